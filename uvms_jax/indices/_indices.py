@@ -1,0 +1,125 @@
+"""Dexterity indices of a Jacobian (SPEC §2): manipulability, KCI, normalised Jacobian, torques.
+
+All functions take ``J: (..., m, n)`` with ``m ≤ n`` and broadcast over leading axes.
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+from jax import Array
+
+
+
+def _check_jacobian(J) -> Array:
+    J = jnp.asarray(J)
+    if J.ndim < 2 or J.shape[-2] > J.shape[-1]:
+        raise ValueError(f"J must have shape (..., m, n) with m <= n, got {J.shape}")
+    return J
+
+
+def _gram(J: Array) -> Array:
+    """``J Jᵀ`` as a fused multiply-sum (fast for small matrices in large batches)."""
+    return jnp.sum(J[..., :, None, :] * J[..., None, :, :], axis=-1)
+
+
+def _safe_sqrt(x: Array) -> Array:
+    """``sqrt(max(x, 0))`` whose gradient is 0, not inf/NaN, at and below zero (double where)."""
+    positive = x > 0
+    return jnp.where(positive, jnp.sqrt(jnp.where(positive, x, 1.0)), 0.0)
+
+
+def _cholesky_diagonal(A: Array) -> Array:
+    """Diagonal of the Cholesky factor of a symmetric PSD ``(..., m, m)``; unrolled over m.
+
+    A pivot that is not positive (rank-deficient ``J``) yields 0 for that and any later
+    factor entry that divides by it, so ``∏ diag`` = sqrt(det A) stays finite and is 0 at
+    singularities.
+    """
+    m = A.shape[-1]
+    L = [[None] * m for _ in range(m)]
+    diag = []
+    for j in range(m):
+        s = A[..., j, j] - sum((L[j][k] ** 2 for k in range(j)), start=jnp.zeros_like(A[..., j, j]))
+        d = _safe_sqrt(s)
+        inv_d = jnp.where(d > 0, 1.0 / jnp.where(d > 0, d, 1.0), 0.0)
+        diag.append(d)
+        L[j][j] = d
+        for i in range(j + 1, m):
+            t = A[..., i, j] - sum((L[i][k] * L[j][k] for k in range(j)), start=jnp.zeros_like(A[..., i, j]))
+            L[i][j] = t * inv_d
+    return jnp.stack(diag, axis=-1)
+
+
+@jax.jit
+def _manipulability(J: Array) -> Array:
+    return jnp.prod(_cholesky_diagonal(_gram(J)), axis=-1)
+
+
+def manipulability(J) -> Array:
+    """Yoshikawa manipulability ``w = sqrt(det(J Jᵀ)) = σ1 ⋯ σm``, shape ``(...)``.
+
+    Computed from an unrolled Cholesky factorisation of ``J Jᵀ`` (no SVD, no LU pivoting),
+    which fuses into one elementwise kernel over large batches. ``w ≥ 0`` and exactly 0 at
+    singular configurations, with finite gradients there.
+    """
+    return _manipulability(_check_jacobian(J))
+
+
+@jax.jit
+def _kci(J: Array) -> Array:
+    eig = jnp.linalg.eigvalsh(_gram(J))  # ascending σ_i²
+    smax2 = eig[..., -1]
+    ratio = jnp.clip(eig[..., 0], 0.0, None) / jnp.where(smax2 > 0, smax2, 1.0)
+    return jnp.where(smax2 > 0, _safe_sqrt(ratio), 0.0)
+
+
+def kci(J) -> Array:
+    """Kinematic conditioning index ``σ_min / σ_max`` ∈ [0, 1], shape ``(...)``; 0 for ``J = 0``."""
+    return _kci(_check_jacobian(J))
+
+
+def singular_values(J) -> Array:
+    """Singular values ``(..., m)`` of ``J``, descending."""
+    return jnp.linalg.svd(_check_jacobian(J), compute_uv=False)
+
+
+def normalized_jacobian(J, joint_speed_max, task_speed_max) -> Array:
+    """``J_n = U J G⁻¹`` with ``G = diag(1/θ̇_max)`` and ``U = diag(1/ṙ_max)`` (SPEC §2).
+
+    Args:
+      J: ``(..., m, n)``.
+      joint_speed_max: ``(n,)`` joint rate limits [rad/s or m/s].
+      task_speed_max: ``(m,)`` task-space rate limits [m/s, rad/s].
+    """
+    J = _check_jacobian(J)
+    joint_speed_max = jnp.asarray(joint_speed_max, dtype=J.dtype)
+    task_speed_max = jnp.asarray(task_speed_max, dtype=J.dtype)
+    if joint_speed_max.shape != J.shape[-1:] or task_speed_max.shape != J.shape[-2:-1]:
+        raise ValueError(
+            f"speed limits must have shapes {J.shape[-1:]} (joints) and {J.shape[-2:-1]} (task), "
+            f"got {joint_speed_max.shape} and {task_speed_max.shape}"
+        )
+    return J * joint_speed_max / task_speed_max[:, None]
+
+
+def joint_torques(J, wrench) -> Array:
+    """Static joint torques ``τ = Jᵀ w_ext`` (thesis eq. 4.10), ``(..., n)`` [N·m or N].
+
+    Args:
+      J: ``(..., 6, n)`` geometric Jacobian (rows: linear, angular).
+      wrench: ``(..., 6)`` external wrench at the tool point ``[f, m]`` [N, N·m], base frame.
+    """
+    J = _check_jacobian(J)
+    wrench = jnp.asarray(wrench, dtype=J.dtype)
+    if wrench.shape[-1] != J.shape[-2]:
+        raise ValueError(f"wrench must have shape (..., {J.shape[-2]}), got {wrench.shape}")
+    return jnp.sum(J * wrench[..., :, None], axis=-2)
+
+
+def payload_wrench(mass: float, volume: float, rho: float = 1025.0, g: float = 9.81) -> Array:
+    """Wrench ``[0, 0, F_b − F_g, 0, 0, 0]`` of a held object: buoyancy ``ρ g V`` minus weight ``m g``.
+
+    Args: mass [kg], volume [m³], rho fluid density [kg/m³] (sea water by default), g [m/s²].
+    """
+    return jnp.array([0.0, 0.0, rho * g * volume - mass * g, 0.0, 0.0, 0.0])
