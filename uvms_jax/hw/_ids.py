@@ -1,0 +1,82 @@
+"""Typed identifiers of the Reach/Blueprint Lab "BPL" protocol (SPEC §6).
+
+Packet ids, device modes, Bravo 7 device ids and hardware-status bits, as integer enums so
+that they print by name and compare equal to the bytes on the wire.
+"""
+
+from __future__ import annotations
+
+import enum
+
+__all__ = ["PacketID", "Mode", "DeviceID", "HardwareStatus", "BROADCAST"]
+
+
+class PacketID(enum.IntEnum):
+    """BPL packet ids (one byte on the wire)."""
+
+    MODE = 0x01
+    VELOCITY = 0x02
+    POSITION = 0x03
+    OPENLOOP = 0x04
+    CURRENT = 0x05
+    INDEXED_POSITION = 0x0D
+    RELATIVE_POSITION = 0x0E
+    POSITION_LIMITS = 0x10
+    VELOCITY_LIMITS = 0x11
+    CURRENT_LIMITS = 0x12
+    SAVE = 0x50
+    REQUEST = 0x60
+    SERIAL_NUMBER = 0x61
+    MODEL_NUMBER = 0x62
+    DEVICE_ID = 0x64
+    TEMPERATURE = 0x66
+    DEVICE_TYPE = 0x67
+    HARDWARE_STATUS = 0x68
+    SOFTWARE_VERSION = 0x6C
+    VOLTAGE = 0x90
+    HEARTBEAT_SET = 0x91
+    HEARTBEAT_FREQUENCY = 0x92
+    KM_END_POS = 0xA1
+    KM_END_VEL = 0xA2
+
+
+class Mode(enum.IntEnum):
+    """Device operating modes (data byte of a MODE packet)."""
+
+    STANDBY = 0x00
+    DISABLE = 0x01
+    POSITION = 0x02
+    VELOCITY = 0x03
+    CURRENT = 0x04
+    OPENLOOP = 0x05
+    ZERO_VELOCITY = 0x15
+
+
+class DeviceID(enum.IntEnum):
+    """Bravo 7 device ids: A = jaws (0x01) … G = base rotate (0x07); 0xFF = broadcast."""
+
+    A = 0x01
+    B = 0x02
+    C = 0x03
+    D = 0x04
+    E = 0x05
+    F = 0x06
+    G = 0x07
+    BROADCAST = 0xFF
+
+
+BROADCAST = DeviceID.BROADCAST
+
+
+class HardwareStatus(enum.IntFlag):
+    """Hardware-status bits; any set bit is a fault the executor aborts on."""
+
+    OK = 0
+    ENCODER_NOT_DETECTED = 1 << 0
+    ENCODER_POSITION_ERROR = 1 << 1
+    MOTOR_DRIVER_FAULT = 1 << 2
+    COMMS_CRC_ERROR = 1 << 3
+    COMMS_SERIAL_ERROR = 1 << 4
+    OVER_TEMPERATURE = 1 << 5
+    OVER_HUMIDITY = 1 << 6
+    FLASH_READ_FAILED = 1 << 7

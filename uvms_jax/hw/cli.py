@@ -1,0 +1,220 @@
+"""``uvms-hw``: run a plan on a Bravo 7 (real or simulated), or serve the simulated arm.
+
+    uvms-hw run PLAN [--sim | --udp HOST:PORT | --serial DEV] [--dry-run]
+                     [--drop P] [--corrupt P] [--latency S] [--stuck-joint X]
+                     [--hw-fault X:BITS[@T]] [--config hw.yaml] [--out DIR] ...
+    uvms-hw sim [--port 6789] [--drop P] ...
+
+Exit status: 0 plan completed (or dry run passed); 1 run aborted safely (arm told to hold);
+2 plan refused or bad arguments. Outputs in ``--out`` (default ``outputs/hw/<time>``):
+``run.csv`` (commanded vs measured), ``run.png`` and ``result.json``.
+Defaults come from :class:`~uvms_jax.hw.config.HwConfig` / ``SimConfig`` (or ``--config``,
+a YAML file shaped like ``configs/hw/default.yaml``); flags override them.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import math
+import sys
+import time
+from collections.abc import Sequence
+from pathlib import Path
+
+from ._joints import BRAVO7
+from .client import Bravo7
+from .config import HwConfig, SimConfig, config_from_mapping
+from .executor import Executor, RunResult
+from .plan import PlanError, check_plan, load_plan
+from .runlog import RunLog
+from .transport import LinkError, SerialTransport, UdpTransport, parse_host_port
+
+__all__ = ["main"]
+
+EXIT_OK, EXIT_ABORTED, EXIT_REFUSED = 0, 1, 2
+
+
+def _parse_fault(text: str) -> dict:
+    """``X:BITS[@T]`` → SimConfig fields (joint letter, status bits, onset time [s])."""
+    try:
+        joint, rest = text.split(":", 1)
+        bits, _, after = rest.partition("@")
+        return {"fault_joint": joint.upper(), "fault_bits": int(bits, 0),
+                "fault_after_s": float(after) if after else 0.0}
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected JOINT:BITS[@SECONDS], got {text!r}") from None
+
+
+def _sim_args(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("simulated arm faults")
+    g.add_argument("--drop", type=float, help="probability a datagram is lost (each direction)")
+    g.add_argument("--corrupt", type=float, help="probability a reply has one byte changed")
+    g.add_argument("--latency", type=float, help="added reply latency [s]")
+    g.add_argument("--stuck-joint", metavar="X", help="joint letter that does not move")
+    g.add_argument("--hw-fault", type=_parse_fault, metavar="X:BITS[@T]",
+                   help="joint X reports hardware-status BITS from simulated time T")
+    g.add_argument("--seed", type=int, help="fault-injection seed")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser (exposed for tests and docs)."""
+    p = argparse.ArgumentParser(prog="uvms-hw", description=__doc__.split("\n\n")[0])
+    sub = p.add_subparsers(dest="command", required=True)
+
+    r = sub.add_parser("run", help="check and execute a plan.json")
+    r.add_argument("plan", type=Path)
+    link = r.add_mutually_exclusive_group()
+    link.add_argument("--sim", action="store_true", help="run against the simulated arm (UDP, 127.0.0.1)")
+    link.add_argument("--udp", metavar="HOST:PORT", help="real arm over UDP (factory 192.168.2.3:6789)")
+    link.add_argument("--serial", metavar="DEV", help="real arm over serial, 115200 8N1")
+    r.add_argument("--dry-run", action="store_true", help="only check the plan; send nothing")
+    r.add_argument("--config", type=Path, help="YAML with executor/sim sections (configs/hw/default.yaml)")
+    r.add_argument("--out", type=Path, help="output folder (default outputs/hw/<time>)")
+    r.add_argument("--rate", type=float, help="streaming rate [Hz]")
+    r.add_argument("--threshold", type=float, help="reached-gate threshold [rad]")
+    r.add_argument("--gate-timeout", type=float, help="gate timeout after each move [s]")
+    r.add_argument("--link-timeout", type=float, help="lost-link timeout [s]")
+    r.add_argument("--approach", action="store_true", help="move to the plan start first")
+    r.add_argument("--no-plot", action="store_true", help="skip the PNG")
+    _sim_args(r)
+
+    s = sub.add_parser("sim", help="serve the simulated Bravo 7 over UDP until interrupted")
+    s.add_argument("--host", default="127.0.0.1")
+    s.add_argument("--port", type=int, default=6789)
+    s.add_argument("--config", type=Path, help="YAML with a sim section")
+    _sim_args(s)
+    return p
+
+
+def _configs(args: argparse.Namespace) -> tuple[HwConfig, SimConfig]:
+    hw, sim = HwConfig(), SimConfig()
+    if args.config is not None:
+        import yaml
+
+        hw, sim = config_from_mapping(yaml.safe_load(args.config.read_text()) or {})
+    over = {k: v for k, v in {
+        "rate_hz": getattr(args, "rate", None), "gate_threshold_rad": getattr(args, "threshold", None),
+        "gate_timeout_s": getattr(args, "gate_timeout", None),
+        "link_timeout_s": getattr(args, "link_timeout", None),
+        "approach": True if getattr(args, "approach", False) else None}.items() if v is not None}
+    hw = dataclasses.replace(hw, **over)
+    sim_over = {k: v for k, v in {
+        "drop": args.drop, "corrupt": args.corrupt, "latency_s": args.latency,
+        "stuck_joint": args.stuck_joint.upper() if args.stuck_joint else None, "seed": args.seed}.items()
+        if v is not None}
+    sim_over.update(args.hw_fault or {})
+    return hw, dataclasses.replace(sim, **sim_over)
+
+
+def _result_json(result: RunResult, out: Path) -> dict:
+    return {
+        "ok": result.ok,
+        "reason": result.reason,
+        "gates": len(result.gates),
+        "max_gate_error_rad": None if math.isnan(result.max_gate_error_rad) else result.max_gate_error_rad,
+        "max_gate_error_mm": max((g.error_mm for g in result.gates), default=None),
+        "duration_s": round(result.duration_s, 3),
+        "abort_after_s": None if math.isnan(result.abort_after_s) else round(result.abort_after_s, 3),
+        "ticks": result.ticks,
+        "link_timeouts": result.link_timeouts,
+        "out": str(out),
+    }
+
+
+def _run(args: argparse.Namespace) -> int:
+    hw, sim_cfg = _configs(args)
+    try:
+        plan = load_plan(args.plan)
+        summary = check_plan(plan, hw)
+    except PlanError as e:
+        print(f"uvms-hw: {e}", file=sys.stderr)
+        return EXIT_REFUSED
+    print(f"plan ok: {summary.n_segments} segments, {summary.n_waypoints} waypoints, "
+          f"{summary.n_gripper_steps} gripper steps, ~{summary.estimated_s:.1f} s of motion", file=sys.stderr)
+    if args.dry_run:
+        return EXIT_OK
+    if not (args.sim or args.udp or args.serial):
+        print("uvms-hw: choose a link: --sim, --udp HOST:PORT or --serial DEV", file=sys.stderr)
+        return EXIT_REFUSED
+    fault_flags = (args.drop, args.corrupt, args.latency, args.stuck_joint, args.hw_fault)
+    if not args.sim and any(f is not None for f in fault_flags):
+        print("uvms-hw: fault injection flags need --sim", file=sys.stderr)
+        return EXIT_REFUSED
+    out = args.out or Path("outputs/hw") / time.strftime("%Y-%m-%d_%H-%M-%S")
+    server = None
+    try:
+        if args.sim:
+            from .sim import SimArm, SimServer
+
+            start = next(s.q[0] for s in plan.segments if s.q)
+            server = SimServer(SimArm(sim_cfg, list(start) + [0.0])).start()
+            transport = UdpTransport(*server.address)
+        elif args.udp:
+            transport = UdpTransport(*parse_host_port(args.udp))
+        else:
+            transport = SerialTransport(args.serial)
+    except (LinkError, ValueError) as e:
+        print(f"uvms-hw: {e}", file=sys.stderr)
+        return EXIT_REFUSED
+    log = RunLog(tuple(j.name for j in BRAVO7))
+    try:
+        from tqdm import tqdm
+
+        bar = tqdm(total=len(plan.segments), unit="seg", file=sys.stderr, leave=False, disable=None)
+
+        def progress(i: int, n: int, name: str) -> None:
+            bar.n = i
+            bar.set_description(name[:30])
+            bar.refresh()
+
+        with Bravo7(transport, request_timeout=hw.request_timeout_s) as client:
+            result = Executor(client, hw, log=log, progress=progress).run(plan)
+        bar.close()
+    finally:
+        if server is not None:
+            server.stop()
+    log.write_csv(out / "run.csv")
+    if not args.no_plot and log.rows:
+        log.plot(out / "run.png")
+    report = _result_json(result, out)
+    if server is not None:
+        report["sim"] = {"limit_violations": server.arm.limit_violations, "dropped": server.link.dropped,
+                         "corrupted": server.link.corrupted}
+    (out / "result.json").write_text(json.dumps(report, indent=2))
+    print(json.dumps(report))
+    if not result.ok:
+        print(f"uvms-hw: aborted, arm told to hold: {result.reason}", file=sys.stderr)
+    return EXIT_OK if result.ok else EXIT_ABORTED
+
+
+def _serve(args: argparse.Namespace) -> int:
+    from .sim import SimArm, SimServer
+
+    _, sim_cfg = _configs(args)
+    with SimServer(SimArm(sim_cfg), host=args.host, port=args.port) as server:
+        print(f"simulated Bravo 7 on {server.address[0]}:{server.address[1]} (Ctrl-C to stop)", file=sys.stderr)
+        try:
+            while server.error is None:
+                time.sleep(0.2)
+        except KeyboardInterrupt:
+            return EXIT_OK
+    print(f"uvms-hw: simulator failed: {server.error}", file=sys.stderr)
+    return EXIT_ABORTED
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Console entry point; returns the exit status (see module docstring)."""
+    args = build_parser().parse_args(argv)
+    try:
+        if args.command == "run":
+            return _run(args)
+        return _serve(args)
+    except (ValueError, OSError) as e:  # bad config values, unreadable files
+        print(f"uvms-hw: {e}", file=sys.stderr)
+        return EXIT_REFUSED
+
+
+if __name__ == "__main__":
+    sys.exit(main())

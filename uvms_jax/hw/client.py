@@ -1,0 +1,239 @@
+"""``Bravo7``: a safe client of the BPL protocol over any :class:`Transport`.
+
+Every outgoing packet goes through :meth:`Bravo7.send`, the lowest send layer, which refuses
+(raises :class:`LimitError`, never clips) a POSITION demand outside the joint's limits, a
+VELOCITY demand above its speed limit, a broadcast motion demand, and any packet id other than
+the few the runner needs (no limit writes, no open-loop or current drive).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from collections.abc import Callable, Iterable, Sequence
+
+from ._codec import PacketReader, decode_float, decode_floats, encode_floats, encode_packet
+from ._ids import BROADCAST, HardwareStatus, Mode, PacketID
+from ._joints import BRAVO7, JointSpec, LimitError, check_position, check_velocity, spec_for_device
+from .transport import LinkError, Transport
+
+__all__ = ["Bravo7", "JointState", "SENDABLE"]
+
+# What the runner may send. Everything else (limit writes, SAVE, open-loop, current, relative
+# and indexed position) could move the arm or change its limits behind the guard's back.
+SENDABLE = frozenset(
+    {PacketID.MODE, PacketID.POSITION, PacketID.VELOCITY, PacketID.REQUEST,
+     PacketID.HEARTBEAT_SET, PacketID.HEARTBEAT_FREQUENCY}
+)
+_SAFE_MODES = frozenset({Mode.STANDBY, Mode.DISABLE, Mode.POSITION, Mode.VELOCITY, Mode.ZERO_VELOCITY})
+
+
+@dataclasses.dataclass(frozen=True)
+class JointState:
+    """Measured state of some devices, in the order they were asked for.
+
+    Attributes:
+      devices: device ids.
+      positions: (n,) positions [rad; mm for the jaws].
+      velocities: (n,) velocities [rad/s; mm/s for the jaws].
+      t: clock time at which the state was complete [s].
+    """
+
+    devices: tuple[int, ...]
+    positions: tuple[float, ...]
+    velocities: tuple[float, ...]
+    t: float
+
+
+def guard_packet(device_id: int, packet_id: int, data: bytes, joints: Sequence[JointSpec]) -> None:
+    """Raise LimitError/ValueError unless the packet is safe to send (see module docstring)."""
+    if packet_id not in SENDABLE:
+        name = PacketID(packet_id).name if packet_id in PacketID._value2member_map_ else f"0x{packet_id:02X}"
+        raise ValueError(f"packet id {name} is not allowed by the safe client")
+    if packet_id in (PacketID.POSITION, PacketID.VELOCITY):
+        if device_id == BROADCAST:
+            raise LimitError("broadcast motion demands are refused: limits are per joint")
+        spec = spec_for_device(device_id, tuple(joints))
+        value = decode_float(data)
+        if packet_id == PacketID.POSITION:
+            check_position(spec, value)
+        else:
+            check_velocity(spec, value)
+    elif packet_id == PacketID.MODE:
+        if len(data) != 1 or data[0] not in _SAFE_MODES:
+            raise ValueError(f"mode payload {data.hex()} is not one of {sorted(m.name for m in _SAFE_MODES)}")
+
+
+class Bravo7:
+    """Client of one Bravo 7 (or its simulator) over ``transport``.
+
+    Args:
+      transport: byte link (UDP, serial, or the in-process simulator link).
+      joints: joint limits the guard enforces (default: SPEC §1.3 Bravo 7).
+      request_timeout: default wait for the answers to one REQUEST [s].
+      clock: monotonic clock [s] (injectable for simulated time).
+    """
+
+    def __init__(
+        self,
+        transport: Transport,
+        joints: Sequence[JointSpec] = BRAVO7,
+        *,
+        request_timeout: float = 0.05,
+        clock: Callable[[], float] = time.monotonic,
+    ) -> None:
+        self.transport = transport
+        self.joints = tuple(joints)
+        self.request_timeout = request_timeout
+        self.clock = clock
+        self.reader = PacketReader()
+        self.latest: dict[tuple[int, int], tuple[bytes, float]] = {}
+        self.packets_sent = 0
+
+    # -- sending ---------------------------------------------------------------------------
+    def send(self, packets: Iterable[tuple[int, int, bytes]]) -> None:
+        """Guard, encode and send packets as one write (one datagram on UDP).
+
+        Raises:
+          LimitError: a motion demand outside the limits (nothing of the batch is sent).
+          ValueError: a packet id or mode the safe client does not send.
+          LinkError: the transport failed.
+        """
+        frames = []
+        for device_id, packet_id, data in packets:
+            guard_packet(device_id, packet_id, data, self.joints)
+            frames.append(encode_packet(device_id, packet_id, data))
+        if frames:
+            self.transport.send(b"".join(frames))
+            self.packets_sent += len(frames)
+
+    def set_mode(self, mode: Mode, devices: Iterable[int] = (BROADCAST,)) -> None:
+        """Set the operating mode of ``devices`` (default: all, by broadcast)."""
+        self.send((d, PacketID.MODE, bytes((Mode(mode),))) for d in devices)
+
+    def set_positions(self, demands: Iterable[tuple[int, float]]) -> None:
+        """Send POSITION demands ``(device_id, value [rad or mm])`` in one write."""
+        self.send((d, PacketID.POSITION, encode_floats(v)) for d, v in demands)
+
+    def set_velocities(self, demands: Iterable[tuple[int, float]]) -> None:
+        """Send VELOCITY demands ``(device_id, value [rad/s or mm/s])`` in one write."""
+        self.send((d, PacketID.VELOCITY, encode_floats(v)) for d, v in demands)
+
+    def hold(self, repeats: int = 3) -> bool:
+        """Zero velocity on every known device, sent ``repeats`` times for lossy links.
+
+        Never raises (it is the last thing done after a failure); returns whether every
+        write went out.
+        """
+        ok = True
+        for _ in range(repeats):
+            try:
+                self.set_velocities((j.device_id, 0.0) for j in self.joints)
+            except Exception:  # noqa: BLE001 - best effort by design
+                ok = False
+        return ok
+
+    def set_heartbeat(self, packet_ids: Sequence[int], frequency_hz: int, device: int = BROADCAST) -> None:
+        """Ask ``device`` to stream ``packet_ids`` at ``frequency_hz`` (0 stops it)."""
+        if not 0 <= frequency_hz <= 255:
+            raise ValueError(f"heartbeat frequency {frequency_hz} Hz outside 0..255")
+        if len(packet_ids) > 10:
+            raise ValueError("at most 10 packet ids per heartbeat")
+        self.send([
+            (device, PacketID.HEARTBEAT_SET, bytes(int(p) for p in packet_ids)),
+            (device, PacketID.HEARTBEAT_FREQUENCY, bytes((frequency_hz,))),
+        ])
+
+    # -- receiving -------------------------------------------------------------------------
+    def poll(self, timeout: float = 0.0) -> int:
+        """Read what arrives within ``timeout`` [s] into :attr:`latest`; returns packet count."""
+        chunk = self.transport.recv(timeout)
+        pkts = self.reader.feed(chunk) if chunk else []
+        now = self.clock()
+        for p in pkts:
+            self.latest[(p.device_id, p.packet_id)] = (p.data, now)
+        return len(pkts)
+
+    def request(
+        self,
+        packet_ids: Sequence[int],
+        devices: Sequence[int],
+        *,
+        timeout: float | None = None,
+        retries: int = 1,
+    ) -> dict[tuple[int, int], bytes]:
+        """Request ``packet_ids`` from ``devices`` and wait for every answer.
+
+        One broadcast REQUEST is sent when several devices are asked, else one addressed to
+        the device. Returns ``{(device_id, packet_id): data}``.
+
+        Raises:
+          LinkError: some answer missing after ``retries`` tries of ``timeout`` seconds each.
+        """
+        timeout = self.request_timeout if timeout is None else timeout
+        target = devices[0] if len(devices) == 1 else BROADCAST
+        wanted = {(int(d), int(p)) for d in devices for p in packet_ids}
+        got: dict[tuple[int, int], bytes] = {}
+        for _ in range(max(retries, 1)):
+            self.send([(target, PacketID.REQUEST, bytes(int(p) for p in packet_ids))])
+            deadline = self.clock() + timeout
+            while True:
+                remaining = deadline - self.clock()
+                if remaining <= 0:
+                    break
+                chunk = self.transport.recv(remaining)
+                if not chunk:
+                    continue
+                now = self.clock()
+                for p in self.reader.feed(chunk):
+                    key = (p.device_id, p.packet_id)
+                    self.latest[key] = (p.data, now)
+                    if key in wanted:
+                        got[key] = p.data
+                if len(got) == len(wanted):
+                    return got
+        missing = sorted(wanted - got.keys())
+        names = ", ".join(f"{PacketID(p).name}@0x{d:02X}" for d, p in missing[:6])
+        raise LinkError(f"no answer within {timeout * 1e3:.0f} ms x{max(retries, 1)}: {names}"
+                        + (" …" if len(missing) > 6 else ""))
+
+    def read_state(self, devices: Sequence[int] | None = None, **kw) -> JointState:
+        """Positions and velocities of ``devices`` (default: all joints) in one request."""
+        devices = tuple(j.device_id for j in self.joints) if devices is None else tuple(devices)
+        got = self.request((PacketID.POSITION, PacketID.VELOCITY), devices, **kw)
+        try:
+            pos = tuple(decode_float(got[(d, PacketID.POSITION)]) for d in devices)
+            vel = tuple(decode_float(got[(d, PacketID.VELOCITY)]) for d in devices)
+        except ValueError as e:
+            raise LinkError(f"malformed state packet: {e}") from e
+        return JointState(devices, pos, vel, self.clock())
+
+    def read_hardware_status(self, devices: Sequence[int] | None = None, **kw) -> dict[int, HardwareStatus]:
+        """Hardware-status flags per device (0 = healthy)."""
+        devices = tuple(j.device_id for j in self.joints) if devices is None else tuple(devices)
+        got = self.request((PacketID.HARDWARE_STATUS,), devices, **kw)
+        return {d: HardwareStatus(int.from_bytes(got[(d, PacketID.HARDWARE_STATUS)][:1] or b"\0", "little"))
+                for d in devices}
+
+    def read_position_limits(self, devices: Sequence[int] | None = None, **kw) -> dict[int, tuple[float, float]]:
+        """Position limits stored in each device, as (lower, upper) [rad or mm]."""
+        devices = tuple(j.device_id for j in self.joints) if devices is None else tuple(devices)
+        got = self.request((PacketID.POSITION_LIMITS,), devices, **kw)
+        out = {}
+        for d in devices:
+            vals = decode_floats(got[(d, PacketID.POSITION_LIMITS)])
+            if len(vals) != 2:
+                raise LinkError(f"POSITION_LIMITS of device 0x{d:02X} has {len(vals)} values, expected 2")
+            out[d] = (min(vals), max(vals))
+        return out
+
+    def close(self) -> None:
+        """Close the transport."""
+        self.transport.close()
+
+    def __enter__(self) -> Bravo7:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+

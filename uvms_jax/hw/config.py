@@ -1,0 +1,134 @@
+"""Defaults of the hardware runner, in one place.
+
+:class:`HwConfig` (executor and link) and :class:`SimConfig` (simulated arm and its faults)
+are the single source of the defaults; ``configs/hw/default.yaml`` mirrors them for Hydra
+(a test keeps the two equal) and :func:`config_from_mapping` builds them from a plain dict or
+a Hydra ``DictConfig`` section.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+from typing import Any
+
+__all__ = ["HwConfig", "SimConfig", "config_from_mapping"]
+
+
+@dataclasses.dataclass(frozen=True)
+class HwConfig:
+    """Executor, safety and link settings.
+
+    Attributes:
+      rate_hz: streaming rate of position demands and state requests [Hz].
+      gate_threshold_rad: reached-gate threshold on every arm encoder [rad] (thesis 4.6).
+      gate_threshold_mm: reached-gate threshold on the jaws [mm].
+      gate_timeout_s: longest wait for the gate after a move's profile has ended [s].
+      tracking_error_rad: abort if any encoder lags its demand by more than this while
+        moving [rad].
+      link_timeout_s: abort if no complete state has arrived for this long [s].
+      request_timeout_s: wait for one request's responses before retrying [s].
+      status_period_s: how often hardware status is read while running [s].
+      speed_scale: fraction (0, 1] of the joints' velocity and acceleration limits the
+        executor uses.
+      continuity_tol_rad: largest allowed jump between a segment's first waypoint and the
+        previous segment's last [rad].
+      start_tolerance_rad: largest allowed distance of the measured start from the plan's
+        first waypoint unless ``approach`` is set [rad].
+      approach: move to the plan's first waypoint first (limit-checked like any move).
+      connect_retries: state requests tried before the link is declared down at start.
+      limit_margin_rad: abort if a measured arm angle leaves its limits by more than this [rad].
+      limit_margin_mm: the same for the jaws [mm].
+    """
+
+    rate_hz: float = 50.0
+    gate_threshold_rad: float = 0.01
+    gate_threshold_mm: float = 0.5
+    gate_timeout_s: float = 2.0
+    tracking_error_rad: float = 0.3
+    link_timeout_s: float = 0.5
+    request_timeout_s: float = 0.02
+    status_period_s: float = 0.25
+    speed_scale: float = 1.0
+    continuity_tol_rad: float = 1e-3
+    start_tolerance_rad: float = 0.05
+    approach: bool = False
+    connect_retries: int = 10
+    limit_margin_rad: float = 0.05
+    limit_margin_mm: float = 1.0
+
+    def __post_init__(self) -> None:
+        positive = ("rate_hz", "gate_threshold_rad", "gate_threshold_mm", "gate_timeout_s",
+                    "tracking_error_rad", "link_timeout_s", "request_timeout_s", "status_period_s",
+                    "continuity_tol_rad", "start_tolerance_rad", "limit_margin_rad", "limit_margin_mm")
+        for name in positive:
+            if not getattr(self, name) > 0:
+                raise ValueError(f"HwConfig.{name} must be positive, got {getattr(self, name)!r}")
+        if not 0 < self.speed_scale <= 1:
+            raise ValueError(f"HwConfig.speed_scale must be in (0, 1], got {self.speed_scale!r}")
+        if self.connect_retries < 1:
+            raise ValueError("HwConfig.connect_retries must be at least 1")
+
+
+@dataclasses.dataclass(frozen=True)
+class SimConfig:
+    """Simulated Bravo 7: servo, physics and fault injection.
+
+    Attributes:
+      physics_dt: MuJoCo time step [s].
+      servo_gain: position-mode gain, commanded joint speed = gain × error [1/s] (saturated
+        at the joint's velocity limit).
+      drop: probability that an incoming or outgoing datagram is lost.
+      corrupt: probability that an outgoing datagram has one byte changed.
+      latency_s: delay added to every response [s].
+      stuck_joint: letter of a joint that does not move ("" = none).
+      fault_joint: letter of a joint that reports ``fault_bits`` ("" = none).
+      fault_bits: hardware-status bits reported by ``fault_joint``.
+      fault_after_s: simulated time after which the fault appears [s].
+      seed: seed of the fault-injection random generator.
+    """
+
+    physics_dt: float = 0.002
+    servo_gain: float = 8.0
+    drop: float = 0.0
+    corrupt: float = 0.0
+    latency_s: float = 0.0
+    stuck_joint: str = ""
+    fault_joint: str = ""
+    fault_bits: int = 0
+    fault_after_s: float = 0.0
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        for name in ("drop", "corrupt"):
+            if not 0 <= getattr(self, name) <= 1:
+                raise ValueError(f"SimConfig.{name} must be a probability, got {getattr(self, name)!r}")
+        if self.latency_s < 0 or self.fault_after_s < 0:
+            raise ValueError("SimConfig latency_s and fault_after_s must be non-negative")
+        if not (self.physics_dt > 0 and self.servo_gain > 0):
+            raise ValueError("SimConfig physics_dt and servo_gain must be positive")
+        for name in ("stuck_joint", "fault_joint"):
+            if getattr(self, name) not in ("", "A", "B", "C", "D", "E", "F", "G"):
+                raise ValueError(f"SimConfig.{name} must be a joint letter A..G or empty")
+        if not 0 <= self.fault_bits <= 0xFF:
+            raise ValueError("SimConfig.fault_bits must fit in one byte")
+
+
+def config_from_mapping(cfg: Mapping[str, Any]) -> tuple[HwConfig, SimConfig]:
+    """Build both configs from a mapping with optional ``executor`` and ``sim`` sections.
+
+    Unknown keys raise ValueError naming them (a typo must not silently fall back to a default).
+    """
+    cfg = dict(cfg)
+    unknown = set(cfg) - {"executor", "sim"}
+    if unknown:
+        raise ValueError(f"unknown hw config sections: {sorted(unknown)}")
+    out = []
+    for section, cls in (("executor", HwConfig), ("sim", SimConfig)):
+        values = dict(cfg.get(section) or {})
+        names = {f.name for f in dataclasses.fields(cls)}
+        bad = set(values) - names
+        if bad:
+            raise ValueError(f"unknown keys in hw.{section}: {sorted(bad)}")
+        out.append(cls(**values))
+    return out[0], out[1]

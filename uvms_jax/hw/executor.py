@@ -1,0 +1,284 @@
+"""Trajectory executor: runs a checked plan on a Bravo 7 with the thesis 4.6 controller.
+
+Per move (waypoint to waypoint, or a jaws step) the executor streams POSITION demands of a
+synchronised, velocity- and acceleration-limited profile at ``rate_hz``, reads the measured
+state every tick, and after the profile ends holds the goal until the reached-gate passes:
+every encoder within ``gate_threshold_rad`` (jaws ``gate_threshold_mm``). Only then does the
+next move start.
+
+Safety: the plan is dry-run checked before anything is sent (:class:`PlanError`); every demand
+passes the client's send guard. A lost link (no state for ``link_timeout_s``), a non-zero
+hardware status, a measured angle outside the limits, a tracking error above
+``tracking_error_rad``, a gate not reached within ``gate_timeout_s``, or a refused demand aborts
+the run: zero velocity is sent to every joint (hold) and the result says why (``ok=False``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from collections.abc import Callable, Sequence
+
+import numpy as np
+
+from ._ids import HardwareStatus, Mode
+from ._joints import ARM_JOINTS, JAWS, JointSpec, LimitError
+from .client import Bravo7
+from .config import HwConfig
+from .plan import Plan, PlanSummary, check_plan
+from .runlog import RunLog
+from .trajectory import Move, synchronised_move
+from .transport import LinkError
+
+__all__ = ["AbortRun", "Executor", "GateRecord", "RunResult"]
+
+
+class AbortRun(RuntimeError):
+    """The run was stopped for safety; the arm was told to hold."""
+
+
+@dataclasses.dataclass(frozen=True)
+class GateRecord:
+    """One passed reached-gate.
+
+    Attributes:
+      segment, waypoint: where (waypoint -1 = the segment's gripper step).
+      error_rad: max |measured - goal| over the arm joints when the gate passed [rad].
+      error_mm: |measured - goal| of the jaws [mm].
+      wait_s: time from the end of the profile to the gate [s].
+    """
+
+    segment: int
+    waypoint: int
+    error_rad: float
+    error_mm: float
+    wait_s: float
+
+
+@dataclasses.dataclass(frozen=True)
+class RunResult:
+    """Outcome of :meth:`Executor.run`.
+
+    Attributes:
+      ok: every segment completed.
+      reason: "completed" or why the run was aborted.
+      gates: passed gates, in order.
+      max_gate_error_rad: max arm gate error over all gates [rad] (NaN if none).
+      duration_s: time from connect to the end [s].
+      ticks: streaming ticks.
+      link_timeouts: state requests that went unanswered.
+      abort_after_s: time from the start of the failing move to the abort [s] (NaN if ok).
+      summary: the dry-run summary.
+    """
+
+    ok: bool
+    reason: str
+    gates: tuple[GateRecord, ...]
+    max_gate_error_rad: float
+    duration_s: float
+    ticks: int
+    link_timeouts: int
+    abort_after_s: float
+    summary: PlanSummary
+
+
+class Executor:
+    """Runs plans through a :class:`Bravo7` client.
+
+    Args:
+      client: connected client; its clock is the executor's clock.
+      config: rates, thresholds and timeouts.
+      sleep: how to wait [s] (``time.sleep``, or a virtual clock's ``sleep``).
+      log: where commanded/measured states go (a fresh :class:`RunLog` by default).
+      arm_joints, jaws: joint specs (SPEC §1.3 Bravo 7 by default).
+      progress: optional callback ``(segment index, n_segments, name)`` for progress display.
+    """
+
+    def __init__(
+        self,
+        client: Bravo7,
+        config: HwConfig = HwConfig(),
+        *,
+        sleep: Callable[[float], None] = time.sleep,
+        log: RunLog | None = None,
+        arm_joints: Sequence[JointSpec] = ARM_JOINTS,
+        jaws: JointSpec = JAWS,
+        progress: Callable[[int, int, str], None] | None = None,
+    ) -> None:
+        self.client = client
+        self.config = config
+        self.clock = client.clock
+        self.sleep = sleep
+        self.arm_joints = tuple(arm_joints)
+        self.jaws = jaws
+        self.joints = self.arm_joints + (jaws,)
+        self.devices = tuple(j.device_id for j in self.joints)
+        self.log = log if log is not None else RunLog(tuple(j.name for j in self.joints))
+        self.progress = progress
+        n = len(self.joints)
+        self._lower = np.array([j.lower for j in self.joints])
+        self._upper = np.array([j.upper for j in self.joints])
+        self._margin = np.array([config.limit_margin_mm if j.unit == "mm" else config.limit_margin_rad
+                                 for j in self.joints])
+        self._vmax = np.array([j.max_velocity for j in self.joints]) * config.speed_scale
+        self._amax = np.array([j.max_acceleration for j in self.joints]) * config.speed_scale
+        self._gate = np.array([config.gate_threshold_mm if j.unit == "mm" else config.gate_threshold_rad
+                               for j in self.joints])
+        self._arm = np.arange(n - 1)
+        self._cmd = np.full(n, math.nan)
+        self._goal = np.full(n, math.nan)
+        self._ticks = self._timeouts = 0
+        self._last_state_t = -math.inf
+        self._next_status_t = -math.inf
+        self._move_start = math.nan
+
+    # -- public ----------------------------------------------------------------------------
+    def run(self, plan: Plan) -> RunResult:
+        """Check and execute ``plan``; never raises for run-time faults (see ``RunResult``).
+
+        Raises:
+          PlanError: the dry-run check refused the plan (nothing was sent).
+        """
+        summary = check_plan(plan, self.config, self.arm_joints, self.jaws)
+        t0 = self.clock()
+        gates: list[GateRecord] = []
+        self._move_start = t0
+        try:
+            self._connect(plan)
+            for i, seg in enumerate(plan.segments):
+                if self.progress is not None:
+                    self.progress(i, len(plan.segments), seg.name)
+                for k in range(len(seg.q)):
+                    if k == 0 and i > 0:
+                        continue  # continuity: the previous gate already holds this point
+                    goal = self._goal.copy()
+                    goal[self._arm] = seg.q[k]
+                    min_dt = seg.t[k] - seg.t[k - 1] if k > 0 else 0.0
+                    gates.append(self._execute(goal, min_dt, i, k))
+                if seg.jaws_mm is not None:
+                    goal = self._goal.copy()
+                    goal[-1] = seg.jaws_mm
+                    gates.append(self._execute(goal, 0.0, i, -1))
+            ok, reason, after = True, "completed", math.nan
+        except (AbortRun, LinkError, LimitError, ValueError) as e:
+            self.client.hold()
+            ok, reason = False, f"{type(e).__name__}: {e}"
+            after = self.clock() - self._move_start
+        except BaseException:
+            self.client.hold()
+            raise
+        errs = [g.error_rad for g in gates]
+        return RunResult(ok, reason, tuple(gates), max(errs) if errs else math.nan,
+                         self.clock() - t0, self._ticks, self._timeouts, after, summary)
+
+    # -- steps -----------------------------------------------------------------------------
+    def _connect(self, plan: Plan) -> None:
+        cfg = self.config
+        state = self.client.read_state(self.devices, timeout=cfg.request_timeout_s * 5,
+                                       retries=cfg.connect_retries)
+        self._last_state_t = self.clock()
+        self._check_status(force=True)
+        meas = np.asarray(state.positions)
+        self._check_measured(meas)
+        q_start = np.asarray(plan.segments[0].q[0]) if plan.segments[0].q else None
+        if q_start is None:  # first segment is gripper-only: start at the first waypoint found
+            q_start = np.asarray(next(s.q[0] for s in plan.segments if s.q))
+        err = np.abs(meas[self._arm] - q_start)
+        j = int(np.argmax(err))
+        if err[j] > cfg.start_tolerance_rad and not cfg.approach:
+            raise AbortRun(f"arm is {err[j]:.3f} rad from the plan start on joint {self.joints[j].name} "
+                           f"(tolerance {cfg.start_tolerance_rad} rad); move it there first or allow the approach move")
+        self._goal = meas.copy()
+        self._cmd = meas.copy()
+        self.client.set_mode(Mode.POSITION)
+
+    def _execute(self, goal: np.ndarray, min_duration: float, seg: int, wp: int) -> GateRecord:
+        """Stream one synchronised move from the current goal to ``goal``, then gate."""
+        cfg = self.config
+        moving = np.flatnonzero(np.abs(goal - self._goal) > 0) if np.all(np.isfinite(self._goal)) \
+            else np.arange(len(goal))
+        move: Move = synchronised_move(self._goal, goal, self._vmax, self._amax, min_duration)
+        start = self.clock()
+        self._move_start = start
+        self._goal = goal.copy()
+        phase = "gripper" if wp < 0 else "move"
+        dt = 1.0 / cfg.rate_hz
+        k = 0
+        while True:
+            t = self.clock() - start
+            q_cmd, _ = move.sample(t)
+            self._cmd = q_cmd
+            if len(moving):
+                self.client.set_positions((self.devices[i], float(q_cmd[i])) for i in moving)
+            meas = self._measure()
+            self.log.add(self.clock(), seg, wp, phase if t < move.duration else "gate", q_cmd, meas)
+            self._ticks += 1
+            if meas is not None:
+                self._check_measured(meas)
+                lag = np.abs(meas[self._arm] - q_cmd[self._arm])
+                if np.max(lag) > cfg.tracking_error_rad:
+                    j = int(np.argmax(lag))
+                    raise AbortRun(f"segment {seg} waypoint {wp}: joint {self.joints[j].name} lags its demand by "
+                                   f"{lag[j]:.3f} rad > {cfg.tracking_error_rad} rad")
+                if t >= move.duration:
+                    err = np.abs(meas - goal)
+                    if np.all(err <= self._gate):
+                        return GateRecord(seg, wp, float(np.max(err[self._arm])), float(err[-1]),
+                                          t - move.duration)
+            if t >= move.duration + cfg.gate_timeout_s:
+                detail = ""
+                if meas is not None:
+                    ratio = np.abs(meas - goal) / self._gate
+                    j = int(np.argmax(ratio))
+                    unit = self.joints[j].unit
+                    detail = (f"; joint {self.joints[j].name} error {abs(meas[j] - goal[j]):.4f} {unit}"
+                              f" > {self._gate[j]} {unit}")
+                raise AbortRun(f"segment {seg} waypoint {wp}: gate not reached within "
+                               f"{cfg.gate_timeout_s} s after the move{detail}")
+            k += 1
+            delay = start + k * dt - self.clock()
+            if delay > 0:
+                self.sleep(delay)
+            else:
+                k = int((self.clock() - start) / dt)  # behind schedule: do not try to catch up
+
+    def _measure(self) -> np.ndarray | None:
+        """Measured positions (n,) or None if this tick's state did not arrive."""
+        cfg = self.config
+        try:
+            self._check_status()
+            state = self.client.read_state(self.devices, timeout=cfg.request_timeout_s)
+        except LinkError as e:
+            self._timeouts += 1
+            silent = self.clock() - self._last_state_t
+            if silent > cfg.link_timeout_s:
+                raise LinkError(f"lost link: no state for {silent:.2f} s (limit {cfg.link_timeout_s} s); "
+                                f"last error: {e}") from e
+            return None
+        self._last_state_t = self.clock()
+        return np.asarray(state.positions)
+
+    def _check_status(self, force: bool = False) -> None:
+        now = self.clock()
+        if not force and now < self._next_status_t:
+            return
+        status = self.client.read_hardware_status(
+            self.devices, timeout=self.config.request_timeout_s * (5 if force else 1),
+            retries=self.config.connect_retries if force else 1)
+        self._next_status_t = now + self.config.status_period_s
+        bad = {d: s for d, s in status.items() if s != HardwareStatus.OK}
+        if bad:
+            names = {j.device_id: j.name for j in self.joints}
+            text = "; ".join(f"joint {names[d]} (0x{d:02X}): {s!r}" for d, s in bad.items())
+            raise AbortRun(f"hardware status fault: {text}")
+
+    def _check_measured(self, meas: np.ndarray) -> None:
+        low = meas < self._lower - self._margin
+        high = meas > self._upper + self._margin
+        bad = np.flatnonzero(low | high | ~np.isfinite(meas))
+        if len(bad):
+            j = int(bad[0])
+            s = self.joints[j]
+            raise AbortRun(f"limit breach: joint {s.name} measured {meas[j]:.4f} {s.unit} outside "
+                           f"[{s.lower}, {s.upper}] ± {self._margin[j]}")

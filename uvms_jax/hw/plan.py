@@ -1,0 +1,257 @@
+"""``plan.json``: what the hardware runner executes, and the dry-run check that guards it.
+
+Format (version 1; JSON object)::
+
+    {
+      "version": 1,
+      "joint_names": ["G", "F", "E", "D", "C", "B"],
+      "segments": [
+        {"name": "0->2 pre-grasp",                  # free text, used in logs and errors
+         "t": [0.0, 1.5, 3.0],                      # [s] from the segment's start, t[0] = 0, increasing
+         "q": [[...6 rad...], [...], [...]],        # one row per time, joint order as joint_names
+         "gripper": null},                          # or {"jaws_mm": 30.0}: set the jaws after the motion
+        {"name": "open", "gripper": {"jaws_mm": 30.0}}   # a gripper-only step (no "t"/"q")
+      ]
+    }
+
+Semantics: segments run in order. A motion visits every waypoint; between two waypoints all
+joints move together (synchronised arrival) within the velocity and acceleration limits, taking
+at least the planned time; at every waypoint the executor waits until every encoder is within
+the gate threshold (thesis 4.6) before going on. After the motion, ``gripper`` (if given) drives
+the jaws [mm, 0 … 35] and waits for them the same way. A segment's first waypoint must repeat
+the previous segment's last one (continuity); the plan's first waypoint is where the arm must
+already be. Joint angles are in rad, within SPEC §1.3 limits.
+
+The dry-run check (:func:`check_plan`) refuses a plan, listing every problem, for: wrong joint
+names, malformed rows, non-finite values, times not starting at 0 or not increasing, positions
+or jaws outside limits, discontinuities between segments, and average speeds between waypoints
+above the velocity limit.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ._joints import ARM_JOINTS, JAWS, JointSpec
+from .config import HwConfig
+from .trajectory import synchronised_move
+
+__all__ = ["Plan", "PlanError", "PlanSummary", "Segment", "check_plan", "load_plan", "parse_plan", "plan_to_dict"]
+
+PLAN_VERSION = 1
+_SPEED_TOL = 1e-6  # relative slack on the average-speed check (JSON round-off of times)
+
+
+class PlanError(ValueError):
+    """A plan that must not run; the message lists every problem found."""
+
+
+@dataclasses.dataclass(frozen=True)
+class Segment:
+    """One plan segment.
+
+    Attributes:
+      name: label for logs and errors.
+      t: (k,) waypoint times from the segment start [s] (k may be 0 for a gripper-only step).
+      q: (k, n_joints) waypoint joint angles [rad].
+      jaws_mm: jaw opening to set after the motion [mm], or None.
+    """
+
+    name: str
+    t: tuple[float, ...]
+    q: tuple[tuple[float, ...], ...]
+    jaws_mm: float | None = None
+
+
+@dataclasses.dataclass(frozen=True)
+class Plan:
+    """A parsed plan: joint names (arm joints, in order) and segments."""
+
+    joint_names: tuple[str, ...]
+    segments: tuple[Segment, ...]
+
+    def waypoints(self) -> list[tuple[int, int, tuple[float, ...]]]:
+        """All ``(segment index, waypoint index, q)`` in execution order."""
+        return [(i, k, q) for i, s in enumerate(self.segments) for k, q in enumerate(s.q)]
+
+
+@dataclasses.dataclass(frozen=True)
+class PlanSummary:
+    """What the dry run found for an accepted plan.
+
+    Attributes:
+      n_segments, n_waypoints, n_gripper_steps: counts.
+      planned_s: sum of the planned times [s].
+      estimated_s: sum of the synchronised move durations the executor will use [s]
+        (gates and gripper moves not included).
+      max_speed_ratio: largest average speed between waypoints over the velocity limit.
+    """
+
+    n_segments: int
+    n_waypoints: int
+    n_gripper_steps: int
+    planned_s: float
+    estimated_s: float
+    max_speed_ratio: float
+
+
+def _floats(x: Any, where: str) -> tuple[float, ...]:
+    if not isinstance(x, Sequence) or isinstance(x, (str, bytes)):
+        raise PlanError(f"{where}: expected a list of numbers, got {type(x).__name__}")
+    out = []
+    for v in x:
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
+            raise PlanError(f"{where}: expected numbers, got {v!r}")
+        out.append(float(v))
+    return tuple(out)
+
+
+def parse_plan(obj: Mapping[str, Any]) -> Plan:
+    """Build a :class:`Plan` from the JSON object; raises PlanError on a malformed structure."""
+    if not isinstance(obj, Mapping):
+        raise PlanError(f"plan must be a JSON object, got {type(obj).__name__}")
+    version = obj.get("version", PLAN_VERSION)
+    if version != PLAN_VERSION:
+        raise PlanError(f"unsupported plan version {version!r} (expected {PLAN_VERSION})")
+    unknown = set(obj) - {"version", "joint_names", "segments", "meta"}
+    if unknown:
+        raise PlanError(f"unknown plan keys {sorted(unknown)}")
+    names = obj.get("joint_names")
+    if not isinstance(names, Sequence) or not all(isinstance(n, str) for n in names):
+        raise PlanError("plan.joint_names must be a list of joint letters")
+    segs = obj.get("segments")
+    if not isinstance(segs, Sequence) or isinstance(segs, (str, bytes)) or not segs:
+        raise PlanError("plan.segments must be a non-empty list")
+    out = []
+    for i, s in enumerate(segs):
+        where = f"segment {i}"
+        if not isinstance(s, Mapping):
+            raise PlanError(f"{where}: expected an object")
+        bad = set(s) - {"name", "t", "q", "gripper"}
+        if bad:
+            raise PlanError(f"{where}: unknown keys {sorted(bad)}")
+        name = str(s.get("name", f"segment {i}"))
+        where = f"segment {i} ({name})"
+        t = _floats(s.get("t", []), f"{where}.t")
+        q_raw = s.get("q", [])
+        if not isinstance(q_raw, Sequence) or isinstance(q_raw, (str, bytes)):
+            raise PlanError(f"{where}.q: expected a list of rows")
+        q = tuple(_floats(row, f"{where}.q[{k}]") for k, row in enumerate(q_raw))
+        if len(t) != len(q):
+            raise PlanError(f"{where}: {len(t)} times but {len(q)} waypoints")
+        for k, row in enumerate(q):
+            if len(row) != len(names):
+                raise PlanError(f"{where}.q[{k}]: {len(row)} values for {len(names)} joints")
+        g = s.get("gripper")
+        jaws = None
+        if g is not None:
+            if not isinstance(g, Mapping) or set(g) != {"jaws_mm"}:
+                raise PlanError(f"{where}.gripper: expected null or {{\"jaws_mm\": number}}")
+            jaws = _floats([g["jaws_mm"]], f"{where}.gripper.jaws_mm")[0]
+        if not q and jaws is None:
+            raise PlanError(f"{where}: neither waypoints nor a gripper step")
+        out.append(Segment(name, t, q, jaws))
+    return Plan(tuple(names), tuple(out))
+
+
+def load_plan(path: str | Path) -> Plan:
+    """Read and parse ``plan.json``; raises PlanError for unreadable or malformed files."""
+    try:
+        obj = json.loads(Path(path).read_text())
+    except (OSError, json.JSONDecodeError) as e:
+        raise PlanError(f"cannot read plan {path}: {e}") from e
+    return parse_plan(obj)
+
+
+def plan_to_dict(plan: Plan) -> dict[str, Any]:
+    """The JSON object of ``plan`` (inverse of :func:`parse_plan`)."""
+    return {
+        "version": PLAN_VERSION,
+        "joint_names": list(plan.joint_names),
+        "segments": [
+            {"name": s.name, "t": list(s.t), "q": [list(r) for r in s.q],
+             "gripper": None if s.jaws_mm is None else {"jaws_mm": s.jaws_mm}}
+            for s in plan.segments
+        ],
+    }
+
+
+def check_plan(
+    plan: Plan,
+    config: HwConfig = HwConfig(),
+    joints: Sequence[JointSpec] = ARM_JOINTS,
+    jaws: JointSpec = JAWS,
+    max_problems: int = 20,
+) -> PlanSummary:
+    """Dry-run check: refuse a bad plan before any motion.
+
+    Raises:
+      PlanError: listing (up to ``max_problems``) every limit, continuity, timing and speed
+        problem, with segment, waypoint and joint named.
+    """
+    problems: list[str] = []
+    names = tuple(j.name for j in joints)
+    if plan.joint_names != names:
+        raise PlanError(f"plan joint_names {list(plan.joint_names)} must be {list(names)} (in this order)")
+    vmax = np.array([j.max_velocity for j in joints]) * config.speed_scale
+    amax = np.array([j.max_acceleration for j in joints]) * config.speed_scale
+    prev_q: np.ndarray | None = None
+    planned = estimated = 0.0
+    ratio = 0.0
+    n_wp = n_grip = 0
+    for i, seg in enumerate(plan.segments):
+        where = f"segment {i} ({seg.name})"
+        t = np.asarray(seg.t, dtype=float)
+        q = np.asarray(seg.q, dtype=float).reshape(len(seg.q), len(names))
+        n_wp += len(q)
+        if len(t):
+            if not np.all(np.isfinite(t)):
+                problems.append(f"{where}: non-finite time")
+            elif t[0] != 0.0:
+                problems.append(f"{where}: t[0] = {t[0]} s, must be 0")
+            elif np.any(np.diff(t) <= 0):
+                k = int(np.argmax(np.diff(t) <= 0))
+                problems.append(f"{where}: times not increasing at waypoint {k}->{k + 1}")
+        for k, row in enumerate(q):
+            for j, spec in enumerate(joints):
+                if not math.isfinite(row[j]):
+                    problems.append(f"{where} waypoint {k}: joint {spec.name} is {row[j]}")
+                elif not spec.contains(row[j]):
+                    problems.append(f"{where} waypoint {k}: joint {spec.name} = {row[j]:.4f} rad "
+                                    f"outside [{spec.lower}, {spec.upper}]")
+        if len(q) and prev_q is not None and np.all(np.isfinite(q[0])):
+            jump = np.abs(q[0] - prev_q)
+            if np.max(jump) > config.continuity_tol_rad:
+                j = int(np.argmax(jump))
+                problems.append(f"{where}: starts {jump[j]:.4f} rad away from the previous segment's end "
+                                f"on joint {names[j]} (tolerance {config.continuity_tol_rad})")
+        if len(q) > 1 and np.all(np.isfinite(q)) and np.all(np.isfinite(t)) and np.all(np.diff(t) > 0):
+            dt = np.diff(t)
+            speed = np.abs(np.diff(q, axis=0)) / dt[:, None] / vmax
+            ratio = max(ratio, float(np.max(speed)))
+            if np.any(speed > 1 + _SPEED_TOL):
+                k, j = np.unravel_index(int(np.argmax(speed)), speed.shape)
+                problems.append(f"{where} waypoint {k}->{k + 1}: joint {names[j]} needs "
+                                f"{speed[k, j] * vmax[j]:.3f} rad/s > limit {vmax[j]:.3f} rad/s")
+            planned += float(t[-1])
+            for k in range(len(q) - 1):
+                estimated += synchronised_move(q[k], q[k + 1], vmax, amax, float(dt[k])).duration
+        if len(q):
+            prev_q = q[-1]
+        if seg.jaws_mm is not None:
+            n_grip += 1
+            if not (math.isfinite(seg.jaws_mm) and jaws.contains(seg.jaws_mm)):
+                problems.append(f"{where}: jaws {seg.jaws_mm} mm outside [{jaws.lower}, {jaws.upper}]")
+    if n_wp == 0:
+        problems.append("plan has no waypoints: the start position is unknown")
+    if problems:
+        more = f"\n  … and {len(problems) - max_problems} more" if len(problems) > max_problems else ""
+        raise PlanError("plan refused:\n  " + "\n  ".join(problems[:max_problems]) + more)
+    return PlanSummary(len(plan.segments), n_wp, n_grip, planned, estimated, ratio)

@@ -1,0 +1,70 @@
+"""Run log: commanded vs measured joint states, written as CSV and plotted as PNG."""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import math
+from collections.abc import Sequence
+from pathlib import Path
+
+__all__ = ["RunLog"]
+
+
+@dataclasses.dataclass
+class RunLog:
+    """Rows of ``(t [s], segment, waypoint, phase, commanded (n,), measured (n,))``.
+
+    ``measured`` is NaN where a state did not arrive. Units per joint: rad, jaws mm.
+    Mutable by design: it is filled while the arm moves.
+    """
+
+    joint_names: tuple[str, ...]
+    rows: list[tuple] = dataclasses.field(default_factory=list)
+
+    def add(self, t: float, segment: int, waypoint: int, phase: str,
+            commanded: Sequence[float], measured: Sequence[float] | None) -> None:
+        """Append one tick."""
+        meas = tuple(measured) if measured is not None else (math.nan,) * len(self.joint_names)
+        self.rows.append((t, segment, waypoint, phase, *map(float, commanded), *map(float, meas)))
+
+    def header(self) -> list[str]:
+        """CSV column names."""
+        return (["t_s", "segment", "waypoint", "phase"] + [f"cmd_{n}" for n in self.joint_names]
+                + [f"meas_{n}" for n in self.joint_names])
+
+    def write_csv(self, path: str | Path) -> Path:
+        """Write the log to ``path`` (parent folders created)."""
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with path.open("w", newline="") as f:
+            w = csv.writer(f)
+            w.writerow(self.header())
+            w.writerows(self.rows)
+        return path
+
+    def plot(self, path: str | Path, title: str = "Bravo 7 run: commanded vs measured") -> Path:
+        """One panel per joint, commanded (dashed) over measured (solid); PNG at ``path``."""
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        n = len(self.joint_names)
+        t = [r[0] for r in self.rows]
+        fig, axes = plt.subplots(n, 1, figsize=(9, 1.6 * n + 1), sharex=True, squeeze=False)
+        for j, name in enumerate(self.joint_names):
+            ax = axes[j, 0]
+            ax.plot(t, [r[4 + j] for r in self.rows], "k--", lw=1, label="commanded")
+            ax.plot(t, [r[4 + n + j] for r in self.rows], "C0", lw=1, label="measured")
+            ax.set_ylabel(f"{name} [{'mm' if name == 'A' else 'rad'}]")
+            ax.grid(alpha=0.3)
+        axes[0, 0].legend(loc="upper right", fontsize=8)
+        axes[-1, 0].set_xlabel("time [s]")
+        fig.suptitle(title)
+        fig.tight_layout()
+        fig.savefig(path, dpi=100)
+        plt.close(fig)
+        return path
