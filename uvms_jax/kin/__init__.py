@@ -22,6 +22,7 @@ from uvms_jax.kin._chain import prismatic_twist
 from uvms_jax.kin._chain import revolute_twist
 from uvms_jax.kin._chain import with_dtype
 from uvms_jax.kin._export import bravo7_mjcf
+from uvms_jax.kin._export import bravo7_mjcf_body
 from uvms_jax.kin._export import bravo7_urdf
 from uvms_jax.kin._export import to_urdf
 from uvms_jax.kin._fk import Kinematics

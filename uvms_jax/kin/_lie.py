@@ -1,8 +1,8 @@
 """Small SE(3) helpers on trailing axes; every function broadcasts over leading axes.
 
 Twists are ordered ``[v, ω]`` (linear part first), as in Murray, Li & Sastry.
-Matrix products are written as broadcast multiply-and-sum so that, under ``vmap`` and
-``jit``, whole batches fuse into elementwise kernels instead of many tiny GEMM calls.
+All small matrix products go through :func:`matmul` / :func:`matvec`, so the lowering of
+tiny batched products is chosen in one place.
 """
 
 from __future__ import annotations
@@ -13,13 +13,13 @@ from jax import Array
 
 
 def matmul(a: Array, b: Array) -> Array:
-    """Product of small matrices ``(..., m, k) @ (..., k, n)`` as a fused multiply-sum."""
-    return jnp.sum(a[..., :, :, None] * b[..., None, :, :], axis=-2)
+    """Product of small matrices ``(..., m, k) @ (..., k, n)``, broadcasting leading axes."""
+    return jnp.matmul(a, b)
 
 
 def matvec(a: Array, x: Array) -> Array:
-    """``(..., m, k) @ (..., k)``."""
-    return jnp.sum(a * x[..., None, :], axis=-1)
+    """``(..., m, k) @ (..., k)``, broadcasting leading axes."""
+    return jnp.matmul(a, x[..., None])[..., 0]
 
 
 def skew(w: Array) -> Array:

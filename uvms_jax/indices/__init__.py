@@ -1,0 +1,12 @@
+"""Dexterity indices (SPEC §2): manipulability w, KCI, normalised Jacobian, area
+manipulability M_a (docking paper eq. 1) and static joint torques."""
+
+from uvms_jax.indices._area import area_manipulability
+from uvms_jax.indices._area import control_points
+from uvms_jax.indices._area import max_branch_manipulability
+from uvms_jax.indices._indices import joint_torques
+from uvms_jax.indices._indices import kci
+from uvms_jax.indices._indices import manipulability
+from uvms_jax.indices._indices import normalized_jacobian
+from uvms_jax.indices._indices import payload_wrench
+from uvms_jax.indices._indices import singular_values
