@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -11,7 +13,8 @@ from hypothesis import strategies as st
 
 from _hw_helpers import Q0, Q1, SimRun, assert_within_limits, short_plan
 from uvms_jax.hw import (Bravo7, Executor, HardwareStatus, HwConfig, PacketID, PacketReader, PlanError, SimArm,
-                         SimConfig, SimServer, UdpTransport, decode_float, parse_plan, synchronised_move)
+                         SimConfig, SimServer, UdpTransport, decode_float, load_plan, parse_plan,
+                         synchronised_move)
 
 GATE = HwConfig().gate_threshold_rad
 
@@ -181,3 +184,31 @@ def test_property_examples_ran():
     """The property above must have executed plans, not only refused them."""
     if EXECUTED:  # only meaningful when run in the same session
         assert any(EXECUTED) or len(EXECUTED) < 3
+
+
+EXAMPLE = Path(__file__).parents[2] / "examples" / "thesis_plan.json"
+
+
+@pytest.mark.parametrize("sim", [SimConfig(), SimConfig(drop=0.1, corrupt=0.01, seed=11)], ids=["clean", "faulty"])
+def test_thesis_plan_in_simulated_time(sim):
+    """The shipped example, every gate within 0.01 rad (simulated time, no sockets)."""
+    plan = load_plan(EXAMPLE)
+    run = SimRun(sim, q0=plan.segments[0].q[0])
+    res = run.executor.run(plan)
+    assert_within_limits(run.sent_packets())
+    assert run.arm.limit_violations == 0
+    if res.ok or sim.drop == 0:
+        assert res.ok, res.reason
+        assert len(res.gates) == 1 + 26 + 13 and res.max_gate_error_rad <= GATE
+    else:
+        assert last_packets_are_hold(run)
+
+
+@pytest.mark.slow
+def test_thesis_plan_cli_real_time(tmp_path):
+    """Acceptance run: ``uvms-hw run examples/thesis_plan.json --sim`` (about a minute)."""
+    from uvms_jax.hw.cli import main
+
+    assert main(["run", str(EXAMPLE), "--sim", "--no-plot", "--out", str(tmp_path)]) == 0
+    res = json.loads((tmp_path / "result.json").read_text())
+    assert res["max_gate_error_rad"] <= GATE and res["sim"]["limit_violations"] == 0

@@ -1,0 +1,79 @@
+"""``uvms-hw`` entry point and the config group."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from pathlib import Path
+
+import pytest
+import yaml
+
+from _hw_helpers import short_plan
+from uvms_jax.hw import HwConfig, SimConfig, config_from_mapping, plan_to_dict
+from uvms_jax.hw.cli import main
+
+ROOT = Path(__file__).parents[2]
+EXAMPLE = ROOT / "examples" / "thesis_plan.json"
+
+
+@pytest.fixture
+def plan_file(tmp_path):
+    p = tmp_path / "plan.json"
+    p.write_text(json.dumps(plan_to_dict(short_plan())))
+    return p
+
+
+def test_dry_run_example(capsys):
+    assert main(["run", str(EXAMPLE), "--dry-run"]) == 0
+    assert "plan ok: 26 segments" in capsys.readouterr().err
+
+
+def test_refused_plan_exit_2(tmp_path, capsys):
+    obj = plan_to_dict(short_plan())
+    obj["segments"][0]["q"][1][0] = 9.0
+    p = tmp_path / "bad.json"
+    p.write_text(json.dumps(obj))
+    assert main(["run", str(p), "--sim"]) == 2
+    assert "joint G = 9.0000 rad outside" in capsys.readouterr().err
+
+
+def test_needs_a_link_and_faults_need_sim(plan_file, capsys):
+    assert main(["run", str(plan_file)]) == 2
+    assert main(["run", str(plan_file), "--udp", "127.0.0.1:9", "--drop", "0.1"]) == 2
+    assert "need --sim" in capsys.readouterr().err
+
+
+def test_sim_run_completes(plan_file, tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main(["run", str(plan_file), "--sim", "--out", str(out)]) == 0
+    res = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert res["ok"] and res["max_gate_error_rad"] <= 0.01 and res["sim"]["limit_violations"] == 0
+    assert (out / "run.csv").exists() and (out / "run.png").exists() and (out / "result.json").exists()
+
+
+def test_sim_stuck_joint_exit_1(plan_file, tmp_path, capsys):
+    rc = main(["run", str(plan_file), "--sim", "--stuck-joint", "B", "--gate-timeout", "0.5",
+               "--no-plot", "--out", str(tmp_path)])
+    assert rc == 1
+    res = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert not res["ok"] and "joint B" in res["reason"]
+
+
+def test_yaml_mirrors_dataclass_defaults(tmp_path, plan_file):
+    cfg = yaml.safe_load((ROOT / "configs" / "hw" / "default.yaml").read_text())
+    hw, sim = config_from_mapping(cfg)
+    assert hw == HwConfig() and sim == SimConfig()
+    assert set(cfg["executor"]) == {f.name for f in dataclasses.fields(HwConfig)}
+    assert set(cfg["sim"]) == {f.name for f in dataclasses.fields(SimConfig)}
+    with pytest.raises(ValueError, match="unknown keys in hw.executor"):
+        config_from_mapping({"executor": {"rate": 5}})
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("executor:\n  rate_hz: -1\n")
+    assert main(["run", str(plan_file), "--dry-run", "--config", str(bad)]) == 2
+
+
+def test_hw_fault_flag_parses():
+    from uvms_jax.hw.cli import _parse_fault
+
+    assert _parse_fault("d:0x04@1.5") == {"fault_joint": "D", "fault_bits": 4, "fault_after_s": 1.5}
