@@ -132,6 +132,7 @@ class Executor:
         self._last_state_t = -math.inf
         self._next_status_t = -math.inf
         self._move_start = math.nan
+        self._t0 = 0.0
 
     # -- public ----------------------------------------------------------------------------
     def run(self, plan: Plan) -> RunResult:
@@ -141,7 +142,7 @@ class Executor:
           PlanError: the dry-run check refused the plan (nothing was sent).
         """
         summary = check_plan(plan, self.config, self.arm_joints, self.jaws)
-        t0 = self.clock()
+        t0 = self._t0 = self.clock()
         gates: list[GateRecord] = []
         self._move_start = t0
         try:
@@ -212,7 +213,7 @@ class Executor:
             if len(moving):
                 self.client.set_positions((self.devices[i], float(q_cmd[i])) for i in moving)
             meas = self._measure()
-            self.log.add(self.clock(), seg, wp, phase if t < move.duration else "gate", q_cmd, meas)
+            self.log.add(self.clock() - self._t0, seg, wp, phase if t < move.duration else "gate", q_cmd, meas)
             self._ticks += 1
             if meas is not None:
                 self._check_measured(meas)

@@ -13,7 +13,7 @@ __all__ = ["RunLog"]
 
 @dataclasses.dataclass
 class RunLog:
-    """Rows of ``(t [s], segment, waypoint, phase, commanded (n,), measured (n,))``.
+    """Rows of ``(t [s] since the run started, segment, waypoint, phase, commanded (n,), measured (n,))``.
 
     ``measured`` is NaN where a state did not arrive. Units per joint: rad, jaws mm.
     Mutable by design: it is filled while the arm moves.
