@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import numpy as np
 from uvms_jax.hw import (BRAVO7, Bravo7, Executor, HwConfig, LoopbackTransport, PacketID, PacketReader,
                          SimArm, SimConfig, SimLink, VirtualClock, decode_float, parse_plan)
 
