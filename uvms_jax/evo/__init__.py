@@ -1,0 +1,31 @@
+"""Docking-pose optimisation (SPEC §3; Sotiropoulos, Aspragathos & Andritsos 2011).
+
+The docking problem (area manipulability M_a, eq. 1; distance D, eq. 3; fitness eq. 15 over
+the search set Wd, eq. 14), the paper's binary GA (Table 2) as pure ``init/ask/tell``
+functions with whole runs in one jitted loop, a chunked dense grid search and CMA-ES
+(evosax) as baselines, and the ``w_max`` map of eq. 16.
+"""
+
+from uvms_jax.evo._binary import BinaryCodec
+from uvms_jax.evo._binary import make_codec
+from uvms_jax.evo._cmaes import CMAESResult
+from uvms_jax.evo._cmaes import run_cmaes
+from uvms_jax.evo._ga import BinaryGA
+from uvms_jax.evo._ga import GAParams
+from uvms_jax.evo._ga import GAResult
+from uvms_jax.evo._ga import GAState
+from uvms_jax.evo._ga import run_ga
+from uvms_jax.evo._ga import run_ga_batch
+from uvms_jax.evo._grid import GridResult
+from uvms_jax.evo._grid import grid_axes
+from uvms_jax.evo._grid import grid_search
+from uvms_jax.evo._grid import refine_grid_search
+from uvms_jax.evo._problem import DockingEval
+from uvms_jax.evo._problem import DockingProblem
+from uvms_jax.evo._problem import base_transform
+from uvms_jax.evo._problem import docking_point
+from uvms_jax.evo._problem import evaluate
+from uvms_jax.evo._problem import in_search_set
+from uvms_jax.evo._problem import make_docking_problem
+from uvms_jax.evo._wmax import WmaxMap
+from uvms_jax.evo._wmax import wmax_map

@@ -1,0 +1,282 @@
+"""The docking problem of Sotiropoulos, Aspragathos & Andritsos (2011), SPEC §3.
+
+Frames and units (written once): the global frame G sits at the centre of the block's top
+face (z = 0 on the face), metres and radians. A candidate docking pose is the arm base pose
+``[x, y, z, ψ]`` (position of B in G, yaw ψ about z of G). Everything here works on a whole
+population at once: ``(..., 4)`` poses → ``(...)`` results, one jitted call over
+individuals × control points × IK branches.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from flax import struct
+from jax import Array
+
+from uvms_jax import indices
+from uvms_jax.indices._area import approach_down
+from uvms_jax.kin import Chain, with_dtype
+
+Pose = Array  # (..., 4) [x, y, z, ψ] of the arm base in G [m, rad]
+Fitness = Array  # (...)
+
+YAW_MODES = ("heading", "fixed")
+
+
+def yaw_matrix(psi: Array) -> Array:
+    """Rotation ``R_z(ψ) (..., 3, 3)`` about z of G (paper eq. 6–7)."""
+    c, s = jnp.cos(psi), jnp.sin(psi)
+    zero, one = jnp.zeros_like(psi), jnp.ones_like(psi)
+    return jnp.stack(
+        [jnp.stack([c, -s, zero], -1), jnp.stack([s, c, zero], -1), jnp.stack([zero, zero, one], -1)], -2
+    )
+
+
+def base_transform(pose: Pose) -> Array:
+    """``T_G_B (..., 4, 4)`` of candidate poses ``[x, y, z, ψ]`` (paper eq. 7)."""
+    R = yaw_matrix(pose[..., 3])
+    top = jnp.concatenate([R, pose[..., :3, None]], axis=-1)
+    bottom = jnp.broadcast_to(jnp.array([0.0, 0.0, 0.0, 1.0], dtype=pose.dtype), pose.shape[:-1] + (1, 4))
+    return jnp.concatenate([top, bottom], axis=-2)
+
+
+def docking_point(pose: Pose, p_bp: Array) -> Array:
+    """Docking (suction-cup) point ``p_d = T_G_B(pose) · p_bp`` (paper eq. 5), ``(..., 3)`` [m]."""
+    R = yaw_matrix(pose[..., 3])
+    return jnp.sum(R * p_bp[..., None, :], axis=-1) + pose[..., :3]
+
+
+@struct.dataclass
+class DockingProblem:
+    """Immutable docking scene and objective (paper eq. 1, 3–8, 14–15).
+
+    Attributes:
+      chain: the 6R docking arm (tool point = wrist centre).
+      p_control: ``(k, 3)`` control points in G [m] (4 corners K, L, M, N or a grid).
+      task_center: ``(3,)`` centre of the square task area in G [m].
+      task_half: half side of the task area [m].
+      face_half: ``(2,)`` half extents of the block's top face along x, y [m].
+      z_face: z of the top face in G [m] (``z_A`` of eq. 11; 0 by the frame convention).
+      d: height margin of eq. 11 [m].
+      p_i: ``(3,)`` initial vehicle base (suction cup) point in G (eq. 4) [m].
+      p_bp: ``(3,)`` vehicle base point in B [m].
+      a, b: weights of eq. 8 (M_a in m³-like units of w, D in m).
+      tool_yaw: demanded tool yaw in G [rad] when ``yaw_mode == "fixed"``.
+      yaw_mode: ``"heading"`` (tool z along the candidate's ψ, SPEC default) or ``"fixed"``
+        (static).
+    """
+
+    chain: Chain
+    p_control: Array
+    task_center: Array
+    task_half: Array
+    face_half: Array
+    z_face: Array
+    d: Array
+    p_i: Array
+    p_bp: Array
+    a: Array
+    b: Array
+    tool_yaw: Array
+    yaw_mode: str = struct.field(pytree_node=False, default="heading")
+
+    @property
+    def pose_low(self) -> Array:
+        """``(4,)`` lower corner of the box that holds Wd (eq. 9–11) and ψ = −π."""
+        return jnp.array([-self.face_half[0], -self.face_half[1], self.z_face, -jnp.pi], dtype=self.d.dtype)
+
+    @property
+    def pose_high(self) -> Array:
+        """``(4,)`` upper corner of the box that holds Wd (eq. 9–11) and ψ = π."""
+        return jnp.array([self.face_half[0], self.face_half[1], self.z_face + self.d, jnp.pi], dtype=self.d.dtype)
+
+    def fitness(self, pose: Pose) -> Fitness:
+        """Fitness of eq. 15 for ``(..., 4)`` poses (traceable; see :func:`evaluate`)."""
+        return evaluate_traced(self, pose).fitness
+
+
+def make_docking_problem(
+    *,
+    block_size: tuple[float, float, float] = (2.0, 2.0, 2.0),
+    task_center: tuple[float, float, float] = (0.0, 0.0, 0.0),
+    task_size: float = 0.4,
+    control_points_per_side: int = 2,
+    p_init: tuple[float, float, float] = (-2.0, -2.0, 2.0),
+    psi_init: float = float(np.pi / 4),
+    p_bp: tuple[float, float, float] = (-0.3, 0.0, -0.2),
+    a: float = 100.0,
+    b: float = 0.5,
+    d: float = 0.3,
+    yaw_mode: str = "heading",
+    tool_yaw: float = 0.0,
+    arm_lengths: tuple[float, float, float] = (0.1, 0.4, 0.4),
+    dtype=None,
+) -> DockingProblem:
+    """Build the docking problem from plain values (SPEC §3; defaults = paper + SPEC defaults).
+
+    Args:
+      block_size: block extents along x, y, z [m]; G is the centre of the top face.
+      task_center, task_size: square task area on the top face [m].
+      control_points_per_side: 2 = the four corners (paper), n > 2 = an n×n grid.
+      p_init, psi_init: initial arm base position [m] and yaw [rad] (eq. 6).
+      p_bp: vehicle base point (suction cup) in B [m].
+      a, b: weights of eq. 8.
+      d: margin above the face for z (eq. 11) [m].
+      yaw_mode, tool_yaw: tool yaw at the control points: ``"heading"`` follows ψ,
+        ``"fixed"`` uses ``tool_yaw`` [rad] in G.
+      arm_lengths: ``(l0, l1, l2)`` of the docking arm [m].
+      dtype: float dtype of the arrays (default: JAX's default float).
+
+    Raises:
+      ValueError: on non-positive sizes, a task area that does not fit the face, or an
+        unknown yaw mode.
+    """
+    from uvms_jax.kin import docking_arm
+
+    if yaw_mode not in YAW_MODES:
+        raise ValueError(f"yaw_mode must be one of {YAW_MODES}, got {yaw_mode!r}")
+    block = np.asarray(block_size, dtype=np.float64)
+    if block.shape != (3,) or np.any(block <= 0):
+        raise ValueError(f"block_size must be 3 positive lengths, got {block_size}")
+    if task_size <= 0 or d <= 0:
+        raise ValueError(f"task_size and d must be positive, got {task_size} and {d}")
+    center = np.asarray(task_center, dtype=np.float64)
+    if np.any(np.abs(center[:2]) + task_size / 2 > block[:2] / 2):
+        raise ValueError(f"task area (centre {task_center}, size {task_size}) does not fit the top face {block[:2]}")
+    dtype = dtype or jnp.zeros(()).dtype
+    arr = lambda x: jnp.asarray(x, dtype=dtype)
+    # Eq. 4 and 6: initial vehicle base point from the initial manipulator base pose.
+    p_i = docking_point(arr([*p_init, psi_init]), arr(p_bp))
+    return DockingProblem(
+        chain=with_dtype(docking_arm(*arm_lengths), dtype),
+        p_control=arr(indices.control_points(center, task_size, control_points_per_side)),
+        task_center=arr(center),
+        task_half=arr(task_size / 2),
+        face_half=arr(block[:2] / 2),
+        z_face=arr(center[2]),
+        d=arr(d),
+        p_i=p_i,
+        p_bp=arr(p_bp),
+        a=arr(a),
+        b=arr(b),
+        tool_yaw=arr(tool_yaw),
+        yaw_mode=yaw_mode,
+    )
+
+
+def in_search_set(problem: DockingProblem, pose: Pose) -> Array:
+    """Membership of Wd (eq. 14): on the top face, ``z_A ≤ z ≤ z_A + d``, outside the task area."""
+    x, y, z = pose[..., 0], pose[..., 1], pose[..., 2]
+    on_face = (jnp.abs(x) <= problem.face_half[0]) & (jnp.abs(y) <= problem.face_half[1])
+    in_height = (z >= problem.z_face) & (z <= problem.z_face + problem.d)
+    over_task = (jnp.abs(x - problem.task_center[0]) < problem.task_half) & (
+        jnp.abs(y - problem.task_center[1]) < problem.task_half
+    )
+    return on_face & in_height & ~over_task
+
+
+def tool_rotation(problem: DockingProblem, psi: Array) -> Array:
+    """Demanded ``R_G_tool (..., 3, 3)`` at the control points: approach down, yaw per mode."""
+    yaw = psi if problem.yaw_mode == "heading" else jnp.broadcast_to(problem.tool_yaw, psi.shape)
+    return approach_down(yaw)
+
+
+class DockingEval(NamedTuple):
+    """Per-candidate terms of the objective, each ``(...)``.
+
+    Attributes:
+      fitness: eq. 15 (``a·M_a − b·D`` inside Wd, 0 outside).
+      M_a: area manipulability, eq. 1.
+      D: distance from the initial to the proposed vehicle base point, eq. 3 [m].
+      feasible: membership of Wd, eq. 14.
+    """
+
+    fitness: Array
+    M_a: Array
+    D: Array
+    feasible: Array
+
+
+def _targets(problem: DockingProblem, pose: Array) -> Array:
+    """Tool targets ``T_B_tool (..., k, 4, 4)`` at the control points for base poses ``(..., 4)``."""
+    R_gb, p_gb = yaw_matrix(pose[..., 3]), pose[..., :3]
+    R_bg = jnp.swapaxes(R_gb, -1, -2)[..., None, :, :]  # (..., 1, 3, 3)
+    R_gt = tool_rotation(problem, pose[..., 3])[..., None, :, :]
+    R_bt = jnp.einsum("...ij,...jk->...ik", R_bg, R_gt)  # (..., 1, 3, 3)
+    p_bt = jnp.einsum("...ij,...j->...i", R_bg, problem.p_control - p_gb[..., None, :])  # (..., k, 3)
+    R_bt = jnp.broadcast_to(R_bt, p_bt.shape + (3,))
+    top = jnp.concatenate([R_bt, p_bt[..., None]], axis=-1)
+    bottom = jnp.broadcast_to(jnp.array([0.0, 0.0, 0.0, 1.0], dtype=pose.dtype), p_bt.shape[:-1] + (1, 4))
+    return jnp.concatenate([top, bottom], axis=-2)
+
+
+def _terms(problem: DockingProblem, pose: Array, w_max: Array) -> DockingEval:
+    """Objective terms from the best-branch manipulability ``w_max (..., k)`` at the points."""
+    M_a = jnp.min(w_max, axis=-1)  # eq. 1: min over control points of max over branches
+    D = jnp.linalg.norm(docking_point(pose, problem.p_bp) - problem.p_i, axis=-1)  # eq. 3
+    feasible = in_search_set(problem, pose)  # eq. 14
+    fitness = jnp.where(feasible, problem.a * M_a - problem.b * D, 0.0)  # eq. 8, 15
+    return DockingEval(fitness=fitness, M_a=M_a, D=D, feasible=feasible)
+
+
+def evaluate_traced(problem: DockingProblem, pose: Array) -> DockingEval:
+    """:func:`evaluate` for use inside ``jit``/``vmap``/loops (no input checks, no padding).
+
+    One :func:`uvms_jax.indices.max_branch_manipulability` call covers individuals ×
+    control points × IK branches.
+    """
+    return _terms(problem, pose, indices.max_branch_manipulability(problem.chain, _targets(problem, pose)))
+
+
+# Eager calls pad the flat batch of IK targets to a bucket, so that populations, grids and
+# maps of different sizes reuse a few compiled kernels (compiling the IK is the slow part).
+MIN_TARGET_BUCKET = 512
+
+
+def bucket_size(n: int) -> int:
+    """Padded length for ``n`` eager IK targets: the next power of two, at least 512."""
+    return max(MIN_TARGET_BUCKET, 1 << max(0, int(n) - 1).bit_length())
+
+
+def max_branch_w_bucketed(chain: Chain, T_base_tool: Array) -> Array:
+    """Eager :func:`uvms_jax.indices.max_branch_manipulability` of ``(..., 4, 4)`` targets,
+    computed on a padded flat batch (padding repeats the first target)."""
+    flat = T_base_tool.reshape((-1, 4, 4))
+    n = flat.shape[0]
+    pad = bucket_size(n) - n
+    padded = jnp.concatenate([flat, jnp.broadcast_to(flat[:1], (pad, 4, 4))], axis=0)
+    return indices.max_branch_manipulability(chain, padded)[:n].reshape(T_base_tool.shape[:-2])
+
+
+_targets_jit = jax.jit(_targets)
+_terms_jit = jax.jit(_terms)
+
+
+def evaluate(problem: DockingProblem, pose) -> DockingEval:
+    """Objective terms of candidate poses (paper eq. 1, 3, 8, 14, 15).
+
+    Eager entry point with input checks; inside ``jit`` use :func:`evaluate_traced` or
+    ``problem.fitness``.
+
+    Args:
+      problem: the scene.
+      pose: ``(..., 4)`` candidate arm base poses ``[x, y, z, ψ]`` in G [m, rad].
+
+    Returns:
+      :class:`DockingEval` with fields of shape ``(...)``.
+    """
+    pose = jnp.asarray(pose, dtype=problem.d.dtype)
+    if pose.ndim == 0 or pose.shape[-1] != 4:
+        raise ValueError(f"pose must have shape (..., 4) = [x, y, z, psi], got {pose.shape}")
+    if isinstance(pose, jax.core.Tracer):
+        return evaluate_traced(problem, pose)
+    if bool(jnp.isnan(pose).any()):
+        raise ValueError("pose contains NaN")
+    flat = pose.reshape((-1, 4))
+    w_max = max_branch_w_bucketed(problem.chain, _targets_jit(problem, flat))
+    out = _terms_jit(problem, flat, w_max)
+    return jax.tree_util.tree_map(lambda x: x.reshape(pose.shape[:-1]), out)
