@@ -1,0 +1,83 @@
+"""Pick-and-place scheduling (thesis ch. 4–5, SPEC §5).
+
+Build a ``PickPlaceProblem`` (from a ready cost matrix, or from per-edge metrics through
+``normalise_metrics`` and ``cost_matrix``), then solve it with ``greedy`` (the thesis's
+"Dijkstra"), ``grasp`` (all iterations in one jitted call), ``astar`` (thesis heuristic,
+optimal) or ``exact`` (dynamic programming, the ground truth); ``score`` checks and costs a
+batch of schedules in one jitted call. Example::
+
+    from uvms_jax import sched
+    problem = sched.thesis_problem()          # eq. 4.1 matrix, Table 5.1 nodes
+    sched.greedy(problem).path_str()          # '0-2-5-4-8-0-1-6-3-7-9'
+    best = sched.exact(problem)
+    sched.schedule_edges(problem, best.path)  # moves to plan and execute
+"""
+
+from uvms_jax.sched._astar import astar
+from uvms_jax.sched._costs import HIGHER_IS_BETTER
+from uvms_jax.sched._costs import METRICS
+from uvms_jax.sched._costs import cost_matrix
+from uvms_jax.sched._costs import metric_tensor
+from uvms_jax.sched._costs import mirror_goal
+from uvms_jax.sched._costs import normalise_metrics
+from uvms_jax.sched._costs import path_metric_sums
+from uvms_jax.sched._edges import ScheduleEdge
+from uvms_jax.sched._edges import schedule_edges
+from uvms_jax.sched._exact import exact
+from uvms_jax.sched._greedy import greedy
+from uvms_jax.sched._grasp import THESIS_ALPHAS
+from uvms_jax.sched._grasp import THESIS_NEIGHBOURHOOD
+from uvms_jax.sched._grasp import GraspBatch
+from uvms_jax.sched._grasp import grasp
+from uvms_jax.sched._grasp import grasp_batch
+from uvms_jax.sched._problem import PAD_NODE
+from uvms_jax.sched._problem import PickPlaceProblem
+from uvms_jax.sched._problem import as_padded_paths
+from uvms_jax.sched._problem import path_cost
+from uvms_jax.sched._random import random_problem
+from uvms_jax.sched._schedule import Schedule
+from uvms_jax.sched._score import Reason
+from uvms_jax.sched._score import Scores
+from uvms_jax.sched._score import score
+from uvms_jax.sched._thesis import THESIS_COMPAT
+from uvms_jax.sched._thesis import THESIS_EQ41
+from uvms_jax.sched._thesis import THESIS_EQ41_GREEDY_PATH
+from uvms_jax.sched._thesis import THESIS_NODE_NAMES
+from uvms_jax.sched._thesis import thesis_problem
+
+SOLVERS = ("greedy", "grasp", "astar", "exact")
+
+__all__ = [
+    "HIGHER_IS_BETTER",
+    "METRICS",
+    "PAD_NODE",
+    "SOLVERS",
+    "THESIS_ALPHAS",
+    "THESIS_COMPAT",
+    "THESIS_EQ41",
+    "THESIS_EQ41_GREEDY_PATH",
+    "THESIS_NEIGHBOURHOOD",
+    "THESIS_NODE_NAMES",
+    "GraspBatch",
+    "PickPlaceProblem",
+    "Reason",
+    "Schedule",
+    "ScheduleEdge",
+    "Scores",
+    "as_padded_paths",
+    "astar",
+    "cost_matrix",
+    "exact",
+    "greedy",
+    "grasp",
+    "grasp_batch",
+    "metric_tensor",
+    "mirror_goal",
+    "normalise_metrics",
+    "path_cost",
+    "path_metric_sums",
+    "random_problem",
+    "schedule_edges",
+    "score",
+    "thesis_problem",
+]

@@ -1,0 +1,79 @@
+"""Random instances for tests, benchmarks and synthetic studies (explicit PRNG keys)."""
+
+from __future__ import annotations
+
+from typing import Mapping, Sequence
+
+import jax
+import numpy as np
+
+from uvms_jax.sched._problem import PickPlaceProblem
+
+
+def _rng(key: jax.Array) -> np.random.Generator:
+    """A NumPy generator seeded from a JAX key (instances are built on the host)."""
+    return np.random.default_rng(int(jax.random.randint(key, (), 0, 2**31 - 1)))
+
+
+def random_problem(
+    key: jax.Array,
+    n_objects: int,
+    n_bases: int,
+    *,
+    compat: Mapping[int, Sequence[int]] | None = None,
+    bases_per_object: tuple[int, int] = (1, 2),
+    nan_fraction: float = 0.0,
+    max_tries: int = 100,
+) -> PickPlaceProblem:
+    """A random instance in the generalised thesis layout.
+
+    Nodes: 0 start, objects ``1..N``, bases ``N+1..N+M``, goal ``N+M+1``. Costs are uniform
+    in ``[0, 1)``; a base → goal move costs the same as base → start (the goal is the start
+    geometrically, as in the thesis).
+
+    Args:
+      key: JAX PRNG key.
+      n_objects, n_bases: ``N`` and ``M`` (``M >= N``).
+      compat: object → allowed bases; default random: each object gets a distinct base (so
+        a full placement exists) plus up to ``bases_per_object[1] - 1`` random extra bases,
+        at least ``bases_per_object[0]`` in all.
+      nan_fraction: fraction of allowed moves made NaN (forbidden); instances without a
+        feasible schedule are redrawn.
+      max_tries: redraws before giving up.
+
+    Raises:
+      ValueError: ``n_bases < n_objects`` or no feasible instance within ``max_tries``.
+    """
+    if n_bases < n_objects:
+        raise ValueError(f"need at least as many bases as objects; got {n_objects} objects, {n_bases} bases")
+    rng = _rng(key)
+    N, M = n_objects, n_bases
+    n = N + M + 2
+    objects = list(range(1, N + 1))
+    bases = list(range(N + 1, N + M + 1))
+    if compat is None:
+        own = rng.permutation(bases)[:N]
+        compat = {}
+        for o, b in zip(objects, own):
+            k = int(rng.integers(bases_per_object[0], bases_per_object[1] + 1))
+            extra = [x for x in rng.permutation(bases) if x != b][: max(k - 1, 0)]
+            compat[o] = tuple(sorted([int(b), *map(int, extra)]))
+    last = None
+    for _ in range(max_tries):
+        c = rng.random((n, n))
+        mask = np.zeros((n, n), bool)
+        mask[0, objects] = True
+        for o, bs in compat.items():
+            mask[o, list(bs)] = True
+        for b in bases:
+            mask[b, objects] = True
+            mask[b, 0] = mask[b, n - 1] = True
+        c[:, n - 1] = c[:, 0]
+        drop = rng.random((n, n)) < nan_fraction
+        drop[:, n - 1] = drop[:, 0]
+        cost = np.where(mask & ~drop, c, np.nan)
+        try:
+            return PickPlaceProblem.from_matrix(cost, compat, start=0, goal=n - 1)
+        except ValueError as e:  # infeasible draw
+            last = e
+    raise ValueError(f"no feasible random instance in {max_tries} tries: {last}")

@@ -1,0 +1,78 @@
+"""Batch scoring of candidate schedules: cost and a reason code, in one jitted call."""
+
+from __future__ import annotations
+
+import enum
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+from jax import Array
+
+from uvms_jax.sched._problem import BASE, OBJECT, PickPlaceProblem
+
+
+class Reason(enum.IntEnum):
+    """Why a schedule is invalid (the first failing check, in this order); OK = valid."""
+
+    OK = 0
+    UNKNOWN_NODE = 1  #: a node index outside 0..n-1 (and not the padding -1)
+    NOT_FROM_START = 2  #: the first node is not the start
+    NO_GOAL = 3  #: the goal is missing or appears more than once
+    OBJECT_NOT_PLACED_ONCE = 4  #: some object is missing or picked twice
+    BASE_REUSED = 5  #: a base receives two objects
+    MOVE_RULE = 6  #: a move the rules forbid (incl. an incompatible base, padding inside)
+    FORBIDDEN_EDGE = 7  #: a move whose cost is NaN
+
+
+class Scores(NamedTuple):
+    """Attributes: cost ``(...,)`` float32 (``inf`` unless valid); reason ``(...,)`` int32
+    (``Reason`` codes)."""
+
+    cost: Array
+    reason: Array
+
+
+@jax.jit
+def score(problem: PickPlaceProblem, paths: Array) -> Scores:
+    """Scores a batch of schedules in one jitted call.
+
+    A schedule is valid when it starts at the start, every move is allowed by the move
+    rules (start → object → allowed base → object | start | goal, goal → padding) with a
+    finite cost, every object appears exactly once, no base twice, and the goal once. With
+    capacity one these also imply "goal only when all objects are placed, then only it".
+
+    Args:
+      problem: the instance.
+      paths: ``(..., L)`` int node sequences padded with ``-1`` after the goal
+        (see ``as_padded_paths``); any ``L >= 2``.
+
+    Returns:
+      ``Scores`` with ``(...,)`` cost (float32) and reason code.
+    """
+    paths = jnp.asarray(paths)
+    n = problem.n_nodes
+    unknown = jnp.any((paths < -1) | (paths >= n), axis=-1)
+    p = jnp.where((paths < 0) | (paths >= n), n, paths)  # padding (and unknown) → node n
+    W = jnp.asarray(problem.move_cost, jnp.float32)
+    rule = jnp.asarray(problem.rule)
+    a, b = p[..., :-1], p[..., 1:]
+    moves = W[a, b]
+    counts = jnp.sum(p[..., :, None] == jnp.arange(n)[None, :], axis=-2)  # (..., n)
+    kind = jnp.asarray(problem.kind[:n])
+    flags = jnp.stack(
+        [
+            unknown,
+            p[..., 0] != problem.start,
+            counts[..., problem.goal] != 1,
+            jnp.any((kind == OBJECT) & (counts != 1), axis=-1),
+            jnp.any((kind == BASE) & (counts > 1), axis=-1),
+            ~jnp.all(rule[a, b], axis=-1),
+            ~jnp.all(jnp.isfinite(moves), axis=-1),
+        ],
+        axis=-1,
+    )
+    bad = jnp.any(flags, axis=-1)
+    reason = jnp.where(bad, jnp.argmax(flags, axis=-1) + 1, Reason.OK).astype(jnp.int32)
+    cost = jnp.where(bad, jnp.inf, jnp.sum(moves, axis=-1))
+    return Scores(cost, reason)
