@@ -7,7 +7,11 @@ import numpy as np
 from jax import Array
 
 from uvms_jax.indices._indices import manipulability
-from uvms_jax.kin import Chain, elbow_ik, jacobian
+import jax
+
+from uvms_jax.kin import Chain, with_dtype
+from uvms_jax.kin._fk import _geometric_from_spatial, _kinematics_one
+from uvms_jax.kin._ik import _check_pose, elbow_branches, reaches
 from uvms_jax.kin._lie import homogeneous, matmul
 
 
@@ -39,6 +43,22 @@ def approach_down(yaw) -> Array:
     return jnp.stack([x, y, z], axis=-1)
 
 
+def _max_branch_w_one(chain: Chain, T: Array) -> Array:
+    branches = elbow_branches(chain, T)
+    # One FK pass per branch serves both the residual check and the Jacobian.
+    k = jax.vmap(_kinematics_one, in_axes=(None, 0))(chain, branches.q)
+    J = _geometric_from_spatial(k.twists, k.T_base_tool[..., :3, 3])
+    valid = branches.valid & reaches(T, k.T_base_tool)
+    return jnp.max(jnp.where(valid, manipulability(J), 0.0), axis=-1)
+
+
+@jax.jit
+def _max_branch_w(chain: Chain, T: Array) -> Array:
+    chain = with_dtype(chain, T.dtype)
+    flat = T.reshape((-1, 4, 4))
+    return jax.vmap(_max_branch_w_one, in_axes=(None, 0))(chain, flat).reshape(T.shape[:-2])
+
+
 def max_branch_manipulability(chain: Chain, T_base_tool) -> Array:
     """``max`` of w over the valid closed-form IK branches of each target, 0 where none is valid.
 
@@ -47,12 +67,9 @@ def max_branch_manipulability(chain: Chain, T_base_tool) -> Array:
       T_base_tool: ``(..., 4, 4)`` target tool poses in the arm base frame.
 
     Returns:
-      ``(...)`` best manipulability [m³ for the docking arm's 6×6 geometric Jacobian].
+      ``(...)`` best manipulability (of the 6×6 geometric Jacobian).
     """
-    sol = elbow_ik(chain, T_base_tool)
-    q = jnp.where(sol.valid[..., None], sol.q, 0.0)
-    w = manipulability(jacobian(chain, q))
-    return jnp.max(jnp.where(sol.valid, w, 0.0), axis=-1)
+    return _max_branch_w(chain, _check_pose(T_base_tool))
 
 
 def area_manipulability(chain: Chain, T_world_base, p_world_points, R_world_tool) -> Array:

@@ -53,11 +53,14 @@ def wrap_into_limits(chain: Chain, q: Array) -> tuple[Array, Array]:
     return q, jnp.all((q >= chain.lower) & (q <= chain.upper), axis=-1)
 
 
-def _residual_ok(chain: Chain, q: Array, T: Array) -> Array:
-    err = pose_error(T, jax.vmap(lambda qi: _kinematics_one(chain, qi).T_base_tool)(q))
-    return (jnp.linalg.norm(err[..., :3], axis=-1) < POSITION_TOL[q.dtype]) & (
-        jnp.linalg.norm(err[..., 3:], axis=-1) < ROTATION_TOL[q.dtype]
-    )
+def reaches(T_target: Array, T: Array) -> Array:
+    """``(...)`` True where pose ``T`` equals ``T_target`` within the IK tolerances of its dtype.
+
+    The orientation test uses ``‖R_target − R‖_F ≈ √2 |Δθ|`` (cheaper than a matrix log).
+    """
+    dp = jnp.linalg.norm(T_target[..., :3, 3] - T[..., :3, 3], axis=-1)
+    dR = jnp.sqrt(jnp.sum((T_target[..., :3, :3] - T[..., :3, :3]) ** 2, axis=(-1, -2)))
+    return (dp < POSITION_TOL[T.dtype]) & (dR < jnp.sqrt(2.0) * ROTATION_TOL[T.dtype])
 
 
 def _inverse(R: Array, p: Array) -> tuple[Array, Array]:
@@ -65,8 +68,13 @@ def _inverse(R: Array, p: Array) -> tuple[Array, Array]:
     return Rt, -matvec(Rt, p)
 
 
-def _elbow_ik_one(chain: Chain, T: Array) -> IKSolutions:
-    """Eight closed-form branches for one target ``T (4, 4)`` (Murray §3.3.2)."""
+def elbow_branches(chain: Chain, T: Array) -> IKSolutions:
+    """Eight closed-form branches for one target ``T (4, 4)`` (Murray §3.3.2), unverified.
+
+    ``q`` holds the raw algebraic angles shifted into the limits modulo 2π (finite
+    everywhere); ``valid`` covers solvability of every subproblem and the joint limits.
+    Callers confirm with :func:`reaches` on FK of ``q``.
+    """
     w = chain.twists[:, 3:]
     # Points on the axes: shoulder = closest point of axis 2 to the origin (it lies on axis 1
     # too), elbow likewise on axis 3; wrist centre = tool point at q = 0.
@@ -104,9 +112,16 @@ def _elbow_ik_one(chain: Chain, T: Array) -> IKSolutions:
                 branches_ok.append(ok3 & ok12 & ok45)
     q = jnp.stack(branches_q)
     q, inside = wrap_into_limits(chain, q)
-    valid = jnp.stack(branches_ok) & inside & jnp.all(jnp.isfinite(q), axis=-1)
-    valid = valid & _residual_ok(chain, jnp.where(valid[:, None], q, 0.0), T)
-    return IKSolutions(q=jnp.where(valid[:, None], q, jnp.nan), valid=valid)
+    finite = jnp.all(jnp.isfinite(q), axis=-1)
+    valid = jnp.stack(branches_ok) & inside & finite
+    return IKSolutions(q=jnp.where(finite[:, None], q, 0.0), valid=valid)
+
+
+def _elbow_ik_one(chain: Chain, T: Array) -> IKSolutions:
+    branches = elbow_branches(chain, T)
+    T_reached = jax.vmap(lambda qi: _kinematics_one(chain, qi).T_base_tool)(branches.q)
+    valid = branches.valid & reaches(T, T_reached)
+    return IKSolutions(q=jnp.where(valid[:, None], branches.q, jnp.nan), valid=valid)
 
 
 @jax.jit
@@ -145,7 +160,10 @@ def _dls_one(chain: Chain, T: Array, q0: Array, iterations: int, damping: float)
         k = _kinematics_one(chain, q)
         J = _geometric_from_spatial(k.twists, k.T_base_tool[:3, 3])
         e = pose_error(T, k.T_base_tool)
-        dq = J.T @ jnp.linalg.solve(J @ J.T + damping**2 * eye, e)
+        # Error-scaled damping: robust far from the target and near singularities, and
+        # Gauss–Newton-fast as the error vanishes (Levenberg–Marquardt flavour of DLS).
+        lam2 = damping**2 * (jnp.sum(e * e) + 1e-6)
+        dq = J.T @ jnp.linalg.solve(J @ J.T + lam2 * eye, e)
         # Box-constrained DLS: iterates stay inside the limits (an algorithmic projection;
         # solutions are still accepted only if FK reaches the target).
         return jnp.clip(q + dq, chain.lower, chain.upper)
@@ -181,7 +199,7 @@ def numeric_ik(
     key: Array,
     n_seeds: int = 32,
     iterations: int = 100,
-    damping: float = 0.05,
+    damping: float = 1.0,
     all_seeds: bool = False,
 ) -> IKSolutions:
     """Numerical IK of any chain: damped least squares from many random seeds in parallel.
@@ -192,7 +210,7 @@ def numeric_ik(
       key: PRNG key for the seeds (uniform inside the joint limits).
       n_seeds: seeds per target, all run in parallel.
       iterations: DLS iterations per seed.
-      damping: DLS damping λ [m or rad].
+      damping: DLS damping factor; λ² = damping² (‖e‖² + 10⁻⁶).
       all_seeds: return every seed's converged solution (``(..., n_seeds, n)``) instead of
         the best one per target.
 
