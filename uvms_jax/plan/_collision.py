@@ -1,0 +1,230 @@
+"""Collision and clearance queries on a :class:`~uvms_jax.plan.Scene` (MuJoCo, CPU).
+
+``is_valid(q)``: inside the joint limits, no arm–scene contact and no self-contact between
+non-adjacent links closer than the safety ``margin``. ``clearance(q)``: the smallest signed
+distance between the moving arm (links F…B, jaws, held object) and the scene. Both run
+``mj_kinematics`` + ``mj_collision`` (a few µs per configuration); clearance uses a second
+copy of the model whose geom margins are ``clearance_max``, so that MuJoCo's broad and narrow
+phases return every arm–scene pair nearer than that with its signed distance in one call.
+Batched versions take ``(k, 6)`` arrays (a whole trajectory or population) and loop over
+MuJoCo calls without per-state Python objects. Validity never reads ``MjData.contact`` (building
+that view costs ~100 µs): the checker keeps one model copy whose geom margins are the safety
+margin and one whose margins are 0, and a state is valid exactly when MuJoCo reports no contact.
+"""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+
+from uvms_jax.plan._scene import ARM_BITS, BASE_BITS, OFF_BITS, SCENE_BITS, SHOULDER_BITS, Context, Scene
+
+__all__ = ["CollisionChecker", "densify"]
+
+
+def densify(path: np.ndarray, resolution: float) -> np.ndarray:
+    """Linear interpolation of a joint path so that no joint moves more than ``resolution``
+    between consecutive rows.
+
+    Args:
+      path: ``(k, n)`` waypoints [rad], k ≥ 1.
+      resolution: largest per-joint step [rad], > 0.
+
+    Returns:
+      ``(m, n)`` points, first and last equal to the path's; every waypoint is kept.
+    """
+    path = np.asarray(path, dtype=float)
+    if path.ndim != 2 or path.shape[0] < 1:
+        raise ValueError(f"path must have shape (k, n) with k >= 1, got {path.shape}")
+    if not resolution > 0:
+        raise ValueError(f"resolution must be positive, got {resolution}")
+    out = [path[:1]]
+    for a, b in zip(path[:-1], path[1:]):
+        steps = max(1, int(np.ceil(np.max(np.abs(b - a)) / resolution - 1e-12)))
+        s = np.arange(1, steps + 1)[:, None] / steps
+        out.append(a + s * (b - a))
+    return np.concatenate(out)
+
+
+def _compile(xml: str, margin: float) -> tuple[mujoco.MjModel, mujoco.MjData]:
+    tag = '<compiler angle="radian"/>'
+    if tag not in xml:
+        raise ValueError("scene XML lacks <compiler angle=\"radian\"/>")
+    m = mujoco.MjModel.from_xml_string(xml.replace(tag, f'{tag}\n  <default><geom margin="{margin!r}"/></default>', 1))
+    return m, mujoco.MjData(m)
+
+
+class CollisionChecker:
+    """Validity and clearance of arm configurations in a scene.
+
+    Args:
+      scene: the built scene.
+      margin: safety distance [m]: ``is_valid`` rejects any pair nearer than this.
+      clearance_max: distances are reported up to this value [m] (farther pairs read as it).
+
+    The checker owns two model copies and one ``MjData`` each; it is not thread-safe.
+    """
+
+    def __init__(self, scene: Scene, margin: float = 0.005, clearance_max: float = 0.3):
+        if margin < 0 or clearance_max <= margin:
+            raise ValueError(f"need 0 <= margin < clearance_max, got {margin}, {clearance_max}")
+        self.scene = scene
+        self.margin = float(margin)
+        self.clearance_max = float(clearance_max)
+        self.lower = scene.model.jnt_range[:, 0].copy()
+        self.upper = scene.model.jnt_range[:, 1].copy()
+        # MuJoCo adds the two geoms' margins of a pair: half each gives the pair margin. The
+        # margin must be compiled in (not set afterwards): broad-phase bounds include it.
+        self._m, self._d = _compile(scene.xml, self.margin / 2)
+        self._m0, self._d0 = _compile(scene.xml, 0.0)
+        self._mc, self._dc = _compile(scene.xml, self.clearance_max / 2)
+        self.n_checks = 0
+        self.context = Context()
+        self._apply(Context())
+
+    # -- context -------------------------------------------------------------------------
+    def set_context(self, context: Context) -> None:
+        """Switch the geoms for ``context`` (held object on, ignored obstacles off)."""
+        if context != self.context:
+            self._apply(context)
+
+    def _apply(self, context: Context) -> None:
+        sc = self.scene
+        if context.held is not None and context.held not in sc.held_geoms:
+            raise ValueError(f"unknown held object node {context.held} (objects: {sorted(sc.held_geoms)})")
+        for key in context.ignore:
+            if key not in sc.obstacle_geoms:
+                raise ValueError(f"cannot ignore unknown obstacle {key!r} (known: {list(sc.obstacle_geoms)})")
+        off = set()
+        for key in context.ignore:
+            off.update(sc.obstacle_geoms[key])
+        if context.held is not None:
+            off.update(sc.obstacle_geoms.get(context.held, ()))
+        held_on = sc.held_geoms.get(context.held) if context.held is not None else None
+        moving = set(sc.arm_geoms)
+        for g in range(sc.model.ngeom):
+            if g == sc.base_geom:
+                bits = BASE_BITS
+            elif g in sc.shoulder_geoms:
+                bits = SHOULDER_BITS
+            elif g in moving or g == held_on:
+                bits = ARM_BITS
+            elif g in sc.held_geoms.values():
+                bits = OFF_BITS
+            else:
+                bits = OFF_BITS if g in off else SCENE_BITS
+            self._m.geom_contype[g], self._m.geom_conaffinity[g] = bits
+            self._m0.geom_contype[g], self._m0.geom_conaffinity[g] = bits
+            # Clearance model: only the clearance geoms (and the held object) against the scene.
+            if g in sc.clearance_geoms or g == held_on:
+                cbits = (1, 0)
+            elif bits == SCENE_BITS:
+                cbits = (0, 1)
+            else:
+                cbits = OFF_BITS
+            self._mc.geom_contype[g], self._mc.geom_conaffinity[g] = cbits
+        self.context = context
+
+    # -- single configurations ------------------------------------------------------------
+    def in_limits(self, q: np.ndarray) -> bool:
+        q = np.asarray(q, dtype=float)
+        return bool(np.all(q >= self.lower) & np.all(q <= self.upper))
+
+    def _pick(self, margin: float | None) -> tuple[mujoco.MjModel, mujoco.MjData]:
+        if margin is None or margin == self.margin:
+            return self._m, self._d
+        if margin == 0.0:
+            return self._m0, self._d0
+        raise ValueError(f"margin must be the checker's margin ({self.margin}) or 0, got {margin}")
+
+    def is_valid(self, q, margin: float | None = None) -> bool:
+        """Whether ``q (6,)`` [rad] is inside the limits and no pair is nearer than ``margin``
+        [m]: the checker's safety margin (default) or 0 (no penetration)."""
+        q = np.asarray(q, dtype=float)
+        if q.shape != (self._m.nq,) or not np.all(np.isfinite(q)):
+            raise ValueError(f"q must be {self._m.nq} finite joint angles, got {q}")
+        m, d = self._pick(margin)
+        if not self.in_limits(q):
+            return False
+        d.qpos[:] = q
+        mujoco.mj_kinematics(m, d)
+        mujoco.mj_collision(m, d)
+        self.n_checks += 1
+        return d.ncon == 0
+
+    def state_validator(self, n: int = 6):
+        """A minimal-overhead ``valid(state) -> bool`` for OMPL states (indexable, ``n``
+        values, inside the bounds), using the safety margin and the current context."""
+        m, d = self._m, self._d
+        qpos = d.qpos
+        kinematics, collision = mujoco.mj_kinematics, mujoco.mj_collision
+        idx = range(n)
+
+        def valid(state) -> bool:
+            for i in idx:
+                qpos[i] = state[i]
+            kinematics(m, d)
+            collision(m, d)
+            return d.ncon == 0
+
+        return valid
+
+    def contacts(self, q, margin: float | None = None) -> list[tuple[str, str, float]]:
+        """The pairs nearer than ``margin`` at ``q``: ``(geom name, geom name, signed distance [m])``."""
+        mod, d = self._pick(margin)
+        d.qpos[:] = np.asarray(q, dtype=float)
+        mujoco.mj_kinematics(mod, d)
+        mujoco.mj_collision(mod, d)
+        name = lambda g: mujoco.mj_id2name(mod, mujoco.mjtObj.mjOBJ_GEOM, int(g))  # noqa: E731
+        c = d.contact
+        return [(name(c.geom[i][0]), name(c.geom[i][1]), float(c.dist[i])) for i in range(d.ncon)]
+
+    def clearance(self, q) -> float:
+        """Smallest signed distance [m] between the moving arm (links F…B, jaws, held object)
+        and the scene at ``q (6,)``, capped at ``clearance_max``; negative = penetration."""
+        d = self._dc
+        d.qpos[:] = q
+        mujoco.mj_kinematics(self._mc, d)
+        mujoco.mj_collision(self._mc, d)
+        if d.ncon == 0:
+            return self.clearance_max
+        return float(min(self.clearance_max, np.min(d.contact.dist[: d.ncon])))
+
+    # -- batches -------------------------------------------------------------------------
+    def _check_batch(self, Q) -> np.ndarray:
+        Q = np.asarray(Q, dtype=float)
+        if Q.ndim != 2 or Q.shape[1] != self._m.nq or not np.all(np.isfinite(Q)):
+            raise ValueError(f"Q must be a finite (k, {self._m.nq}) array, got shape {Q.shape}")
+        return Q
+
+    def is_valid_batch(self, Q, margin: float | None = None) -> np.ndarray:
+        """``(k,)`` bool: :meth:`is_valid` of every row of ``Q (k, 6)``."""
+        Q = self._check_batch(Q)
+        mod, d = self._pick(margin)
+        inside = np.all((Q >= self.lower) & (Q <= self.upper), axis=1)
+        out = np.zeros(len(Q), dtype=bool)
+        qpos = d.qpos
+        for i in np.flatnonzero(inside):
+            qpos[:] = Q[i]
+            mujoco.mj_kinematics(mod, d)
+            mujoco.mj_collision(mod, d)
+            out[i] = d.ncon == 0
+        self.n_checks += int(inside.sum())
+        return out
+
+    def clearance_batch(self, Q) -> np.ndarray:
+        """``(k,)`` :meth:`clearance` of every row of ``Q (k, 6)`` [m]."""
+        Q = self._check_batch(Q)
+        out = np.empty(len(Q))
+        mod, d = self._mc, self._dc
+        for i, q in enumerate(Q):
+            d.qpos[:] = q
+            mujoco.mj_kinematics(mod, d)
+            mujoco.mj_collision(mod, d)
+            out[i] = self.clearance_max if d.ncon == 0 else min(self.clearance_max, np.min(d.contact.dist[: d.ncon]))
+        return out
+
+    def path_is_valid(self, path, resolution: float = 0.01, margin: float | None = None) -> bool:
+        """Whether the piecewise-linear joint path ``(k, 6)`` is valid at every point of a
+        ``resolution`` [rad] interpolation."""
+        return bool(np.all(self.is_valid_batch(densify(path, resolution), margin)))

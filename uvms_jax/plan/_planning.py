@@ -1,0 +1,203 @@
+"""OMPL planning over the six arm joints with the MuJoCo validity checker, and trajectories.
+
+A plan is: ``solve`` (RRTConnect, BKPIECE1 or PRM) within a time budget, ``simplifySolution``,
+then a check of the simplified path at ``resolution`` [rad] with the true geometry (margin 0)
+— the planner itself works with the checker's safety margin, so the re-check passes unless
+the planner's own motion checks skipped a thin obstacle. A path that fails the re-check is
+re-planned while budget is left. Time parameterisation follows the arm's controller (thesis
+4.6, :func:`uvms_jax.hw.synchronised_move`): rest to rest between consecutive waypoints, all
+joints arriving together, within the velocity and acceleration limits.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+
+import numpy as np
+from ompl import base as ob
+from ompl import geometric as og
+from ompl import util as ou
+
+from uvms_jax.hw.trajectory import synchronised_move
+from uvms_jax.plan._collision import CollisionChecker, densify
+
+__all__ = ["PLANNERS", "PlanResult", "Trajectory", "plan_motion", "seed_ompl", "time_parameterize"]
+
+PLANNERS = ("RRTConnect", "BKPIECE1", "PRM")
+_ou_quiet = False
+
+
+def seed_ompl(seed: int) -> None:
+    """Seed OMPL's RNG with ``seed + 1`` (OMPL refuses 0) and silence its logging. Call once
+    per process, before any planner exists (OMPL ignores later seeds; NOTES.md)."""
+    global _ou_quiet
+    if seed < 0:
+        raise ValueError(f"seed must be >= 0, got {seed}")
+    ou.setLogLevel(ou.LogLevel.LOG_WARN)
+    ou.RNG.setSeed(int(seed) + 1)
+    _ou_quiet = True
+
+
+@dataclasses.dataclass(frozen=True)
+class PlanResult:
+    """Outcome of one planning query.
+
+    Attributes:
+      success: a path was found and passed the re-check.
+      path: ``(k, 6)`` simplified waypoints [rad] (empty when not successful).
+      planning_time_s: wall time of solve + simplify over all attempts [s].
+      attempts: solve calls made.
+      revalidated: the returned path passed the dense re-check with margin 0.
+    """
+
+    success: bool
+    path: np.ndarray
+    planning_time_s: float
+    attempts: int
+    revalidated: bool
+
+
+@dataclasses.dataclass(frozen=True)
+class Trajectory:
+    """A time-parameterised joint path: waypoints and the times the arm reaches them.
+
+    Attributes:
+      t: ``(k,)`` waypoint times [s], t[0] = 0.
+      q: ``(k, 6)`` waypoints [rad].
+      max_velocity, max_acceleration: ``(6,)`` limits used [rad/s, rad/s²].
+    """
+
+    t: np.ndarray
+    q: np.ndarray
+    max_velocity: np.ndarray
+    max_acceleration: np.ndarray
+
+    def sample(self, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Positions and velocities every ``dt`` [s] (and at every waypoint): ``t (m,)``,
+        ``q (m, 6)``, ``qd (m, 6)``."""
+        ts, qs, vs = [], [], []
+        for i in range(len(self.t) - 1):
+            mv = synchronised_move(self.q[i], self.q[i + 1], self.max_velocity, self.max_acceleration,
+                                   self.t[i + 1] - self.t[i])
+            n = max(2, int(np.ceil(mv.duration / dt)) + 1)
+            for tau in np.linspace(0.0, mv.duration, n)[(1 if i else 0):]:
+                q, v = mv.sample(tau)
+                ts.append(self.t[i] + tau)
+                qs.append(q)
+                vs.append(v)
+        if not ts:
+            return np.zeros(1), self.q[:1].copy(), np.zeros_like(self.q[:1])
+        return np.array(ts), np.array(qs), np.array(vs)
+
+
+def time_parameterize(path, max_velocity, max_acceleration) -> Trajectory:
+    """Times of a waypoint path for a controller that stops at every waypoint and makes all
+    joints arrive together (thesis 4.6): each leg is the shortest synchronised trapezoidal
+    move within the limits.
+
+    Args:
+      path: ``(k, n)`` waypoints [rad].
+      max_velocity, max_acceleration: ``(n,)`` positive limits [rad/s, rad/s²].
+    """
+    path = np.asarray(path, dtype=float)
+    v = np.broadcast_to(np.asarray(max_velocity, dtype=float), path.shape[1:]).copy()
+    a = np.broadcast_to(np.asarray(max_acceleration, dtype=float), path.shape[1:]).copy()
+    t = [0.0]
+    for q0, q1 in zip(path[:-1], path[1:]):
+        t.append(t[-1] + synchronised_move(q0, q1, v, a).duration)
+    return Trajectory(np.array(t), path, v, a)
+
+
+def _make_planner(name: str, si):
+    try:
+        return {"RRTConnect": og.RRTConnect, "BKPIECE1": og.BKPIECE1, "PRM": og.PRM}[name](si)
+    except KeyError:
+        raise ValueError(f"unknown planner {name!r} (choose from {PLANNERS})") from None
+
+
+def plan_motion(
+    checker: CollisionChecker,
+    q_start,
+    q_goal,
+    planner: str = "RRTConnect",
+    budget_s: float = 5.0,
+    resolution: float = 0.02,
+    recheck_resolution: float = 0.01,
+    simplify_s: float = 0.2,
+) -> PlanResult:
+    """Plan a collision-free joint path from ``q_start`` to ``q_goal`` in the checker's context.
+
+    Args:
+      checker: collision checker, already in the right :class:`~uvms_jax.plan.Context`.
+      q_start, q_goal: ``(6,)`` joint angles [rad]; both must be valid.
+      planner: ``RRTConnect``, ``BKPIECE1`` or ``PRM``.
+      budget_s: total planning time allowed for this query, all attempts together [s].
+      resolution: planner's motion-check step [rad] (converted to OMPL's fraction of the
+        space's extent).
+      recheck_resolution: joint step of the re-check of the result [rad].
+      simplify_s: time given to path simplification per attempt [s].
+
+    Raises:
+      ValueError: unknown planner, or an invalid start or goal (the contacts are named).
+    """
+    if not _ou_quiet:
+        ou.setLogLevel(ou.LogLevel.LOG_WARN)
+    q_start, q_goal = np.asarray(q_start, dtype=float), np.asarray(q_goal, dtype=float)
+    for label, q in (("start", q_start), ("goal", q_goal)):
+        if not checker.is_valid(q):
+            raise ValueError(f"{label} {np.round(q, 4).tolist()} is invalid: {checker.contacts(q) or 'outside the limits'}")
+    n = len(q_start)
+    space = ob.RealVectorStateSpace(n)
+    bounds = ob.RealVectorBounds(n)
+    for i in range(n):
+        bounds.setLow(i, float(checker.lower[i]))
+        bounds.setHigh(i, float(checker.upper[i]))
+    space.setBounds(bounds)
+    ss = og.SimpleSetup(space)
+    ss.setStateValidityChecker(checker.state_validator(n))
+    si = ss.getSpaceInformation()
+    si.setStateValidityCheckingResolution(resolution / space.getMaximumExtent())
+    ss.setPlanner(_make_planner(planner, si))
+    start, goal = space.allocState(), space.allocState()
+    start[0:n] = q_start.tolist()
+    goal[0:n] = q_goal.tolist()
+    ss.setStartAndGoalStates(start, goal)
+    spent, attempts = 0.0, 0
+    result = PlanResult(False, np.zeros((0, n)), 0.0, 0, False)
+    while spent < budget_s:
+        t0 = time.perf_counter()
+        solved = ss.solve(budget_s - spent)
+        exact = bool(solved) and ss.haveExactSolutionPath()
+        if exact:
+            ss.simplifySolution(simplify_s)
+            path = np.array([[s[i] for i in range(n)] for s in ss.getSolutionPath().getStates()])
+        spent += time.perf_counter() - t0
+        attempts += 1
+        if not exact:
+            break
+        path[0], path[-1] = q_start, q_goal
+        ok = checker.path_is_valid(path, recheck_resolution, margin=0.0)
+        result = PlanResult(ok, path if ok else np.zeros((0, n)), spent, attempts, ok)
+        if ok:
+            break
+        ss.clear()
+    del ss
+    return dataclasses.replace(result, planning_time_s=spent, attempts=attempts)
+
+
+def check_trajectory(checker: CollisionChecker, traj: Trajectory, resolution: float = 0.01) -> dict[str, bool | float]:
+    """Re-check a trajectory: every point of a ``resolution`` [rad] interpolation is
+    collision-free (margin 0) and inside the joint limits, and the sampled joint speeds stay
+    within the velocity limits.
+
+    Returns:
+      ``collision_free``, ``in_limits``, ``within_velocity`` (bools) and ``max_speed_ratio``.
+    """
+    dense = densify(traj.q, resolution)
+    inside = bool(np.all((dense >= checker.lower) & (dense <= checker.upper)))
+    free = bool(np.all(checker.is_valid_batch(dense, margin=0.0)))
+    _, _, qd = traj.sample(0.02)
+    ratio = float(np.max(np.abs(qd) / traj.max_velocity)) if len(qd) else 0.0
+    return {"collision_free": free, "in_limits": inside, "within_velocity": ratio <= 1.0 + 1e-6,
+            "max_speed_ratio": ratio}

@@ -1,0 +1,467 @@
+"""The thesis's test cage as a MuJoCo model, generated from a scenario config (thesis 5.1).
+
+World frame: origin at the centre of the cage floor, z up; metres and radians. The arm hangs
+from the top of the cage (its base frame's z points down). Every box of the scene — tables,
+cage profiles, ceiling, base plates, cubes, and the arm's jaw fingers — is a convex *mesh*
+of 8 vertices, because MuJoCo's primitive capsule–box test misses a capsule whose axis runs
+right through a thin box (NOTES.md); cylinders and hexagonal prisms are convex meshes too.
+
+Collision groups (``contype``/``conaffinity`` bits): scene geoms ``2/2``, moving arm geoms
+``1/7``, links G and F ``1/3``, the fixed base link ``4/0`` — it is bolted to the mount, so it
+meets neither the scene nor links G and F (whose capsules touch it at the shoulder joints), but
+does meet the rest of the arm. (The base link is welded to the world, so an ``<exclude>`` naming
+it would switch off the world's geoms too; hence bits.) All world geoms share one body, so
+MuJoCo never tests them against each other; parent–child link pairs are filtered by MuJoCo, and
+the pairs listed in ``self_collision_exclude`` (links two apart whose capsules meet at a joint
+cluster; jointed bodies only) by ``<exclude>``. The in-hand copies of the objects (``held_<name>``, fixed in link B at the
+grasp) are off until a :class:`Context` turns one on.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import xml.etree.ElementTree as ET
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import mujoco
+import numpy as np
+
+from uvms_jax import kin
+
+__all__ = [
+    "Base",
+    "Box",
+    "Context",
+    "Item",
+    "Scene",
+    "SceneSpec",
+    "build_scene",
+    "rpy_to_matrix",
+]
+
+SCENE_BITS = (2, 2)  # contype, conaffinity of static geoms
+ARM_BITS = (1, 7)  # moving arm geoms: collide with the arm, the scene and the base link
+SHOULDER_BITS = (1, 3)  # links G and F: not against the base link (they meet it at the joints)
+BASE_BITS = (4, 0)  # fixed base link: only against links E…B, jaws and held object
+OFF_BITS = (0, 0)
+_CYLINDER_SIDES = 32  # inscribed polygon: radius error r(1 - cos(π/32)) ≈ 0.2 mm for r = 40 mm
+
+
+def rpy_to_matrix(rpy: Sequence[float]) -> np.ndarray:
+    """Rotation ``Rz(yaw) Ry(pitch) Rx(roll)`` (URDF fixed-axis roll-pitch-yaw), ``(3, 3)``."""
+    r, p, y = (float(a) for a in rpy)
+    cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
+    return np.array(
+        [
+            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+            [-sp, cp * sr, cp * cr],
+        ]
+    )
+
+
+def _pose(R=np.eye(3), p=(0.0, 0.0, 0.0)) -> np.ndarray:
+    T = np.eye(4)
+    T[:3, :3] = R
+    T[:3, 3] = p
+    return T
+
+
+def _rz(yaw: float) -> np.ndarray:
+    return rpy_to_matrix((0.0, 0.0, yaw))
+
+
+def _quat(R: np.ndarray) -> np.ndarray:
+    q = np.zeros(4)
+    mujoco.mju_mat2Quat(q, np.ascontiguousarray(R, dtype=np.float64).reshape(9))
+    return q
+
+
+def _fmt(v) -> str:
+    return " ".join(f"{float(x):.10g}" for x in np.ravel(v))
+
+
+@dataclasses.dataclass(frozen=True)
+class Box:
+    """A box obstacle: centre ``pos`` [m], full ``size`` [m], orientation ``rpy`` [rad] (world)."""
+
+    name: str
+    pos: tuple[float, float, float]
+    size: tuple[float, float, float]
+    rpy: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+    @property
+    def T_world_box(self) -> np.ndarray:
+        return _pose(rpy_to_matrix(self.rpy), self.pos)
+
+    @property
+    def T_world_top(self) -> np.ndarray:
+        """Frame on the centre of the top face, z along the face normal."""
+        return self.T_world_box @ _pose(p=(0.0, 0.0, self.size[2] / 2.0))
+
+
+@dataclasses.dataclass(frozen=True)
+class Item:
+    """A pick object standing on a table.
+
+    Attributes:
+      node: task-graph node number (thesis Table 5.1).
+      name: label.
+      shape: ``box`` (dims = full edges x, y, z), ``cylinder`` (radius, height) or
+        ``hex_prism`` (edge, height).
+      dims: see ``shape`` [m].
+      table: name of the supporting table.
+      at: (u, v) position on the table top [m]; yaw [rad] about the top's normal.
+    """
+
+    node: int
+    name: str
+    shape: str
+    dims: tuple[float, ...]
+    table: str
+    at: tuple[float, float]
+    yaw: float = 0.0
+
+    def __post_init__(self) -> None:
+        need = {"box": 3, "cylinder": 2, "hex_prism": 2}
+        if self.shape not in need:
+            raise ValueError(f"object {self.name!r}: unknown shape {self.shape!r} (box, cylinder, hex_prism)")
+        if len(self.dims) != need[self.shape] or min(self.dims) <= 0:
+            raise ValueError(f"object {self.name!r}: {self.shape} needs {need[self.shape]} positive dims, got {self.dims}")
+
+    @property
+    def height(self) -> float:
+        return self.dims[2] if self.shape == "box" else self.dims[1]
+
+    @property
+    def volume(self) -> float:
+        if self.shape == "box":
+            return float(np.prod(self.dims))
+        if self.shape == "cylinder":
+            return float(np.pi * self.dims[0] ** 2 * self.dims[1])
+        return float(1.5 * np.sqrt(3.0) * self.dims[0] ** 2 * self.dims[1])
+
+    @property
+    def symmetry(self) -> float:
+        """Yaw period of the shape about its axis [rad] (0 = any yaw)."""
+        if self.shape == "box":
+            return np.pi / 2 if np.isclose(self.dims[0], self.dims[1]) else np.pi
+        return 0.0 if self.shape == "cylinder" else np.pi / 3
+
+    def vertices(self) -> np.ndarray:
+        """Convex-hull vertices ``(k, 3)`` in the object frame (centre, z = axis) [m]."""
+        if self.shape == "box":
+            return _box_vertices(self.dims)
+        r, h = (self.dims[0], self.dims[1])
+        n = _CYLINDER_SIDES if self.shape == "cylinder" else 6
+        # Hexagon: corners on the x axis (edge = circumradius); flats face ±y.
+        a = np.arange(n) * 2 * np.pi / n
+        ring = np.stack([r * np.cos(a), r * np.sin(a)], axis=-1)
+        return np.concatenate([np.c_[ring, np.full(n, -h / 2)], np.c_[ring, np.full(n, h / 2)]])
+
+
+@dataclasses.dataclass(frozen=True)
+class Base:
+    """A destination base plate: full ``size`` [m] on ``table`` at (u, v), yaw; ``fits`` object nodes."""
+
+    node: int
+    name: str
+    size: tuple[float, float, float]
+    table: str
+    at: tuple[float, float]
+    yaw: float
+    fits: tuple[int, ...]
+
+
+@dataclasses.dataclass(frozen=True)
+class SceneSpec:
+    """Everything that defines the scene (``configs/scenario/*.yaml``); see that file for units."""
+
+    cage_size: tuple[float, float, float]
+    profile: float
+    ceiling_thickness: float
+    mount_pos: tuple[float, float, float]
+    mount_rpy: tuple[float, float, float]
+    mount_size: tuple[float, float, float]
+    link_radius: float
+    jaws_open: float
+    tables: tuple[Box, ...]
+    objects: tuple[Item, ...]
+    bases: tuple[Base, ...]
+    object_density: float
+    water_density: float
+    gravity: float
+    start_q: tuple[float, ...]
+    grasp_standoff: float = 0.05
+    approach: float = 0.08
+    self_collision_exclude: tuple[tuple[str, str], ...] = ()
+
+    @staticmethod
+    def from_mapping(m: Mapping[str, Any]) -> "SceneSpec":
+        """Build from the scenario mapping (a plain dict, e.g. ``OmegaConf.to_container(cfg)``)."""
+        t = lambda x: tuple(float(v) for v in x)  # noqa: E731
+        objects = []
+        for o in m["objects"]:
+            dims = {"box": lambda: o["size"], "cylinder": lambda: (o["radius"], o["height"]),
+                    "hex_prism": lambda: (o["edge"], o["height"])}
+            if o["shape"] not in dims:
+                raise ValueError(f"object {o.get('name')!r}: unknown shape {o['shape']!r}")
+            objects.append(Item(int(o["node"]), str(o["name"]), str(o["shape"]), t(dims[o["shape"]]()),
+                                str(o["table"]), t(o["at"]), float(o.get("yaw", 0.0))))
+        grasp = m.get("grasp", {})
+        spec = SceneSpec(
+            cage_size=t(m["cage"]["size"]),
+            profile=float(m["cage"]["profile"]),
+            ceiling_thickness=float(m["cage"]["ceiling_thickness"]),
+            mount_pos=t(m["arm"]["mount_pos"]),
+            mount_rpy=t(m["arm"]["mount_rpy"]),
+            mount_size=t(m["arm"]["mount_size"]),
+            link_radius=float(m["arm"]["link_radius"]),
+            jaws_open=float(m["arm"]["jaws_open"]),
+            tables=tuple(Box(str(b["name"]), t(b["pos"]), t(b["size"]), t(b.get("rpy", (0, 0, 0)))) for b in m["tables"]),
+            objects=tuple(objects),
+            bases=tuple(Base(int(b["node"]), str(b["name"]), t(b["size"]), str(b["table"]), t(b["at"]),
+                             float(b.get("yaw", 0.0)), tuple(int(f) for f in b["fits"])) for b in m["bases"]),
+            object_density=float(m["object_density"]),
+            water_density=float(m["water_density"]),
+            gravity=float(m["gravity"]),
+            start_q=t(m["start_q"]),
+            grasp_standoff=float(grasp.get("standoff", 0.05)),
+            approach=float(grasp.get("approach", 0.08)),
+            self_collision_exclude=tuple(tuple(p) for p in m["arm"].get("self_collision_exclude", ())),
+        )
+        spec.validate()
+        return spec
+
+    def validate(self) -> None:
+        """Raise ValueError naming the problem for an inconsistent spec."""
+        tables = {b.name for b in self.tables}
+        nodes = [o.node for o in self.objects] + [b.node for b in self.bases]
+        if len(set(nodes)) != len(nodes) or 0 in nodes:
+            raise ValueError(f"object/base node numbers must be unique and not 0, got {nodes}")
+        for x in (*self.objects, *self.bases):
+            if x.table not in tables:
+                raise ValueError(f"{x.name!r} stands on unknown table {x.table!r} (tables: {sorted(tables)})")
+        objs = {o.node for o in self.objects}
+        for b in self.bases:
+            if not b.fits or not set(b.fits) <= objs:
+                raise ValueError(f"base {b.name!r} fits unknown objects {b.fits} (objects: {sorted(objs)})")
+        if len(self.start_q) != 6 or not np.all(np.isfinite(self.start_q)):
+            raise ValueError(f"start_q must be 6 finite joint angles, got {self.start_q}")
+
+
+@dataclasses.dataclass(frozen=True)
+class Context:
+    """What the collision checker considers at a moment of the task.
+
+    Attributes:
+      held: node of the object in the jaws (its in-hand copy is on, its table copy off), or None.
+      ignore: nodes of objects/bases (and names of tables) whose geoms are switched off, e.g.
+        the object being grasped during the approach, or the base and table under the object
+        being placed.
+    """
+
+    held: int | None = None
+    ignore: tuple[int | str, ...] = ()
+
+
+def _box_vertices(size) -> np.ndarray:
+    h = np.asarray(size, dtype=float) / 2.0
+    return np.array([[sx * h[0], sy * h[1], sz * h[2]] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
+
+
+class Scene:
+    """A built scene: MuJoCo model, geom groups and the poses of objects and bases.
+
+    Attributes:
+      spec: the :class:`SceneSpec`.
+      xml: the MJCF text.
+      model: ``mujoco.MjModel`` (its contype/conaffinity are switched by the collision checker).
+      T_world_base: ``(4, 4)`` pose of the arm's base link in the world.
+      arm_geoms: geom ids of the moving arm (links G…B and jaws).
+      clearance_geoms: arm geoms whose distance to the scene counts as clearance (links F…B
+        and jaws; the base and link G only spin about the vertical axis under the mount, so
+        their distance to it never changes).
+      held_geoms: object node → geom id of its in-hand copy.
+      obstacle_geoms: label (object/base node or table name, "cage", "ceiling", "mount")
+        → geom ids.
+      T_obj_tool: ``(4, 4)`` grasp: the tool (jaws base frame) in the object frame.
+    """
+
+    def __init__(self, spec: SceneSpec):
+        spec.validate()
+        self.spec = spec
+        self.tables = {b.name: b for b in spec.tables}
+        self.objects = {o.node: o for o in spec.objects}
+        self.bases = {b.node: b for b in spec.bases}
+        self.T_world_base = _pose(rpy_to_matrix(spec.mount_rpy), spec.mount_pos)
+        self.T_base_world = np.linalg.inv(self.T_world_base)
+        self.xml, self.finger_length = self._build_xml()
+        self.model = mujoco.MjModel.from_xml_string(self.xml)
+        m = self.model
+        gid = lambda n: mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, n)  # noqa: E731
+        bid = lambda n: mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, n)  # noqa: E731
+        arm_bodies = {bid(f"link_{j}") for j in "GFEDCB"}
+        self.base_geom = gid("geom_base")
+        self.held_geoms = {o.node: gid(f"held_{o.name}") for o in spec.objects}
+        held = set(self.held_geoms.values())
+        self.arm_geoms = tuple(g for g in range(m.ngeom) if m.geom_bodyid[g] in arm_bodies and g not in held)
+        link_g = bid("link_G")
+        self.shoulder_geoms = (gid("geom_G"), gid("geom_F"))
+        self.clearance_geoms = tuple(g for g in self.arm_geoms if m.geom_bodyid[g] != link_g)
+        self.obstacle_geoms: dict[int | str, tuple[int, ...]] = {}
+        for g in range(m.ngeom):
+            if m.geom_bodyid[g] != 0:
+                continue
+            name = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_GEOM, g)
+            label = name.split(":", 1)[0]
+            key: int | str = int(label[1:]) if label[0] == "n" and label[1:].isdigit() else label
+            self.obstacle_geoms[key] = self.obstacle_geoms.get(key, ()) + (g,)
+        self.T_obj_tool = np.linalg.inv(self.T_tool_obj_for(None))
+        self.default_bits = (m.geom_contype.copy(), m.geom_conaffinity.copy())
+
+    # -- poses ---------------------------------------------------------------------------
+    def T_world_object(self, node: int) -> np.ndarray:
+        """Pose of an object's centre at its start position ``(4, 4)`` (z = the shape's axis)."""
+        o = self.objects[node]
+        return self.tables[o.table].T_world_top @ _pose(_rz(o.yaw), (*o.at, 0.0)) @ _pose(p=(0, 0, o.height / 2))
+
+    def T_world_base_top(self, node: int) -> np.ndarray:
+        """Frame on the centre of a base plate's top face ``(4, 4)``."""
+        b = self.bases[node]
+        return self.tables[b.table].T_world_top @ _pose(_rz(b.yaw), (*b.at, b.size[2]))
+
+    def T_world_placed(self, base: int, obj: int) -> np.ndarray:
+        """Pose of object ``obj``'s centre when placed on base ``base``."""
+        return self.T_world_base_top(base) @ _pose(p=(0, 0, self.objects[obj].height / 2))
+
+    def T_tool_obj_for(self, node: int | None) -> np.ndarray:
+        """The grasp: the object frame in the tool frame (object ``node``; None → standoff only).
+
+        Top grasp: the approach (tool z) runs down the object's axis, the jaws open along the
+        object's x axis, the tool sits ``grasp_standoff`` above the object's top face.
+        """
+        h = 0.0 if node is None else self.objects[node].height
+        return _pose(np.diag([1.0, -1.0, -1.0]), (0.0, 0.0, self.spec.grasp_standoff + h / 2))
+
+    def mass(self, node: int) -> float:
+        return self.spec.object_density * self.objects[node].volume
+
+    def payload_force_world(self, node: int) -> np.ndarray:
+        """``(3,)`` net force of the held object on the jaws, world frame [N]: ``[0, 0, F_b − F_g]``
+        (thesis eq. 4.12–4.14)."""
+        o, s = self.objects[node], self.spec
+        return np.array([0.0, 0.0, s.water_density * s.gravity * o.volume - self.mass(node) * s.gravity])
+
+    # -- MJCF ----------------------------------------------------------------------------
+    def _build_xml(self) -> tuple[str, float]:
+        s = self.spec
+        assets: list[str] = []
+
+        def mesh(name: str, verts: np.ndarray) -> str:
+            assets.append(f'<mesh name="{name}" vertex="{_fmt(verts)}"/>')
+            return name
+
+        world: list[str] = []
+
+        def box(label: str, T: np.ndarray, size, rgba: str) -> None:
+            mname = mesh(f"m_{label}", _box_vertices(size))
+            world.append(
+                f'<geom name="{label}" type="mesh" mesh="{mname}" pos="{_fmt(T[:3, 3])}" '
+                f'quat="{_fmt(_quat(T[:3, :3]))}" rgba="{rgba}" contype="{SCENE_BITS[0]}" conaffinity="{SCENE_BITS[1]}"/>'
+            )
+
+        L, W, H = s.cage_size
+        p = s.profile
+        # The ceiling and the table under everything are half-spaces (MuJoCo planes): exact,
+        # cheap against every shape, and they also forbid slipping past their edges.
+        world.append(
+            f'<geom name="ceiling" type="plane" pos="0 0 {H}" quat="0 1 0 0" size="{L / 2} {W / 2} 0.05" '
+            f'rgba="0.7 0.7 0.7 0.2" contype="{SCENE_BITS[0]}" conaffinity="{SCENE_BITS[1]}"/>'
+        )
+        under = s.tables[0]
+        top = under.T_world_top
+        world.append(
+            f'<geom name="{under.name}" type="plane" pos="{_fmt(top[:3, 3])}" quat="{_fmt(_quat(top[:3, :3]))}" '
+            f'size="{under.size[0] / 2} {under.size[1] / 2} 0.05" rgba="0.6 0.55 0.5 1" '
+            f'contype="{SCENE_BITS[0]}" conaffinity="{SCENE_BITS[1]}"/>'
+        )
+        k = 0
+        for sx in (-1, 1):
+            for sy in (-1, 1):
+                box(f"cage:post{k}", _pose(p=(sx * (L - p) / 2, sy * (W - p) / 2, H / 2)), (p, p, H), "0.6 0.6 0.65 1")
+                k += 1
+        for z in (p / 2, H - p / 2):
+            for sx in (-1, 1):
+                box(f"cage:x{k}", _pose(p=(sx * (L - p) / 2, 0, z)), (p, W - 2 * p, p), "0.6 0.6 0.65 1")
+                box(f"cage:y{k}", _pose(p=(0, sx * (W - p) / 2, z)), (L - 2 * p, p, p), "0.6 0.6 0.65 1")
+                k += 1
+        ms = s.mount_size
+        mount_T = self.T_world_base @ _pose(p=(0, 0, -ms[2] / 2))
+        box("mount", mount_T, ms, "0.3 0.3 0.3 1")
+        for t in s.tables[1:]:
+            box(t.name, t.T_world_box, t.size, "0.75 0.8 0.9 0.6")
+        for b in s.bases:
+            T = self.T_world_base_top(b.node) @ _pose(p=(0, 0, -b.size[2] / 2))
+            box(f"n{b.node}:{b.name}", T, b.size, "0.9 0.3 0.2 1")
+        for o in s.objects:
+            T = self.T_world_object(o.node)
+            mname = mesh(f"m_{o.name}", o.vertices())
+            world.append(
+                f'<geom name="n{o.node}:{o.name}" type="mesh" mesh="{mname}" pos="{_fmt(T[:3, 3])}" '
+                f'quat="{_fmt(_quat(T[:3, :3]))}" rgba="1 0.55 0.1 1" contype="{SCENE_BITS[0]}" conaffinity="{SCENE_BITS[1]}"/>'
+            )
+
+        arm = ET.fromstring(
+            kin.bravo7_mjcf_body(s.mount_pos, _quat(self.T_world_base[:3, :3]), s.link_radius, s.jaws_open)
+        )
+        finger_length = 0.0
+        tool_site = None
+        link_b = None
+        for body in arm.iter("body"):
+            for child in body:
+                if child.tag == "site" and child.get("name") == "tool":
+                    tool_site, link_b = child, body
+        if tool_site is None:
+            raise RuntimeError("kin.bravo7_mjcf_body has no site 'tool'")
+        tool_pos = np.array([float(v) for v in tool_site.get("pos").split()])
+        for body in arm.iter("body"):
+            for g in body.findall("geom"):
+                name = g.get("name")
+                bits = BASE_BITS if name == "geom_base" else SHOULDER_BITS if name in ("geom_G", "geom_F") else ARM_BITS
+                g.set("contype", str(bits[0]))
+                g.set("conaffinity", str(bits[1]))
+                if g.get("type") == "box":  # jaw fingers → convex meshes (NOTES.md)
+                    size = np.array([float(v) for v in g.get("size").split()]) * 2
+                    pos = np.array([float(v) for v in g.get("pos").split()])
+                    finger_length = max(finger_length, pos[2] + size[2] / 2 - tool_pos[2])
+                    g.set("type", "mesh")
+                    g.set("mesh", mesh(f"m_{g.get('name')}", _box_vertices(size)))
+                    del g.attrib["size"]
+        # In-hand copies of the objects, fixed in link B at the grasp (off by default).
+        for o in s.objects:
+            T = _pose(p=tool_pos) @ self.T_tool_obj_for(o.node)
+            mname = f"m_{o.name}"
+            ET.SubElement(link_b, "geom", {
+                "name": f"held_{o.name}", "type": "mesh", "mesh": mname, "pos": _fmt(T[:3, 3]),
+                "quat": _fmt(_quat(T[:3, :3])), "rgba": "1 0.55 0.1 0.8", "contype": "0", "conaffinity": "0",
+            })
+        for a, b in s.self_collision_exclude:
+            if "base_link" in (a, b):
+                raise ValueError("self_collision_exclude must not name base_link (it is welded to the world)")
+        excludes = "".join(f'<exclude body1="{a}" body2="{b}"/>' for a, b in s.self_collision_exclude)
+        xml = (
+            '<mujoco model="thesis_cage">\n  <compiler angle="radian"/>\n  <option gravity="0 0 0"/>\n'
+            '  <visual><global offwidth="960" offheight="720"/></visual>\n'
+            f"  <asset>\n    {chr(10).join(assets)}\n  </asset>\n"
+            f"  <worldbody>\n    <light pos=\"0 0 3\" dir=\"0 0 -1\"/>\n    {chr(10).join(world)}\n"
+            f"{ET.tostring(arm, encoding='unicode')}\n  </worldbody>\n"
+            f"  <contact>{excludes}</contact>\n</mujoco>\n"
+        )
+        return xml, finger_length
+
+
+def build_scene(spec: SceneSpec | Mapping[str, Any]) -> Scene:
+    """Build the MuJoCo scene from a :class:`SceneSpec` or a scenario mapping."""
+    return Scene(spec if isinstance(spec, SceneSpec) else SceneSpec.from_mapping(spec))

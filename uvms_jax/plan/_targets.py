@@ -1,0 +1,196 @@
+"""Pick-and-place targets: the arm configurations of the eight steps at every object and base.
+
+The thesis (4.4) splits one pick and place into eight steps: pre-grasp, open, grasp, close,
+post-grasp (at the object), pre-final, final, post-final (at the base). Here the pre- and post-
+poses coincide (``approach`` back along the approach axis from the grasp/final pose), so a
+node has two arm configurations: ``q_pre`` (where the arm arrives and leaves) and ``q_at``
+(grasp or final). Gripper steps (open, close, and the release at the final pose) do not move
+the arm.
+
+All tool poses of all nodes and of every symmetric yaw of the object go through one batched
+numerical IK call (:func:`uvms_jax.kin.numeric_ik`, many seeds per target). For every yaw and
+seed the grasp solution is paired with the nearest pre-pose solution (same IK branch), and the
+pair is kept only if both are inside the limits and collision-free in the contexts of the
+step (approach with the object ignored, lift with the object held, …) and the straight
+joint-space segment between them is collision-free. Among those, the pair of highest
+manipulability ``min(w(q_pre), w(q_at))`` wins.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from uvms_jax import indices, kin
+from uvms_jax.plan._collision import CollisionChecker
+from uvms_jax.plan._scene import Context, Scene, rpy_to_matrix
+
+__all__ = ["NodeTarget", "STEPS", "node_contexts", "pick_place_targets", "tool_poses"]
+
+#: The eight pick-and-place steps (thesis 4.4): object steps then base steps.
+STEPS = ("pre-grasp", "open", "grasp", "close", "post-grasp", "pre-final", "final", "post-final")
+
+
+@dataclasses.dataclass(frozen=True)
+class NodeTarget:
+    """Arm configurations of one object or base node.
+
+    Attributes:
+      node: node number.
+      q_pre: (6,) pre-grasp = post-grasp (object) or pre-final = post-final (base) [rad].
+      q_at: (6,) grasp or final configuration [rad].
+      T_world_pre, T_world_at: (4, 4) the corresponding tool poses (world frame).
+      yaw: object yaw of the chosen grasp about its axis [rad].
+      manipulability: min(w(q_pre), w(q_at)).
+      n_candidates: valid (yaw, seed) pairs found.
+    """
+
+    node: int
+    q_pre: np.ndarray
+    q_at: np.ndarray
+    T_world_pre: np.ndarray
+    T_world_at: np.ndarray
+    yaw: float
+    manipulability: float
+    n_candidates: int
+
+
+def _shift(z: float) -> np.ndarray:
+    T = np.eye(4)
+    T[2, 3] = z
+    return T
+
+
+def _yaws(period: float, n_continuous: int) -> np.ndarray:
+    n = n_continuous if period == 0.0 else int(round(2 * np.pi / period))
+    return np.arange(n) * 2 * np.pi / n
+
+
+def tool_poses(scene: Scene, node: int, n_yaw_continuous: int = 8) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Candidate tool poses of a node, one per symmetric yaw of its object.
+
+    Returns:
+      yaws ``(k,)`` [rad], ``T_world_at (k, 4, 4)`` (grasp/final) and ``T_world_pre (k, 4, 4)``.
+    """
+    if node in scene.objects:
+        obj, T_obj = node, scene.T_world_object(node)
+    elif node in scene.bases:
+        obj = scene.bases[node].fits[0]
+        T_obj = scene.T_world_placed(node, obj)
+    else:
+        raise ValueError(f"node {node} is neither an object {sorted(scene.objects)} nor a base {sorted(scene.bases)}")
+    yaws = _yaws(scene.objects[obj].symmetry, n_yaw_continuous)
+    T_obj_tool = np.linalg.inv(scene.T_tool_obj_for(obj))
+    at = np.stack([T_obj @ _rot_z(y) @ T_obj_tool for y in yaws])
+    pre = at @ _shift(-scene.spec.approach)
+    return yaws, at, pre
+
+
+def _rot_z(yaw: float) -> np.ndarray:
+    T = np.eye(4)
+    T[:3, :3] = rpy_to_matrix((0.0, 0.0, yaw))
+    return T
+
+
+def node_contexts(scene: Scene, node: int) -> dict[str, Context]:
+    """Collision contexts of a node's moves.
+
+    Keys: ``arrive`` and ``leave`` (at ``q_pre``), ``down`` (pre → at, before the gripper
+    acts) and ``up`` (at → pre, after it). At an object the arm arrives empty, goes down with
+    the object ignored, and lifts it (held; its table ignored while they touch). At a base it
+    arrives holding the object, goes down with base and table ignored, and leaves empty.
+    """
+    if node in scene.objects:
+        table = scene.objects[node].table
+        return {"arrive": Context(), "down": Context(ignore=(node,)),
+                "up": Context(held=node, ignore=(table,)), "leave": Context(held=node)}
+    if node in scene.bases:
+        obj, table = scene.bases[node].fits[0], scene.bases[node].table
+        return {"arrive": Context(held=obj), "down": Context(held=obj, ignore=(node, table)),
+                "up": Context(ignore=(node,)), "leave": Context()}
+    raise ValueError(f"node {node} is neither an object nor a base")
+
+
+def _valid(checker: CollisionChecker, ctx: Context, q: np.ndarray) -> bool:
+    checker.set_context(ctx)
+    return checker.is_valid(q)
+
+
+def _segment_valid(checker: CollisionChecker, ctx: Context, a, b, resolution: float) -> bool:
+    checker.set_context(ctx)
+    return checker.path_is_valid(np.stack([a, b]), resolution)
+
+
+def pick_place_targets(
+    scene: Scene,
+    checker: CollisionChecker,
+    key: jax.Array,
+    n_seeds: int = 32,
+    iterations: int = 150,
+    n_yaw_continuous: int = 8,
+    max_branch_jump: float = 1.0,
+    resolution: float = 0.01,
+) -> dict[int, NodeTarget]:
+    """Solve the targets of every object and base node by batched numerical IK.
+
+    Args:
+      scene, checker: the scene and its collision checker (its context is changed).
+      key: PRNG key for the IK seeds.
+      n_seeds, iterations: numerical IK seeds per pose and DLS iterations.
+      n_yaw_continuous: yaws tried for a rotationally symmetric object (cylinder).
+      max_branch_jump: largest joint change [rad] allowed between ``q_pre`` and ``q_at``.
+      resolution: joint step [rad] of the segment check between them.
+
+    Returns:
+      node → :class:`NodeTarget`.
+
+    Raises:
+      ValueError: a node has no valid, collision-free target pair (names the node).
+    """
+    chain = kin.bravo7()
+    nodes = sorted(scene.objects) + sorted(scene.bases)
+    per_node = [tool_poses(scene, n, n_yaw_continuous) for n in nodes]
+    T_world = np.concatenate([np.stack([at, pre], axis=1) for _, at, pre in per_node])  # (K, 2, 4, 4)
+    T_base = scene.T_base_world @ T_world
+    sol = kin.numeric_ik(chain, jnp.asarray(T_base), key, n_seeds=n_seeds, iterations=iterations, all_seeds=True)
+    q_all = np.asarray(sol.q)  # (K, 2, S, 6)
+    ok_all = np.asarray(sol.valid)
+    w_all = np.asarray(indices.manipulability(kin.jacobian(chain, jnp.nan_to_num(jnp.asarray(q_all)))))
+    out: dict[int, NodeTarget] = {}
+    row = 0
+    for node, (yaws, at, pre) in zip(nodes, per_node):
+        ctx = node_contexts(scene, node)
+        best, n_ok = None, 0
+        for k in range(len(yaws)):
+            q_at, q_pre = q_all[row + k, 0], q_all[row + k, 1]
+            ok_at, ok_pre = ok_all[row + k, 0], ok_all[row + k, 1]
+            if not ok_pre.any():
+                continue
+            pre_idx = np.flatnonzero(ok_pre)
+            tried: set[tuple[int, int]] = set()
+            for s in np.flatnonzero(ok_at):
+                jump = np.max(np.abs(q_pre[pre_idx] - q_at[s]), axis=1)
+                j = pre_idx[int(np.argmin(jump))]
+                if jump.min() > max_branch_jump or (s, j) in tried:
+                    continue
+                tried.add((s, j))
+                score = float(min(w_all[row + k, 0, s], w_all[row + k, 1, j]))
+                a, p = q_at[s], q_pre[j]
+                if not (_valid(checker, ctx["arrive"], p) and _valid(checker, ctx["leave"], p)
+                        and _valid(checker, ctx["down"], a) and _valid(checker, ctx["up"], a)
+                        and _segment_valid(checker, ctx["down"], p, a, resolution)
+                        and _segment_valid(checker, ctx["up"], a, p, resolution)):
+                    continue
+                n_ok += 1
+                if best is None or score > best[0]:
+                    best = (score, k, a.copy(), p.copy())
+        row += len(yaws)
+        if best is None:
+            raise ValueError(f"node {node}: no collision-free IK target pair among {len(yaws)} yaws x {n_seeds} seeds")
+        score, k, a, p = best
+        out[node] = NodeTarget(node, p, a, pre[k], at[k], float(yaws[k]), score, n_ok)
+    checker.set_context(Context())
+    return out

@@ -1,0 +1,235 @@
+"""The pick-and-place task graph (thesis Table 5.1, eq. 4.1): its edges, planning every edge,
+the cost matrix for ``uvms_jax.sched``, and ``plan.json`` for ``uvms_jax.hw``.
+
+Nodes: 0 start, the objects, the bases, and the goal (= the start configuration, numbered
+one past the last base; 9 in the thesis). Allowed moves: start → any object; object → a base
+it fits; base → any object, the start or the goal. An edge's motion runs from where the arm
+leaves the source (start, or the post-grasp / post-final configuration) to where it arrives at
+the destination (pre-grasp / pre-final, or the start); the arm holds the object on edges out
+of an object. The descent to the grasp/final pose and back is the same whatever the
+schedule, so it belongs to the node, not to the edges (and to ``plan.json``).
+
+The scene is static (thesis 5.2: "only static collision objects"): objects stay at their
+start positions as obstacles, except the one held or being grasped.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+
+from uvms_jax import kin
+from uvms_jax.plan._collision import CollisionChecker, densify
+from uvms_jax.plan._metrics import METRIC_NAMES, EdgeMetrics, trajectory_metrics
+from uvms_jax.plan._planning import PlanResult, Trajectory, check_trajectory, plan_motion, time_parameterize
+from uvms_jax.plan._scene import Context, Scene
+from uvms_jax.plan._targets import NodeTarget, node_contexts
+
+__all__ = [
+    "EdgeResult",
+    "cost_matrix",
+    "edge_endpoints",
+    "goal_node",
+    "metric_matrices",
+    "plan_edge",
+    "plan_json",
+    "task_edges",
+]
+
+START = 0
+
+
+def goal_node(scene: Scene) -> int:
+    """Number of the goal node (one past the last object/base node)."""
+    return max(*scene.objects, *scene.bases) + 1
+
+
+def task_edges(scene: Scene) -> list[tuple[int, int]]:
+    """All allowed moves ``(src, dst)`` of the task graph, in row-major order."""
+    objs, bases, goal = sorted(scene.objects), sorted(scene.bases), goal_node(scene)
+    edges = [(START, o) for o in objs]
+    edges += [(o, b) for o in objs for b in bases if o in scene.bases[b].fits]
+    edges += [(b, d) for b in bases for d in (START, *objs, goal)]
+    return sorted(edges)
+
+
+def _q_at_node(scene: Scene, targets: Mapping[int, NodeTarget], node: int) -> np.ndarray:
+    if node in (START, goal_node(scene)):
+        return np.asarray(scene.spec.start_q, dtype=float)
+    if node not in targets:
+        raise ValueError(f"unknown node {node} (known: {sorted(targets)}, start {START}, goal {goal_node(scene)})")
+    return targets[node].q_pre
+
+
+def edge_endpoints(scene: Scene, targets: Mapping[int, NodeTarget], src: int, dst: int) -> tuple[np.ndarray, np.ndarray, Context]:
+    """``(q_from, q_to, context)`` of edge ``src → dst``; raises ValueError for a move the
+    task graph forbids."""
+    if (src, dst) not in set(task_edges(scene)):
+        raise ValueError(f"move {src} -> {dst} is not in the task graph")
+    ctx = Context(held=src) if src in scene.objects else Context()
+    return _q_at_node(scene, targets, src), _q_at_node(scene, targets, dst), ctx
+
+
+@dataclasses.dataclass(frozen=True)
+class EdgeResult:
+    """One planned edge: planner output, trajectory, re-check and metrics."""
+
+    planner: str
+    src: int
+    dst: int
+    plan: PlanResult
+    trajectory: Trajectory | None
+    metrics: EdgeMetrics | None
+    check: dict
+
+    @property
+    def success(self) -> bool:
+        return self.plan.success
+
+    @property
+    def revalidated(self) -> bool:
+        c = self.check
+        return bool(c) and c["collision_free"] and c["in_limits"] and c["within_velocity"]
+
+    def row(self) -> dict:
+        """A flat record (the columns of ``edges.csv``)."""
+        m = self.metrics._asdict() if self.metrics else {k: np.nan for k in METRIC_NAMES}
+        m["planning_time_s"] = self.plan.planning_time_s
+        return {"planner": self.planner, "src": self.src, "dst": self.dst, "success": self.success, **m,
+                "revalidated": self.revalidated}
+
+
+def plan_edge(
+    scene: Scene,
+    checker: CollisionChecker,
+    targets: Mapping[int, NodeTarget],
+    src: int,
+    dst: int,
+    planner: str,
+    *,
+    budget_s: float = 5.0,
+    resolution: float = 0.02,
+    recheck_resolution: float = 0.01,
+    clearance_resolution: float = 0.05,
+    simplify_s: float = 0.2,
+    max_velocity=0.5,
+    max_acceleration=1.0,
+    chain: kin.Chain | None = None,
+) -> EdgeResult:
+    """Plan one edge, time-parameterise it, re-check it and measure its metrics.
+
+    Metrics are measured on the path interpolated at ``recheck_resolution`` (clearance at
+    ``clearance_resolution``), torques with the wrench of the held object (edges out of an
+    object) rotated into the arm's base frame.
+    """
+    q0, q1, ctx = edge_endpoints(scene, targets, src, dst)
+    checker.set_context(ctx)
+    res = plan_motion(checker, q0, q1, planner, budget_s, resolution, recheck_resolution, simplify_s)
+    if not res.success:
+        return EdgeResult(planner, src, dst, res, None, None, {})
+    traj = time_parameterize(res.path, max_velocity, max_acceleration)
+    check = check_trajectory(checker, traj, recheck_resolution)
+    chain = chain or kin.bravo7()
+    force = None
+    if ctx.held is not None:
+        force = scene.T_base_world[:3, :3] @ scene.payload_force_world(ctx.held)
+    dense = densify(res.path, recheck_resolution)
+    jm, ee, tau = trajectory_metrics(chain, dense, force)
+    clearance = float(np.min(checker.clearance_batch(densify(res.path, clearance_resolution))))
+    return EdgeResult(planner, src, dst, res, traj, EdgeMetrics(res.planning_time_s, jm, ee, clearance, tau), check)
+
+
+def metric_matrices(scene: Scene, results: Sequence[EdgeResult]) -> dict[str, np.ndarray]:
+    """``name → (N, N)`` matrix of each metric (NaN where the move is forbidden or failed)."""
+    n = goal_node(scene) + 1
+    out = {k: np.full((n, n), np.nan) for k in METRIC_NAMES}
+    for r in results:
+        if r.success and r.metrics is not None:
+            for k in METRIC_NAMES:
+                out[k][r.src, r.dst] = getattr(r.metrics, k)
+    return out
+
+
+def cost_matrix(matrices: Mapping[str, np.ndarray], weights: Mapping[str, float] | None = None) -> np.ndarray:
+    """Thesis eq. 4.15–4.17: ``C = Σ_k K_k N_k`` with every metric min-max normalised over the
+    edges; security is inverted (larger clearance → lower cost). NaN stays NaN.
+
+    Args:
+      matrices: from :func:`metric_matrices`.
+      weights: metric name → K (default 1/5 each).
+    """
+    weights = dict(weights or {k: 1.0 / len(METRIC_NAMES) for k in METRIC_NAMES})
+    unknown = set(weights) - set(METRIC_NAMES)
+    if unknown:
+        raise ValueError(f"unknown metrics {sorted(unknown)} (known: {METRIC_NAMES})")
+    C = None
+    for k, w in weights.items():
+        X = matrices[k]
+        lo, hi = np.nanmin(X), np.nanmax(X)
+        N = (X - lo) / (hi - lo) if hi > lo else np.where(np.isnan(X), np.nan, 0.0)
+        if k == "min_clearance":
+            N = 1.0 - N
+        C = w * N if C is None else C + w * N
+    return C
+
+
+def _segment(name: str, traj: Trajectory, gripper_mm: float | None = None) -> dict:
+    return {"name": name, "t": [float(x) for x in traj.t], "q": [[float(v) for v in row] for row in traj.q],
+            "gripper": None if gripper_mm is None else {"jaws_mm": float(gripper_mm)}}
+
+
+def plan_json(
+    scene: Scene,
+    targets: Mapping[int, NodeTarget],
+    edges: Mapping[tuple[int, int], EdgeResult],
+    sequence: Sequence[int],
+    *,
+    jaws_open_mm: float = 35.0,
+    jaws_closed_mm: float = 0.0,
+    max_velocity=0.5,
+    max_acceleration=1.0,
+    checker: CollisionChecker | None = None,
+    resolution: float = 0.01,
+) -> dict:
+    """The ``plan.json`` object (format: :mod:`uvms_jax.hw.plan`, version 1) of a schedule.
+
+    For every move of ``sequence`` (e.g. ``[0, 2, 5, 4, 8, 0, 1, 6, 3, 7, 9]``) it emits the
+    edge's motion, then at an object: ``open``, ``grasp`` (down), ``close``, ``post-grasp``
+    (up); at a base: ``final`` (down), ``release`` (open), ``post-final`` (up). Pre-grasp and
+    pre-final are the ends of the edge motions.
+
+    Raises:
+      ValueError: a move of the sequence has no successful edge in ``edges``, or (with a
+        ``checker``) a node's down/up motion is not collision-free.
+    """
+    names = {o.node: o.name for o in scene.spec.objects} | {b.node: b.name for b in scene.spec.bases}
+    names |= {START: "start", goal_node(scene): "goal"}
+    segments = []
+    for src, dst in zip(sequence[:-1], sequence[1:]):
+        e = edges.get((src, dst))
+        if e is None or not e.success or e.trajectory is None:
+            raise ValueError(f"no successful plan for the move {src} -> {dst}")
+        segments.append(_segment(f"{src}->{dst} to {names[dst]}", e.trajectory))
+        if dst not in targets:
+            continue
+        tg = targets[dst]
+        down = time_parameterize(np.stack([tg.q_pre, tg.q_at]), max_velocity, max_acceleration)
+        up = time_parameterize(np.stack([tg.q_at, tg.q_pre]), max_velocity, max_acceleration)
+        if checker is not None:
+            ctx = node_contexts(scene, dst)
+            for key, tr in (("down", down), ("up", up)):
+                checker.set_context(ctx[key])
+                if not checker.path_is_valid(tr.q, resolution):
+                    raise ValueError(f"node {dst}: the {key} motion collides")
+        if dst in scene.objects:
+            segments += [{"name": f"open at {names[dst]}", "gripper": {"jaws_mm": jaws_open_mm}},
+                         _segment(f"grasp {names[dst]}", down),
+                         {"name": f"close on {names[dst]}", "gripper": {"jaws_mm": jaws_closed_mm}},
+                         _segment(f"post-grasp {names[dst]}", up)]
+        else:
+            segments += [_segment(f"final on {names[dst]}", down),
+                         {"name": f"release on {names[dst]}", "gripper": {"jaws_mm": jaws_open_mm}},
+                         _segment(f"post-final {names[dst]}", up)]
+    return {"version": 1, "joint_names": [j.name for j in kin.BRAVO7_JOINTS], "segments": segments}
