@@ -34,6 +34,7 @@ from uvms_jax.sched._problem import PAD_NODE
 from uvms_jax.sched._problem import PickPlaceProblem
 from uvms_jax.sched._problem import as_padded_paths
 from uvms_jax.sched._problem import path_cost
+from uvms_jax.sched._random import random_metrics
 from uvms_jax.sched._random import random_problem
 from uvms_jax.sched._schedule import Schedule
 from uvms_jax.sched._score import Reason
@@ -76,6 +77,7 @@ __all__ = [
     "normalise_metrics",
     "path_cost",
     "path_metric_sums",
+    "random_metrics",
     "random_problem",
     "schedule_edges",
     "score",

@@ -77,3 +77,40 @@ def random_problem(
         except ValueError as e:  # infeasible draw
             last = e
     raise ValueError(f"no feasible random instance in {max_tries} tries: {last}")
+
+
+def random_metrics(key: jax.Array, problem: PickPlaceProblem, *, object_mass_kg: float = 0.5) -> np.ndarray:
+    """Synthetic raw edge metrics ``(5, n, n)`` for the moves of ``problem`` (NaN elsewhere).
+
+    Not from any planner: node positions are drawn in a 2 × 2 × 1 m cage (start/goal above,
+    objects on two tables, bases on two others, thesis 5.1) and each metric is a noisy
+    function of the move — end-effector distance ≈ straight line × (1–1.6), joint movement
+    ∝ distance, planning time log-normal growing with distance, clearance 2–20 cm, max
+    torque from the carried object's weight at the reach (moves that carry an object only).
+    Enough to exercise the weights pipeline (thesis Tables 5.6–5.9) without a planner.
+
+    Returns:
+      ``(5, n, n)`` raw metrics in ``METRICS`` order.
+    """
+    rng = _rng(key)
+    n = problem.n_nodes
+    pos = np.zeros((n, 3))
+    pos[problem.start] = pos[problem.goal] = (0.0, 0.0, 0.9)
+    for k, o in enumerate(problem.objects):
+        pos[o] = (-0.6 + 1.2 * (k % 2), -0.6 + 0.15 * k, 0.1) + rng.normal(0, 0.05, 3)
+    for k, b in enumerate(problem.bases):
+        pos[b] = (-0.5 + 1.0 * (k % 2), 0.6 - 0.15 * k, 0.25) + rng.normal(0, 0.05, 3)
+    mc = np.asarray(problem.move_cost)[:n, :n]
+    src, dst = np.nonzero(np.isfinite(mc))
+    line = np.linalg.norm(pos[src] - pos[dst], axis=1)
+    ee = line * rng.uniform(1.0, 1.6, line.size)
+    joints = 2.5 * ee * rng.uniform(0.8, 1.3, line.size)
+    t_plan = 0.02 * np.exp(rng.normal(0.0, 0.5, line.size)) * (1 + 3 * line)
+    clearance = rng.uniform(0.02, 0.20, line.size)
+    carrying = np.isin(dst, problem.bases)
+    reach = np.linalg.norm(pos[dst, :2], axis=1) + 0.3
+    torque = np.where(carrying, object_mass_kg * 9.81 * reach, 0.3) * rng.uniform(0.9, 1.1, line.size)
+    out = np.full((5, n, n), np.nan)
+    for k, v in enumerate((t_plan, joints, ee, clearance, torque)):
+        out[k, src, dst] = v
+    return out
