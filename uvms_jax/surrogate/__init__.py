@@ -1,0 +1,52 @@
+"""Neural-network surrogates of the dexterity indices w and KCI (dexterity paper; SPEC §4).
+
+Datasets D1 (θ1…θ11 → KCI) and D2 (θ5…θ11 → w) of the 12-DOF UVMS, sampled as in the paper's
+Fig. 7; a feed-forward network (FFBN: tanh hidden layer, linear output) trained by
+Levenberg–Marquardt or Adam; a Gaussian RBF network (RBFN) grown greedily; the paper's design
+loops; save/load. Every network has ``index_fn(q)`` with ``q: (..., 12)`` so it can replace the
+analytic index (``analytic_index_fn``) wherever a batch of configurations is scored.
+
+Error metric throughout: the maximum relative test error ``max |(T − S)/T|`` (paper eq. 21).
+"""
+
+from uvms_jax.surrogate._adam import fit_adam
+from uvms_jax.surrogate._dataset import INDEX_INPUTS
+from uvms_jax.surrogate._dataset import Dataset
+from uvms_jax.surrogate._dataset import Sampling
+from uvms_jax.surrogate._dataset import analytic_index
+from uvms_jax.surrogate._dataset import analytic_index_fn
+from uvms_jax.surrogate._dataset import index_inputs
+from uvms_jax.surrogate._dataset import load_dataset
+from uvms_jax.surrogate._dataset import make_dataset
+from uvms_jax.surrogate._dataset import mb_offset
+from uvms_jax.surrogate._dataset import sample_configurations
+from uvms_jax.surrogate._dataset import save_dataset
+from uvms_jax.surrogate._design import Design
+from uvms_jax.surrogate._design import DesignStep
+from uvms_jax.surrogate._design import design_ffbn
+from uvms_jax.surrogate._design import design_rbfn
+from uvms_jax.surrogate._design import max_relative_error
+from uvms_jax.surrogate._ffbn import FFBN
+from uvms_jax.surrogate._ffbn import MLP
+from uvms_jax.surrogate._ffbn import init_ffbn
+from uvms_jax.surrogate._ffbn import mlp_apply
+from uvms_jax.surrogate._ffbn import pad_hidden
+from uvms_jax.surrogate._ffbn import padded_width
+from uvms_jax.surrogate._ffbn import trim_hidden
+from uvms_jax.surrogate._ffbn import train_ffbn_adam
+from uvms_jax.surrogate._ffbn import train_ffbn_lm
+from uvms_jax.surrogate._io import load_network
+from uvms_jax.surrogate._io import save_network
+from uvms_jax.surrogate._lm import LevenbergMarquardt
+from uvms_jax.surrogate._lm import LMHyperParams
+from uvms_jax.surrogate._lm import LMState
+from uvms_jax.surrogate._lm import fit_lm
+from uvms_jax.surrogate._lm import levenberg_marquardt
+from uvms_jax.surrogate._rbfn import RBFN
+from uvms_jax.surrogate._rbfn import RBFNFit
+from uvms_jax.surrogate._rbfn import fit_rbfn
+from uvms_jax.surrogate._rbfn import fit_rbfn_arrays
+from uvms_jax.surrogate._scaler import Scaler
+from uvms_jax.surrogate._scaler import fit_scaler
+from uvms_jax.surrogate._timing import time_index_fn
+from uvms_jax.surrogate._timing import xla_flops_per_sample

@@ -1,0 +1,203 @@
+"""The paper's design loops (dexterity paper §3.3–3.4, Fig. 6) and the test-error metric.
+
+Test error (eq. 21): ``e = max_i |(T_i − S_i) / T_i|`` over the test set — the *maximum*
+relative error, not a mean; T is the analytic index, S the network output. It is meaningful
+only where T stays away from 0 (the paper's sampling keeps w and KCI well above 0).
+
+- FFBN: hidden neurons H = 1, 2, … (``hidden_step``) up to ``max_hidden``; each network is
+  trained (Levenberg–Marquardt to E_mse or L_epochs, or Adam) and tested; the loop stops at the
+  first network with ``e < E``.
+- RBFN: for spread = s0, s0 + st_spread, … ≤ L_s: greedy design until training mse ≤ E_th
+  (or the unit limit), then test; stop at the first spread with ``e < E``.
+
+The outer loops are Python loops over networks; each network's training is one jitted call.
+FFBNs are trained zero-padded to the next power of two of hidden units (at least 8), which
+gives the same network and compiles the trainer once per width rather than once per size; the
+RBFN spread is traced, so a spread search compiles once.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from typing import Callable, NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jax import Array
+
+from uvms_jax.surrogate._dataset import Dataset
+from uvms_jax.surrogate._ffbn import FFBN, init_ffbn, padded_width, train_ffbn_adam, train_ffbn_lm
+from uvms_jax.surrogate._lm import LMHyperParams
+from uvms_jax.surrogate._rbfn import RBFN, fit_rbfn
+
+log = logging.getLogger(__name__)
+TRAINERS = ("lm", "adam")
+
+
+def max_relative_error(target, prediction) -> Array:
+    """Paper eq. 21: ``max |(T − S) / T|`` over all entries; ``inf`` if some ``T == 0``."""
+    target, prediction = jnp.asarray(target), jnp.asarray(prediction)
+    if target.shape != prediction.shape:
+        raise ValueError(f"target and prediction shapes differ: {target.shape} vs {prediction.shape}")
+    zero = target == 0
+    rel = jnp.where(zero, jnp.inf, jnp.abs(target - prediction) / jnp.where(zero, 1.0, jnp.abs(target)))
+    return jnp.max(rel)
+
+
+class DesignStep(NamedTuple):
+    """One network tried by a design loop.
+
+    Attributes:
+      size: hidden neurons (FFBN) or RBF units (RBFN).
+      spread: RBF spread (normalised input units); NaN for an FFBN.
+      test_error: max relative test error (eq. 21).
+      train_mse: final training mse [index units²].
+      epochs: training epochs (FFBN) or added units (RBFN).
+      seconds: wall time of training + testing, compilation included.
+    """
+
+    size: int
+    spread: float
+    test_error: float
+    train_mse: float
+    epochs: int
+    seconds: float
+
+
+class Design(NamedTuple):
+    """Result of a design loop.
+
+    Attributes:
+      network: the first network that met the error goal, else the one with the lowest test error.
+      steps: every network tried, in order.
+      met: whether ``network`` meets the goal.
+      seconds: total wall time.
+      history: training-mse history of ``network`` [index units²] (per epoch / per unit).
+    """
+
+    network: FFBN | RBFN
+    steps: list[DesignStep]
+    met: bool
+    seconds: float
+    history: np.ndarray
+
+
+def _check_pair(train: Dataset, test: Dataset) -> None:
+    if train.index != test.index or tuple(train.inputs) != tuple(test.inputs):
+        raise ValueError(f"train ({train.index}, {train.inputs}) and test ({test.index}, {test.inputs}) sets differ")
+
+
+def design_ffbn(
+    key: Array,
+    train: Dataset,
+    test: Dataset,
+    *,
+    error_goal: float = 0.02,
+    max_hidden: int = 100,
+    hidden_start: int = 1,
+    hidden_step: int = 1,
+    trainer: str = "lm",
+    target_mse: float = 1e-3,
+    max_epochs: int = 100,
+    lm_hyper: LMHyperParams = LMHyperParams(),
+    adam_steps: int = 2000,
+    adam_learning_rate: float = 1e-2,
+    callback: Callable[[DesignStep], None] | None = None,
+) -> Design:
+    """Grow an FFBN until its max relative test error < ``error_goal`` (paper Fig. 6a).
+
+    Args:
+      key: PRNG key (split once per network size).
+      train, test: datasets of the same index.
+      error_goal: E (paper: 0.02).
+      max_hidden: L_iter (paper: 100).
+      hidden_start, hidden_step: sizes tried are ``hidden_start, +hidden_step, …``.
+      trainer: "lm" (Levenberg–Marquardt, E_mse/L_epochs) or "adam" (``adam_steps``).
+      target_mse: E_mse in squared index units (paper: 1e-3 for w, 5e-6 for KCI).
+      max_epochs: L_epochs (paper: 100).
+      callback: called with each :class:`DesignStep` (progress reporting).
+    """
+    _check_pair(train, test)
+    if trainer not in TRAINERS:
+        raise ValueError(f"unknown trainer {trainer!r}; expected one of {TRAINERS}")
+    if not (1 <= hidden_start <= max_hidden and hidden_step >= 1):
+        raise ValueError(f"need 1 <= hidden_start <= max_hidden and hidden_step >= 1, got "
+                         f"{hidden_start}, {max_hidden}, {hidden_step}")
+    t_all = time.perf_counter()
+    steps: list[DesignStep] = []
+    best = None
+    for hidden in range(hidden_start, max_hidden + 1, hidden_step):
+        key, sub = jax.random.split(key)
+        t0 = time.perf_counter()
+        net = init_ffbn(sub, hidden, train)
+        width = padded_width(hidden)
+        if trainer == "lm":
+            net, state, history = train_ffbn_lm(net, train, max_epochs=max_epochs, target_mse=target_mse,
+                                                hyper=lm_hyper, pad_to=width)
+            mse, epochs = float(state.mse), int(state.epoch)
+        else:
+            net, history = train_ffbn_adam(net, train, steps=adam_steps, learning_rate=adam_learning_rate, pad_to=width)
+            mse, epochs = float(history[-1]), adam_steps
+        err = float(max_relative_error(test.y, net.predict(test.x)))
+        step = DesignStep(hidden, float("nan"), err, mse, epochs, time.perf_counter() - t0)
+        steps.append(step)
+        log.info("FFBN-%s H=%d: max rel test error %.4f, train mse %.3g, %d epochs, %.2f s",
+                 train.index, hidden, err, mse, epochs, step.seconds)
+        if callback is not None:
+            callback(step)
+        history = np.asarray(history)
+        if best is None or err < best[1]:
+            best = (net, err, history[np.isfinite(history)])
+        if err < error_goal:
+            return Design(net, steps, True, time.perf_counter() - t_all, best[2])
+    return Design(best[0], steps, False, time.perf_counter() - t_all, best[2])
+
+
+def design_rbfn(
+    train: Dataset,
+    test: Dataset,
+    *,
+    error_goal: float = 0.02,
+    spread_start: float = 1.0,
+    spread_step: float = 1.0,
+    spread_max: float = 10.0,
+    target_mse: float = 1e-6,
+    max_centres: int = 300,
+    callback: Callable[[DesignStep], None] | None = None,
+) -> Design:
+    """Search the spread of a greedily grown RBFN (paper Fig. 6b).
+
+    Args:
+      train, test: datasets of the same index.
+      error_goal: E (paper: 0.02).
+      spread_start, spread_step, spread_max: spreads ``s0, s0 + st_spread, … ≤ L_s`` in
+        normalised input units (paper: L_s = 10).
+      target_mse: E_th, training mse at which unit addition stops [index units²].
+      max_centres: unit limit per spread.
+      callback: called with each :class:`DesignStep`.
+    """
+    _check_pair(train, test)
+    if not (spread_start > 0 and spread_step > 0 and spread_max >= spread_start):
+        raise ValueError(f"need 0 < spread_start <= spread_max and spread_step > 0, got "
+                         f"{spread_start}, {spread_step}, {spread_max}")
+    t_all = time.perf_counter()
+    n_spreads = int(np.floor((spread_max - spread_start) / spread_step + 1e-9)) + 1
+    steps: list[DesignStep] = []
+    best = None
+    for spread in spread_start + spread_step * np.arange(n_spreads):
+        t0 = time.perf_counter()
+        net, history = fit_rbfn(train, spread=float(spread), target_mse=target_mse, max_centres=max_centres)
+        err = float(max_relative_error(test.y, net.predict(test.x)))
+        step = DesignStep(net.n_centres, float(spread), err, float(history[-1]), net.n_centres, time.perf_counter() - t0)
+        steps.append(step)
+        log.info("RBFN-%s spread %.3g: %d units, max rel test error %.4f, train mse %.3g, %.2f s",
+                 train.index, spread, net.n_centres, err, step.train_mse, step.seconds)
+        if callback is not None:
+            callback(step)
+        if best is None or err < best[1]:
+            best = (net, err, np.asarray(history))
+        if err < error_goal:
+            return Design(net, steps, True, time.perf_counter() - t_all, np.asarray(history))
+    return Design(best[0], steps, False, time.perf_counter() - t_all, best[2])

@@ -1,0 +1,209 @@
+"""Feed-forward back-propagation network (FFBN; dexterity paper §3.2, eqs. 13–16).
+
+One hidden layer of ``tanh`` units and a linear output unit (a flax ``linen`` MLP), wrapped
+with min–max normalisation of inputs and output to [−1, 1]:
+
+    S = y⁻¹( W2ᵀ tanh(W1ᵀ x̃ + b1) + b2 ),   x̃ = (x − x_offset) · x_scale.
+"""
+
+from __future__ import annotations
+
+from functools import partial
+from typing import Any
+
+import flax.linen as nn
+import jax
+import jax.numpy as jnp
+from flax import struct
+from jax import Array
+
+from uvms_jax.surrogate._adam import fit_adam
+from uvms_jax.surrogate._dataset import Dataset
+from uvms_jax.surrogate._lm import LMHyperParams, LMState, fit_lm
+from uvms_jax.surrogate._scaler import Scaler, fit_scaler
+
+# Operation counts in the paper's convention (Table 4, Appendix A): additions and
+# multiplications cost 1 each, exp costs one multiplication, tanh = (e^γ − e^−γ)/(e^γ + e^−γ)
+# costs 7 (2 exp, 2 add, 1 div + 2 for the negated exponent). Reproduces the paper's 184
+# (w: 8 hidden, 7 inputs) and 775 (KCI: 25 hidden, 11 inputs).
+TANH_OPS = 7
+
+
+class MLP(nn.Module):
+    """``tanh`` hidden layer of ``hidden`` units, linear scalar output; ``(..., d) → (...)``."""
+
+    hidden: int
+
+    @nn.compact
+    def __call__(self, x: Array) -> Array:
+        h = jnp.tanh(nn.Dense(self.hidden, name="hidden", param_dtype=x.dtype)(x))
+        return nn.Dense(1, name="output", param_dtype=x.dtype)(h)[..., 0]
+
+
+def mlp_apply(params: Any, x: Array) -> Array:
+    """Apply the MLP whose parameters are ``params`` (hidden size read from their shapes)."""
+    return MLP(params["hidden"]["kernel"].shape[-1]).apply({"params": params}, x)
+
+
+@struct.dataclass
+class FFBN:
+    """A trained (or initialised) FFBN surrogate of one index.
+
+    Attributes:
+      params: flax parameters ``{"hidden": {kernel (d, H), bias (H,)}, "output": {kernel (H, 1), bias (1,)}}``
+        acting on normalised inputs/outputs.
+      x_norm: input scaler, ``(d,)`` offsets and scales [joint units].
+      y_norm: output scaler, scalar offset and scale [index units].
+      index: "w" or "kci" (static).
+      inputs: joint indices of the inputs in the full configuration (static).
+      n_joints: length of the full configuration ``q`` (static).
+    """
+
+    params: Any
+    x_norm: Scaler
+    y_norm: Scaler
+    index: str = struct.field(pytree_node=False)
+    inputs: tuple[int, ...] = struct.field(pytree_node=False)
+    n_joints: int = struct.field(pytree_node=False, default=12)
+
+    @property
+    def hidden(self) -> int:
+        """Number of hidden neurons H."""
+        return int(self.params["hidden"]["kernel"].shape[-1])
+
+    @property
+    def n_inputs(self) -> int:
+        return len(self.inputs)
+
+    @property
+    def operation_count(self) -> int:
+        """Additions + multiplications per evaluation, paper convention: ``H (2d + 2 + 7)``."""
+        return self.hidden * (2 * self.n_inputs + 2 + TANH_OPS)
+
+    def predict(self, x: Array) -> Array:
+        """Index estimate for network inputs ``x: (..., d)`` → ``(...)``, in the dtype of ``x``."""
+        return _predict(self, jnp.asarray(x))
+
+    def index_fn(self, q: Array) -> Array:
+        """Stand-in for the analytic index: ``q: (..., n_joints)`` [m, rad] → ``(...)``."""
+        q = _check_q(q, self.n_joints)
+        return self.predict(q[..., list(self.inputs)])
+
+
+@jax.jit
+def _predict(net: FFBN, x: Array) -> Array:
+    params = jax.tree_util.tree_map(lambda p: p.astype(x.dtype), net.params)
+    return net.y_norm.inverse(mlp_apply(params, net.x_norm(x)))
+
+
+@partial(jax.jit, static_argnums=2)
+def _init_params(key: Array, x: Array, hidden: int) -> Any:
+    return MLP(hidden).init(key, x)["params"]
+
+
+def _check_q(q, n_joints: int) -> Array:
+    q = jnp.asarray(q)
+    if q.ndim == 0 or q.shape[-1] != n_joints:
+        raise ValueError(f"q must have shape (..., {n_joints}), got {q.shape}")
+    if not jnp.issubdtype(q.dtype, jnp.floating):
+        q = q.astype(jnp.float32)
+    return q
+
+
+def init_ffbn(key: Array, hidden: int, data: Dataset) -> FFBN:
+    """A fresh FFBN of ``hidden`` neurons, normalised to ``data``'s input and target ranges.
+
+    Weights use flax's defaults (LeCun-normal kernels, zero biases) in the dtype of ``data.x``.
+    """
+    if hidden < 1:
+        raise ValueError(f"hidden must be >= 1, got {hidden}")
+    x_norm, y_norm = fit_scaler(data.x, axis=0), fit_scaler(data.y, axis=None)
+    x = jnp.asarray(data.x)
+    params = _init_params(key, x_norm(x[:1]), int(hidden))
+    return FFBN(params=params, x_norm=x_norm, y_norm=y_norm, index=data.index, inputs=data.inputs,
+                n_joints=data.q.shape[-1])
+
+
+def padded_width(hidden: int, minimum: int = 8) -> int:
+    """Trainer width for ``hidden`` neurons: the next power of two, at least ``minimum``.
+
+    Networks are trained zero-padded to this width so that a design loop over H = 1, 2, …
+    compiles one trainer per width, not per H (see :func:`pad_hidden`).
+    """
+    return max(minimum, 1 << (int(hidden) - 1).bit_length())
+
+
+def pad_hidden(params: Any, width: int) -> Any:
+    """Zero-pad the hidden layer of MLP ``params`` to ``width`` units.
+
+    A unit whose input weights, bias and output weight are all 0 outputs 0 and has zero
+    gradient with respect to each of its parameters (∂/∂w_out = tanh(0) = 0, ∂/∂w_in ∝ w_out = 0),
+    so Levenberg–Marquardt (block-diagonal normal equations, zero right-hand side) and Adam
+    leave it at exactly 0: training the padded network trains the unpadded one.
+    """
+    extra = width - params["hidden"]["kernel"].shape[-1]
+    if extra < 0:
+        raise ValueError(f"cannot pad {params['hidden']['kernel'].shape[-1]} hidden units to {width}")
+    return {
+        "hidden": {"kernel": jnp.pad(params["hidden"]["kernel"], ((0, 0), (0, extra))),
+                   "bias": jnp.pad(params["hidden"]["bias"], (0, extra))},
+        "output": {"kernel": jnp.pad(params["output"]["kernel"], ((0, extra), (0, 0))),
+                   "bias": params["output"]["bias"]},
+    }
+
+
+def trim_hidden(params: Any, hidden: int) -> Any:
+    """Inverse of :func:`pad_hidden`: keep the first ``hidden`` units."""
+    return {
+        "hidden": {"kernel": params["hidden"]["kernel"][:, :hidden], "bias": params["hidden"]["bias"][:hidden]},
+        "output": {"kernel": params["output"]["kernel"][:hidden], "bias": params["output"]["bias"]},
+    }
+
+
+def _normalised(net: FFBN, data: Dataset) -> tuple[Array, Array]:
+    if tuple(data.inputs) != tuple(net.inputs):
+        raise ValueError(f"dataset inputs {data.inputs} differ from the network's {net.inputs}")
+    x = jnp.asarray(data.x)
+    return net.x_norm(x), net.y_norm(jnp.asarray(data.y, x.dtype))
+
+
+def train_ffbn_lm(
+    net: FFBN,
+    data: Dataset,
+    *,
+    max_epochs: int = 100,
+    target_mse: float = 0.0,
+    hyper: LMHyperParams = LMHyperParams(),
+    pad_to: int | None = None,
+) -> tuple[FFBN, LMState, Array]:
+    """Levenberg–Marquardt training of ``net`` on ``data`` (paper §3.3).
+
+    ``target_mse`` (E_mse) is in squared index units (eq. 19); internally the mse lives on the
+    normalised output, so it is converted with the output scale. ``pad_to`` trains zero-padded
+    to that many hidden units (same result, shared compilation; :func:`pad_hidden`). Returns
+    (net, final LM state, history of the mse in index units, NaN after the last epoch).
+    """
+    x, y = _normalised(net, data)
+    s2 = jnp.asarray(net.y_norm.scale, y.dtype) ** 2
+    params = jax.tree_util.tree_map(lambda p: p.astype(x.dtype), net.params)
+    hidden = net.hidden
+    params = pad_hidden(params, pad_to or hidden)
+    params, state, history = fit_lm(mlp_apply, params, x, y, max_epochs=max_epochs,
+                                    target_mse=float(target_mse) * float(s2), hyper=hyper)
+    return net.replace(params=trim_hidden(params, hidden)), state._replace(mse=state.mse / s2), history / s2
+
+
+def train_ffbn_adam(
+    net: FFBN, data: Dataset, *, steps: int = 2000, learning_rate: float = 1e-2, pad_to: int | None = None
+) -> tuple[FFBN, Array]:
+    """Full-batch Adam training of ``net``; returns (net, mse history in index units).
+
+    ``pad_to`` as in :func:`train_ffbn_lm`.
+    """
+    x, y = _normalised(net, data)
+    s2 = jnp.asarray(net.y_norm.scale, y.dtype) ** 2
+    params = jax.tree_util.tree_map(lambda p: p.astype(x.dtype), net.params)
+    hidden = net.hidden
+    params = pad_hidden(params, pad_to or hidden)
+    params, history = fit_adam(mlp_apply, params, x, y, steps=steps, learning_rate=learning_rate)
+    return net.replace(params=trim_hidden(params, hidden)), history / s2

@@ -1,0 +1,55 @@
+"""Side-by-side timing of index functions (used by the surrogate experiment and benchmark)."""
+
+from __future__ import annotations
+
+import time
+from typing import Callable
+
+import jax
+import numpy as np
+from jax import Array
+
+
+def time_index_fn(fn: Callable[[Array], Array], q: Array, *, repeats: int = 5, chunk: int | None = None) -> dict:
+    """Wall time of ``fn(q)`` for a batch ``q: (N, n_joints)``, compiled once beforehand.
+
+    Args:
+      fn: ``q: (..., n_joints) → (...)`` index function (jitted here).
+      q: ``(N, n_joints)`` configurations, already on the device.
+      repeats: timed runs; the median is reported.
+      chunk: if given, evaluate in chunks of this many rows (``lax.map``) to bound memory.
+
+    Returns:
+      ``{"seconds": median, "min_seconds", "compile_seconds", "per_second": N / median}``.
+    """
+    n = q.shape[0]
+    if chunk is not None and chunk < n:
+        if n % chunk:
+            raise ValueError(f"batch {n} is not a multiple of chunk {chunk}")
+        f = jax.jit(lambda q: jax.lax.map(fn, q.reshape(n // chunk, chunk, -1)).reshape(n))
+    else:
+        f = jax.jit(fn)
+    t0 = time.perf_counter()
+    f(q).block_until_ready()
+    compile_s = time.perf_counter() - t0
+    times = []
+    for _ in range(max(1, repeats)):
+        t0 = time.perf_counter()
+        f(q).block_until_ready()
+        times.append(time.perf_counter() - t0)
+    med = float(np.median(times))
+    return {"seconds": med, "min_seconds": float(np.min(times)), "compile_seconds": compile_s, "per_second": n / med}
+
+
+def xla_flops_per_sample(fn: Callable[[Array], Array], q: Array) -> float | None:
+    """Floating-point operations per sample of ``fn`` on ``q: (N, n_joints)`` from XLA's cost
+    analysis (transcendentals not included); None where the backend gives no estimate."""
+    try:
+        cost = jax.jit(fn).lower(q).compile().cost_analysis()
+    except Exception:  # noqa: BLE001 - cost analysis is best-effort and backend-specific
+        return None
+    if isinstance(cost, (list, tuple)):
+        cost = cost[0] if cost else None
+    if not cost or "flops" not in cost:
+        return None
+    return float(cost["flops"]) / q.shape[0]
