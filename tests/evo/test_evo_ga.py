@@ -1,5 +1,7 @@
 """Binary GA (paper Table 2): coding, determinism, monotone best fitness, batch = single runs."""
 
+import dataclasses
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -35,7 +37,26 @@ def test_codec_roundtrip(setup):
     err = np.abs(np.asarray(codec.decode(codec.encode(x))) - x)
     assert np.all(err <= np.asarray(codec.resolution) / 2 + 1e-12)
     np.testing.assert_allclose(np.asarray(codec.decode(jnp.zeros(codec.n_bits, bool))), LOW)
-    np.testing.assert_allclose(np.asarray(codec.decode(jnp.ones(codec.n_bits, bool))), HIGH)
+    np.testing.assert_allclose(np.asarray(codec.decode(codec.encode(HIGH))), HIGH)
+    plain = evo.make_codec(LOW, HIGH, BITS, gray=False)
+    np.testing.assert_allclose(np.asarray(plain.decode(jnp.ones(plain.n_bits, bool))), HIGH)
+
+
+def test_gray_code_mirror_is_one_bit():
+    """In reflected Gray code, v and 2^n − 1 − v (x and −x on the block) differ in one bit."""
+    codec = evo.make_codec(LOW, HIGH, BITS)
+    x = np.random.default_rng(1).uniform(LOW, HIGH, (20, 4))
+    mirrored = x.copy()
+    mirrored[:, 0] = -x[:, 0]
+    a, b = np.asarray(codec.encode(x)), np.asarray(codec.encode(mirrored))
+    flips = np.nonzero(a != b)
+    assert np.all(flips[1] == 0)  # only the first bit of the x field
+    # and neighbouring codes differ in exactly one bit
+    step = x.copy()
+    step[:, 1] = x[:, 1] + np.asarray(codec.resolution)[1]
+    inside = step[:, 1] <= HIGH[1]
+    d = np.sum(np.asarray(codec.encode(x)) != np.asarray(codec.encode(step)), axis=-1)
+    assert np.all(d[inside] == 1)
 
 
 def test_same_seed_same_result(setup, batch, sphere):
@@ -69,6 +90,17 @@ def test_batch_equals_single_run(setup, batch, sphere):
     np.testing.assert_array_equal(np.asarray(batch.best_x[2]), np.asarray(single.best_x))
     np.testing.assert_array_equal(np.asarray(batch.history[2]), np.asarray(single.history))
     assert int(batch.generations[2]) == int(single.generations)
+
+
+@pytest.mark.parametrize("chunk", [1, 7])
+def test_fitness_cache_gives_identical_runs(setup, batch, sphere, chunk):
+    codec, ga, params, keys = setup
+    cached = evo.run_ga_batch(keys, sphere, codec, dataclasses.replace(ga, eval_chunk=chunk), params, batch_size=2)
+    np.testing.assert_array_equal(np.asarray(cached.history), np.asarray(batch.history))
+    np.testing.assert_array_equal(np.asarray(cached.best_x), np.asarray(batch.best_x))
+    full = np.asarray(batch.generations) * ga.population_size
+    np.testing.assert_array_equal(np.asarray(batch.evaluations), full)
+    assert np.all(np.asarray(cached.evaluations) < full)  # elites alone are never re-evaluated
 
 
 def test_elitism_and_rate_decay(setup, sphere):

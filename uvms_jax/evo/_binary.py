@@ -1,4 +1,10 @@
-"""Binary chromosome of the docking GA: ``x | y | z | ψ`` bit fields (paper §III.B)."""
+"""Binary chromosome of the docking GA: ``x | y | z | ψ`` bit fields (paper §III.B).
+
+Each field is a fixed-point integer, optionally in reflected Gray code: neighbouring values
+then differ in one bit, and mirror values ``v ↔ 2^n − 1 − v`` (here ``x ↔ −x`` on the
+symmetric block) differ only in the field's first bit — one mutation apart instead of a
+"Hamming cliff" of several bits.
+"""
 
 from __future__ import annotations
 
@@ -21,11 +27,13 @@ class BinaryCodec:
     Attributes:
       low, high: ``(m,)`` box corners.
       field_bits: bits per variable (static).
+      gray: fields in reflected Gray code (static); plain binary otherwise.
     """
 
     low: Array
     high: Array
     field_bits: tuple[int, ...] = struct.field(pytree_node=False)
+    gray: bool = struct.field(pytree_node=False, default=True)
 
     @property
     def n_bits(self) -> int:
@@ -46,9 +54,20 @@ class BinaryCodec:
             start += n
         return W
 
+    def _fields(self):
+        start = 0
+        for n in self.field_bits:
+            yield start, n
+            start += n
+
     def decode(self, bits: Bits) -> Array:
         """``(..., n_bits)`` chromosomes → ``(..., m)`` values in the box."""
-        levels = jnp.asarray(bits, dtype=self.low.dtype) @ jnp.asarray(self._weights(), dtype=self.low.dtype)
+        bits = jnp.asarray(bits)
+        if self.gray:  # binary bit i = XOR of Gray bits 0..i of its field
+            bits = jnp.concatenate(
+                [jnp.cumsum(bits[..., s : s + n].astype(jnp.int32), axis=-1) % 2 for s, n in self._fields()], axis=-1
+            )
+        levels = bits.astype(self.low.dtype) @ jnp.asarray(self._weights(), dtype=self.low.dtype)
         return self.low + levels * self.resolution
 
     def encode(self, x) -> Bits:
@@ -57,12 +76,15 @@ class BinaryCodec:
         v = jnp.round((jnp.clip(x, self.low, self.high) - self.low) / self.resolution).astype(jnp.int32)
         fields = []
         for i, n in enumerate(self.field_bits):
+            vi = v[..., i, None]
+            if self.gray:
+                vi = vi ^ (vi >> 1)
             shifts = jnp.arange(n - 1, -1, -1, dtype=jnp.int32)
-            fields.append(((v[..., i, None] >> shifts) & 1).astype(bool))
+            fields.append(((vi >> shifts) & 1).astype(bool))
         return jnp.concatenate(fields, axis=-1)
 
 
-def make_codec(low, high, field_bits) -> BinaryCodec:
+def make_codec(low, high, field_bits, gray: bool = True) -> BinaryCodec:
     """Build a :class:`BinaryCodec`; ``field_bits`` positive, at most 30 per field, ``low < high``."""
     field_bits = tuple(int(n) for n in field_bits)
     low, high = jnp.asarray(low), jnp.asarray(high)
@@ -72,4 +94,4 @@ def make_codec(low, high, field_bits) -> BinaryCodec:
         raise ValueError(f"bits per field must be in 1..30, got {field_bits}")
     if not bool(jnp.all(low < high)):
         raise ValueError(f"box is empty: low {low} must be < high {high}")
-    return BinaryCodec(low=low, high=high.astype(low.dtype), field_bits=field_bits)
+    return BinaryCodec(low=low, high=high.astype(low.dtype), field_bits=field_bits, gray=bool(gray))

@@ -109,6 +109,11 @@ class BinaryGA:
       max_generations: Table 2: 500.
       n_elites: individuals copied unchanged into the next generation.
       tournament_size: individuals per selection tournament.
+      eval_chunk: fitness-cache chunk for :func:`run_ga`. ``None``: the whole population is
+        evaluated every generation. An integer c: only individuals whose chromosome is not in
+        the previous generation (elites, unchanged copies and repeated crossovers are looked
+        up) are evaluated, c at a time in a loop of as many chunks as needed. Results are
+        identical; on a CPU a small c (≈ 10) skips much of the work of a converging run.
     """
 
     population_size: int
@@ -116,6 +121,7 @@ class BinaryGA:
     max_generations: int = 500
     n_elites: int = 2
     tournament_size: int = 2
+    eval_chunk: int | None = None
 
     def __post_init__(self):
         if self.population_size < 2 or not 0 <= self.n_elites < self.population_size:
@@ -123,6 +129,8 @@ class BinaryGA:
                 f"need population_size >= 2 and 0 <= n_elites < population_size, "
                 f"got {self.population_size} and {self.n_elites}"
             )
+        if self.eval_chunk is not None and self.eval_chunk < 1:
+            raise ValueError(f"eval_chunk must be None or >= 1, got {self.eval_chunk}")
         if self.n_bits < 2 or self.max_generations < 1 or self.tournament_size < 1:
             raise ValueError(
                 f"need n_bits >= 2, max_generations >= 1, tournament_size >= 1, got "
@@ -212,6 +220,7 @@ class GAResult(NamedTuple):
       best_x: ``(m,)`` decoded best solution (a docking pose ``[x, y, z, ψ]``).
       best_fitness: ``()`` its fitness.
       generations: ``()`` generations evaluated.
+      evaluations: ``()`` fitness evaluations made (fewer than generations × P with a cache).
       history: ``(max_generations,)`` best fitness per generation (NaN after the stop).
       state: final :class:`GAState`.
     """
@@ -219,8 +228,34 @@ class GAResult(NamedTuple):
     best_x: Array
     best_fitness: Array
     generations: Array
+    evaluations: Array
     history: Array
     state: GAState
+
+
+def _evaluate_cached(problem: Any, codec: BinaryCodec, population: Bits, state: GAState, chunk: int):
+    """Fitness of ``population``: looked up for chromosomes of the previous generation,
+    computed ``chunk`` at a time for the others. Returns ``(fitness (P,), n_evaluated)``."""
+    P = population.shape[0]
+    same = jnp.all(population[:, None, :] == state.population[None, :, :], axis=-1)  # (P, P)
+    same = same & jnp.isfinite(state.fitness)[None, :]  # nothing is known before generation 1
+    known = jnp.any(same, axis=-1)
+    fitness = jnp.where(known, state.fitness[jnp.argmax(same, axis=-1)], -jnp.inf)
+    n_new = (P - jnp.sum(known)).astype(jnp.int32)
+    n_slots = -(-P // chunk) * chunk
+    # Indices of the new individuals first; padding slots point past the end and are dropped.
+    order = jnp.argsort(known, stable=True)
+    order = jnp.concatenate([order, jnp.full((n_slots - P,), P, order.dtype)])
+    order = jnp.where(jnp.arange(n_slots) < n_new, order, P)
+
+    def body(carry):
+        i, fitness = carry
+        idx = jax.lax.dynamic_slice(order, (i * chunk,), (chunk,))
+        f = problem.fitness(codec.decode(population[jnp.minimum(idx, P - 1)]))
+        return i + 1, fitness.at[idx].set(f.astype(fitness.dtype), mode="drop")
+
+    _, fitness = jax.lax.while_loop(lambda c: c[0] * chunk < n_new, body, (jnp.asarray(0, jnp.int32), fitness))
+    return fitness, n_new
 
 
 def _run(key: Array, problem: Any, codec: BinaryCodec, ga: BinaryGA, params: GAParams) -> GAResult:
@@ -228,17 +263,23 @@ def _run(key: Array, problem: Any, codec: BinaryCodec, ga: BinaryGA, params: GAP
     state = ga.init(k_init, params)
 
     def body(carry):
-        key, state = carry
+        key, state, n_evals = carry
         key, k_ask = jax.random.split(key)
-        population, state = ga.ask(k_ask, state, params)
-        fitness = problem.fitness(codec.decode(population))
-        return key, ga.tell(population, fitness, state, params)
+        population, new_state = ga.ask(k_ask, state, params)
+        if ga.eval_chunk is None:
+            fitness, n_new = problem.fitness(codec.decode(population)), ga.population_size
+        else:
+            fitness, n_new = _evaluate_cached(problem, codec, population, state, ga.eval_chunk)
+        return key, ga.tell(population, fitness, new_state, params), n_evals + n_new
 
-    _, state = jax.lax.while_loop(lambda c: ~c[1].done, body, (k_loop, state))
+    _, state, n_evals = jax.lax.while_loop(
+        lambda c: ~c[1].done, body, (k_loop, state, jnp.asarray(0, dtype=jnp.int32))
+    )
     return GAResult(
         best_x=codec.decode(state.best_bits),
         best_fitness=state.best_fitness,
         generations=state.generation,
+        evaluations=n_evals,
         history=state.history,
         state=state,
     )
@@ -254,9 +295,12 @@ def _run_jit(key, problem, codec, ga, params):
     return _run(key, problem, codec, ga, params)
 
 
-@partial(jax.jit, static_argnames=("ga",))
-def _run_batch_jit(keys, problem, codec, ga, params):
-    return jax.vmap(_run, in_axes=(0, None, None, None, None))(keys, problem, codec, ga, params)
+@partial(jax.jit, static_argnames=("ga", "batch_size"))
+def _run_batch_jit(keys, problem, codec, ga, params, batch_size):
+    run = lambda key: _run(key, problem, codec, ga, params)
+    if batch_size is None:
+        return jax.vmap(run)(keys)
+    return jax.lax.map(run, keys, batch_size=batch_size)
 
 
 def run_ga(key: Array, problem: Any, codec: BinaryCodec, ga: BinaryGA, params: GAParams | None = None) -> GAResult:
@@ -275,12 +319,26 @@ def run_ga(key: Array, problem: Any, codec: BinaryCodec, ga: BinaryGA, params: G
 
 
 def run_ga_batch(
-    keys: Array, problem: Any, codec: BinaryCodec, ga: BinaryGA, params: GAParams | None = None
+    keys: Array,
+    problem: Any,
+    codec: BinaryCodec,
+    ga: BinaryGA,
+    params: GAParams | None = None,
+    batch_size: int | None = None,
 ) -> GAResult:
-    """Independent runs, one per key in ``keys (R,)``, in one jitted call (``vmap``).
+    """Independent runs, one per key in ``keys (R,)``, in one jitted call.
 
-    The batch runs until its slowest member stops; each run's state freezes at its own stop,
-    so results equal those of :func:`run_ga` with the same key.
+    Args:
+      batch_size: ``None`` vmaps all runs together: every loop step evaluates R populations
+        until the slowest run stops (best on a GPU). An integer runs groups of that many
+        runs one after another (``lax.map``), so the cost is the sum of the groups' longest
+        runs rather than R × the longest (fewer evaluations on a small CPU).
+
+    Each run's state freezes at its own stop, so results equal those of :func:`run_ga`
+    with the same key, whatever ``batch_size``.
     """
     _check(codec, ga)
-    return _run_batch_jit(keys, problem, codec, ga, params if params is not None else ga.default_params)
+    if batch_size is not None and batch_size < 1:
+        raise ValueError(f"batch_size must be None or >= 1, got {batch_size}")
+    params = params if params is not None else ga.default_params
+    return _run_batch_jit(keys, problem, codec, ga, params, batch_size)

@@ -42,21 +42,22 @@ def grid_axes(low, high, counts, periodic) -> list[np.ndarray]:
     ]
 
 
-def _grid_point(flat: Array, low: Array, step: Array, counts: tuple[int, ...]) -> Array:
-    """Grid point of flat (row-major) index ``flat (n,)`` → ``(n, m)``."""
-    idx = jnp.stack(jnp.unravel_index(flat, counts), axis=-1).astype(low.dtype)
-    return low + idx * step
+def _grid_point(flat: Array, low: Array, step: Array, counts: Array) -> Array:
+    """Grid point of flat (row-major) index ``flat (n,)`` → ``(n, m)``; ``counts`` is traced, so
+    one compiled search serves every grid size and every refinement box."""
+    strides = jnp.cumprod(jnp.concatenate([counts[1:], jnp.ones((1,), counts.dtype)])[::-1])[::-1]
+    idx = (flat[:, None] // strides) % counts
+    return low + idx.astype(low.dtype) * step
 
 
-@partial(jax.jit, static_argnames=("counts", "chunk_size"))
-def _search(problem: Any, low: Array, step: Array, counts: tuple[int, ...], chunk_size: int):
-    n = int(np.prod(counts))
-    n_chunks = -(-n // chunk_size)
-    dtype = low.dtype
+@partial(jax.jit, static_argnames=("chunk_size",))
+def _search(problem: Any, low: Array, step: Array, counts: Array, chunk_size: int):
+    n = jnp.prod(counts)
+    n_chunks = (n + chunk_size - 1) // chunk_size
 
     def body(c, best):
         best_x, best_f = best
-        flat = c * chunk_size + jnp.arange(chunk_size, dtype=jnp.int32)
+        flat = c * chunk_size + jnp.arange(chunk_size, dtype=counts.dtype)
         inside = flat < n
         x = _grid_point(jnp.where(inside, flat, 0), low, step, counts)
         f = jnp.where(inside, problem.fitness(x), -jnp.inf)
@@ -65,7 +66,7 @@ def _search(problem: Any, low: Array, step: Array, counts: tuple[int, ...], chun
         better = f[i] > best_f  # strict: ties keep the lowest flat index
         return jnp.where(better, x[i], best_x), jnp.where(better, f[i], best_f)
 
-    init = (low, jnp.asarray(-jnp.inf, dtype=dtype))
+    init = (low, jnp.asarray(-jnp.inf, dtype=low.dtype))
     return jax.lax.fori_loop(0, n_chunks, body, init)
 
 
@@ -85,7 +86,8 @@ def grid_search(
       counts: points per variable; ``prod(counts)`` candidates (must fit int32).
       periodic: per variable, whether ``high`` wraps to ``low`` (then it is not sampled
         twice); default: none.
-      chunk_size: candidates per jitted evaluation (memory bound).
+      chunk_size: candidates per jitted evaluation (memory bound); the compiled search depends
+        only on it (and the problem's shapes), not on ``counts`` or the box.
 
     Returns:
       :class:`GridResult`; ties go to the candidate with the lowest flat (row-major) index.
@@ -105,7 +107,7 @@ def grid_search(
     step = jnp.asarray([1.0 / max(k, 1) for k in divisions], dtype=low.dtype) * (high - low)
     # A single point per axis sits at the box centre.
     low_eff = jnp.where(jnp.asarray(counts) == 1, (low + high) / 2, low)
-    x, f = _search(problem, low_eff, step, counts, min(chunk_size, n))
+    x, f = _search(problem, low_eff, step, jnp.asarray(counts, dtype=jnp.int32), chunk_size)
     return GridResult(x=x, fitness=f, n_candidates=n, low=low, high=high)
 
 

@@ -1,0 +1,144 @@
+"""Docking optimisation timings: GA batch vs CMA-ES (evosax) vs dense grid; prints one JSON.
+
+  python benchmarks/docking.py                                   # CPU defaults (paper sizes)
+  python benchmarks/docking.py --population 100000 --runs 1 \\
+      --grid 464,464,58,8 --chunk 1048576                         # GPU: pop 1e5, grid 1e8
+
+Every optimiser is called once to compile and then timed ``--repeat`` times (best and
+median reported). The scene and GA settings come from configs/docking/scene/paper.yaml and
+configs/ga/paper.yaml, so the benchmark runs the same problem as the experiment.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import statistics
+import time
+from pathlib import Path
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from omegaconf import OmegaConf
+
+from uvms_jax import evo
+
+ROOT = Path(__file__).resolve().parents[1]
+FIELDS = ("x", "y", "z", "psi")
+
+
+def _time(fn, repeat):
+    t0 = time.perf_counter()
+    out = jax.block_until_ready(fn())
+    first = time.perf_counter() - t0
+    times = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        out = jax.block_until_ready(fn())
+        times.append(time.perf_counter() - t0)
+    return out, {"compile_and_first_s": first, "best_s": min(times), "median_s": statistics.median(times)}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--runs", type=int, default=7, help="independent GA runs in one batch")
+    ap.add_argument("--population", type=int, default=None, help="GA population (default: config, 60)")
+    ap.add_argument("--max-generations", type=int, default=None, help="default: config, 500")
+    ap.add_argument("--grid", default="81,81,16,12", help="grid points per x,y,z,ψ (product = candidates)")
+    ap.add_argument("--chunk", type=int, default=16384, help="grid candidates per jitted chunk")
+    ap.add_argument("--cma-runs", type=int, default=7)
+    ap.add_argument("--cma-population", type=int, default=16)
+    ap.add_argument("--cma-generations", type=int, default=300)
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--dtype", default="float32")
+    ap.add_argument("--skip", default="", help="comma list of parts to skip: ga,grid,cmaes")
+    args = ap.parse_args()
+    skip = set(filter(None, args.skip.split(",")))
+
+    scene = OmegaConf.to_container(OmegaConf.load(ROOT / "configs/docking/scene/paper.yaml"))
+    g = OmegaConf.load(ROOT / "configs/ga/paper.yaml")
+    problem = evo.make_docking_problem(**scene, dtype=jnp.dtype(args.dtype))
+    codec = evo.make_codec(problem.pose_low, problem.pose_high, [g.bits[f] for f in FIELDS], gray=g.gray)
+    ga = evo.BinaryGA(
+        population_size=args.population or g.population_size,
+        n_bits=codec.n_bits,
+        max_generations=args.max_generations or g.max_generations,
+        n_elites=g.n_elites,
+        tournament_size=g.tournament_size,
+    )
+    params = evo.GAParams(**{k: g[k] for k in (
+        "crossover_rate", "mutation_rate", "crossover_bias", "rate_decay", "improvement_decay",
+        "crossover_rate_min", "mutation_rate_min", "stall_generations", "improvement_tol")})
+    n_points = int(problem.p_control.shape[0])
+    report = {
+        "device": str(jax.devices()[0]),
+        "device_kind": jax.devices()[0].device_kind,
+        "platform": platform.machine(),
+        "cpu_count": os.cpu_count(),
+        "affinity_cpus": len(os.sched_getaffinity(0)),
+        "jax": jax.__version__,
+        "dtype": args.dtype,
+        "control_points": n_points,
+        "load_average_start": os.getloadavg(),
+    }
+
+    if "ga" not in skip:
+        keys = jax.random.split(jax.random.key(0), args.runs)
+        res, t = _time(lambda: evo.run_ga_batch(keys, problem, codec, ga, params), args.repeat)
+        gens = np.asarray(res.generations)
+        evals = int(gens.max()) * args.runs * ga.population_size  # the batch steps until its last run stops
+        report["ga"] = {
+            "runs": args.runs,
+            "population": ga.population_size,
+            "max_generations": ga.max_generations,
+            "generations": gens.tolist(),
+            "best_fitness": np.asarray(res.best_fitness).tolist(),
+            **t,
+            "evaluations_per_s": evals / t["best_s"],
+            "ik_targets_per_s": evals * n_points / t["best_s"],
+        }
+
+    if "grid" not in skip:
+        counts = tuple(int(c) for c in args.grid.split(","))
+        low, high = problem.pose_low, problem.pose_high
+        periodic = (False, False, False, True)
+        res, t = _time(lambda: evo.grid_search(problem, low, high, counts, periodic, args.chunk), max(1, args.repeat - 2))
+        n = int(np.prod(counts))
+        report["grid"] = {
+            "counts": list(counts),
+            "candidates": n,
+            "chunk": args.chunk,
+            "best_fitness": float(res.fitness),
+            "pose": np.asarray(res.x).tolist(),
+            **t,
+            "candidates_per_s": n / t["best_s"],
+            "ik_targets_per_s": n * n_points / t["best_s"],
+        }
+
+    if "cmaes" not in skip:
+        ckeys = jax.random.split(jax.random.key(1), args.cma_runs)
+        res, t = _time(
+            lambda: evo.run_cmaes(ckeys, problem, problem.pose_low, problem.pose_high,
+                                  args.cma_population, args.cma_generations, 0.3),
+            args.repeat,
+        )
+        evals = args.cma_runs * args.cma_population * args.cma_generations
+        report["cmaes"] = {
+            "runs": args.cma_runs,
+            "population": args.cma_population,
+            "generations": args.cma_generations,
+            "best_fitness": np.asarray(res.best_fitness).tolist(),
+            **t,
+            "evaluations_per_s": evals / t["best_s"],
+        }
+    if "ga" in report and "cmaes" in report:
+        report["ga_over_cmaes_evaluations_per_s"] = report["ga"]["evaluations_per_s"] / report["cmaes"]["evaluations_per_s"]
+    report["load_average_end"] = os.getloadavg()
+    print(json.dumps(report))
+
+
+if __name__ == "__main__":
+    main()
