@@ -155,8 +155,9 @@ class Item:
             return _box_vertices(self.dims)
         r, h = (self.dims[0], self.dims[1])
         n = _CYLINDER_SIDES if self.shape == "cylinder" else 6
-        # Hexagon: corners on the x axis (edge = circumradius); flats face ±y.
-        a = np.arange(n) * 2 * np.pi / n
+        # Hexagon (edge = circumradius): flats face ±x, so the jaws (opening along x) grip
+        # across flats, 69 mm for a 40 mm edge.
+        a = np.arange(n) * 2 * np.pi / n + (np.pi / 6 if self.shape == "hex_prism" else 0.0)
         ring = np.stack([r * np.cos(a), r * np.sin(a)], axis=-1)
         return np.concatenate([np.c_[ring, np.full(n, -h / 2)], np.c_[ring, np.full(n, h / 2)]])
 
