@@ -103,10 +103,12 @@ def test_grasp_one_element_rcl_is_greedy():
     greedy = sched.greedy(p)
     u = jax.random.uniform(jax.random.key(0), (5, p.max_path_len - 1))
     construct = jax.jit(jax.vmap(sched._grasp.construct, in_axes=(None, None, 0)))
-    paths, costs = construct(p, 0.01, u)
-    for path in np.asarray(paths):
+    built = construct(p, 0.01, u)
+    for path, objs, bases in zip(np.asarray(built.path), np.asarray(built.objs), np.asarray(built.bases)):
         assert sched._grasp.unpad(path, p.n_nodes) == greedy.path
-    np.testing.assert_allclose(costs, greedy.cost, rtol=1e-6)
+        assert list(objs) == [v for v in greedy.path if v in p.objects]
+        assert list(bases) == [v for v in greedy.path if v in p.bases]
+    np.testing.assert_allclose(built.cost, greedy.cost, rtol=1e-6)
 
 
 def test_greedy_reports_a_dead_end():

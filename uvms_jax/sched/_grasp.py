@@ -24,6 +24,16 @@ DEFAULT_ROUNDS = 4
 _RCL_EPS = 1e-4  # float32 α·|CL| = 2.9999998 must still give an RCL of 3
 
 
+class Construction(NamedTuple):
+    """One constructed schedule: ``path`` ``(L,)`` (padding node ``n``), ``cost``
+    (``inf`` if stuck), and its deliveries in order, ``objs`` and ``bases`` ``(N,)``."""
+
+    path: Array
+    cost: Array
+    objs: Array
+    bases: Array
+
+
 class GraspBatch(NamedTuple):
     """All GRASP iterations of one call.
 
@@ -39,7 +49,7 @@ class GraspBatch(NamedTuple):
     construction_costs: Array
 
 
-def construct(problem: PickPlaceProblem, alpha: Array, u: Array) -> tuple[Array, Array]:
+def construct(problem: PickPlaceProblem, alpha: Array, u: Array) -> Construction:
     """One randomised greedy construction (thesis Algorithm 3) for one iteration.
 
     At every step the candidate list CL holds the moves allowed now (occupancy included);
@@ -52,7 +62,8 @@ def construct(problem: PickPlaceProblem, alpha: Array, u: Array) -> tuple[Array,
       u: ``(L − 1,)`` uniforms in ``[0, 1)``, one per step.
 
     Returns:
-      ``(path (L,) int32 with padding node n, cost scalar)``; ``inf`` if it got stuck.
+      ``Construction``: the node path, its cost (``inf`` if it got stuck) and its
+      deliveries in order.
     """
     W = jnp.asarray(problem.move_cost, jnp.float32)
     kind = jnp.asarray(problem.kind)
@@ -65,8 +76,10 @@ def construct(problem: PickPlaceProblem, alpha: Array, u: Array) -> tuple[Array,
     # cumulative count as a float matmul: faster on the CPU than cumsum or an int matmul
     counts_before = jnp.tril(jnp.ones((n1, n1), jnp.float32))
 
+    slot = jnp.arange(n_obj)
+
     def step(carry, u_t):
-        pos, visited, placed = carry
+        pos, visited, placed, objs, bases = carry
         all_placed = placed == n_obj
         avail = jnp.where(
             kind == START, ~all_placed, jnp.where(kind == GOAL, all_placed, ~visited)
@@ -81,21 +94,26 @@ def construct(problem: PickPlaceProblem, alpha: Array, u: Array) -> tuple[Array,
         nxt = jnp.where(n_cand > 0, nxt, n1 - 1).astype(jnp.int32)  # stuck: pad → cost inf
         k = kind[nxt]
         visited = visited | ((jnp.arange(n1) == nxt) & ((k == OBJECT) | (k == BASE)))
-        return (nxt, visited, placed + (k == BASE)), nxt
+        # the deliveries, recorded as they are made (no compaction of the path later)
+        objs = jnp.where((slot == placed) & (k == OBJECT), nxt, objs)
+        bases = jnp.where((slot == placed) & (k == BASE), nxt, bases)
+        return (nxt, visited, placed + (k == BASE), objs, bases), nxt
 
-    init = (jnp.int32(problem.start), jnp.zeros(n1, bool), jnp.int32(0))
-    _, rest = jax.lax.scan(step, init, u)
+    none = jnp.full(n_obj, n1 - 1, jnp.int32)
+    init = (jnp.int32(problem.start), jnp.zeros(n1, bool), jnp.int32(0), none, none)
+    (_, _, _, objs, bases), rest = jax.lax.scan(step, init, u)
     path = jnp.concatenate([jnp.array([problem.start], jnp.int32), rest.astype(jnp.int32)])
-    return path, _cost(W, path)
+    return Construction(path, _cost(W, path), objs, bases)
 
 
 def local_search(
     problem: PickPlaceProblem,
-    path: Array,
+    objs: Array,
+    bases: Array,
     cost: Array,
     neighbourhood: int = THESIS_NEIGHBOURHOOD,
     rounds: int = DEFAULT_ROUNDS,
-) -> tuple[Array, Array]:
+) -> tuple[Array, Array, Array]:
     """Swap local search (thesis 4.7.2.2, Algorithm 4) on one schedule.
 
     The elements swapped are the deliveries (an object with its base — the thesis's reason
@@ -115,25 +133,21 @@ def local_search(
     C[b, start] + C[start, o])``.
 
     Args:
-      path: ``(L,)`` int32 schedule, padding node ``n``; cost: its cost (``inf`` = stuck,
-        returned unchanged).
+      objs, bases: ``(N,)`` the schedule's deliveries in order (``Construction``).
+      cost: its cost (``inf`` = stuck: returned unchanged).
       neighbourhood: how many following deliveries each one is swapped with (thesis: 3).
       rounds: improving swaps applied at most (static).
 
     Returns:
-      ``(path, cost)`` after the search, ``path`` again ``(L,)`` with padding.
+      ``(objs, bases, cost)`` after the search; ``to_path`` gives the node path.
     """
     W = jnp.asarray(problem.move_cost, jnp.float32)
-    kind = jnp.asarray(problem.kind)
-    s, g, N, L = problem.start, problem.goal, problem.n_objects, path.shape[0]
-    pad = W.shape[0] - 1
+    s, g = problem.start, problem.goal
     via_start = W[:, s][:, None] + W[s, :][None, :]
     pick = jnp.minimum(W, via_start)  # [b, o]; pick[start, o] = C[start, o] (C[s, s] = inf)
-    mv = _swap_moves(N, neighbourhood)
+    mv = _swap_moves(problem.n_objects, neighbourhood)
 
-    k = kind[path]
-    o = _compact(path, k == OBJECT, N, pad)
-    b = _compact(path, k == BASE, N, pad)
+    o, b = objs, bases
     ok = jnp.isfinite(cost)
 
     def terms(o, b):
@@ -166,14 +180,20 @@ def local_search(
     if rounds > 0:
         o, b = jax.lax.fori_loop(0, rounds, body, (o, b))
     bx, ox, w, pk = terms(o, b)
-    c = w.sum() + pk.sum()
-    # back to nodes: [start] + per delivery ([start if cheaper], object, base) + [goal]
-    via = jnp.concatenate([jnp.zeros(1, bool), via_start[b[:-1], o[1:]] < W[b[:-1], o[1:]]])
-    seg = jnp.stack([jnp.where(via, s, pad), o, b], axis=1).reshape(-1)
+    return o, b, jnp.where(ok, w.sum() + pk.sum(), cost)  # the cost of ``to_path(o, b)``
+
+
+def to_path(problem: PickPlaceProblem, objs: Array, bases: Array) -> Array:
+    """Node path ``(L,)`` (padding node ``n``) of a delivery sequence: ``start`` + per
+    delivery (``start`` when going through it is cheaper, object, base) + ``goal``."""
+    W = jnp.asarray(problem.move_cost, jnp.float32)
+    s, g, L = problem.start, problem.goal, problem.max_path_len
+    pad = W.shape[0] - 1
+    prev, nxt = bases[:-1], objs[1:]
+    via = jnp.concatenate([jnp.zeros(1, bool), W[prev, s] + W[s, nxt] < W[prev, nxt]])
+    seg = jnp.stack([jnp.where(via, s, pad), objs, bases], axis=1).reshape(-1)
     nodes = jnp.concatenate([jnp.array([s]), seg, jnp.array([g])]).astype(jnp.int32)
-    nodes = _compact(nodes, nodes != pad, L, pad)
-    better = ok & (c <= cost)
-    return jnp.where(better, nodes, path), jnp.where(better, c, cost)
+    return _compact(nodes, nodes != pad, L, pad)
 
 
 class _Moves(NamedTuple):
@@ -283,22 +303,30 @@ def grasp_batch(
     Returns:
       ``GraspBatch`` of ``I`` schedules.
     """
+    built, objs, bases, cost = _iterations(problem, key, iterations, alphas, neighbourhood, rounds)
+    paths = jax.vmap(to_path, in_axes=(None, 0, 0))(problem, objs, bases)
+    paths = jnp.where(jnp.isfinite(cost)[:, None], paths, built.path)  # stuck: as constructed
+    return GraspBatch(paths, cost, built.cost)
+
+
+def _iterations(problem, key, iterations, alphas, neighbourhood, rounds):
+    """Construction and local search of every iteration: deliveries and costs."""
     L = problem.max_path_len
     k_alpha, k_seed = jax.random.split(key)
     alpha = jnp.asarray(alphas, jnp.float32)[jax.random.randint(k_alpha, (iterations,), 0, len(alphas))]
     seeds = jax.random.bits(k_seed, (iterations,), jnp.uint32)
     u = jax.vmap(_uniforms, in_axes=(0, None))(seeds, L - 1)
-    paths, c0 = jax.vmap(construct, in_axes=(None, 0, 0))(problem, alpha, u)
+    built = jax.vmap(construct, in_axes=(None, 0, 0))(problem, alpha, u)
     ls = partial(local_search, neighbourhood=neighbourhood, rounds=rounds)
-    paths, c1 = jax.vmap(ls, in_axes=(None, 0, 0))(problem, paths, c0)
-    return GraspBatch(paths, c1, c0)
+    objs, bases, cost = jax.vmap(ls, in_axes=(None, 0, 0, 0))(problem, built.objs, built.bases, built.cost)
+    return built, objs, bases, cost
 
 
 @partial(jax.jit, static_argnames=("iterations", "alphas", "neighbourhood", "rounds"))
 def _grasp_best(problem, key, iterations, alphas, neighbourhood, rounds):
-    batch = grasp_batch(problem, key, iterations, alphas, neighbourhood, rounds)
-    i = jnp.argmin(batch.costs)
-    return batch.paths[i], batch.costs[i]
+    _, objs, bases, cost = _iterations(problem, key, iterations, alphas, neighbourhood, rounds)
+    i = jnp.argmin(cost)
+    return to_path(problem, objs[i], bases[i]), cost[i]
 
 
 def grasp(
