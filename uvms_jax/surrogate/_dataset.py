@@ -224,6 +224,14 @@ class Dataset:
     def __len__(self) -> int:
         return int(self.y.shape[0])
 
+    def split(self, n_first: int) -> tuple["Dataset", "Dataset"]:
+        """The first ``n_first`` samples and the rest (e.g. train and test sets of one draw)."""
+        if not 0 < n_first < len(self):
+            raise ValueError(f"n_first must be in (0, {len(self)}), got {n_first}")
+        head = self.replace(q=self.q[:n_first], x=self.x[:n_first], y=self.y[:n_first])
+        tail = self.replace(q=self.q[n_first:], x=self.x[n_first:], y=self.y[n_first:])
+        return head, tail
+
 
 @partial(jax.jit, static_argnames=("sampling", "n", "index", "dtype"))
 def _make(key, chain, mb0, sampling, n, index, dtype):
