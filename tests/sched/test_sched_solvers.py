@@ -94,6 +94,11 @@ def test_grasp_is_reproducible_and_uses_the_key():
     np.testing.assert_array_equal(a.paths, b.paths)
     assert not np.array_equal(a.construction_costs, c.construction_costs)
     assert (np.asarray(a.costs) <= np.asarray(a.construction_costs) + 1e-6).all()
+    # every returned schedule is valid and costs what the batch says
+    paths = np.where(np.asarray(a.paths) == p.n_nodes, -1, np.asarray(a.paths))
+    s = sched.score(p, paths)
+    assert (np.asarray(s.reason) == sched.Reason.OK).all()
+    np.testing.assert_allclose(s.cost, a.costs, rtol=1e-6)
 
 
 def test_grasp_one_element_rcl_is_greedy():

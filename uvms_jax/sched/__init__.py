@@ -25,6 +25,7 @@ from uvms_jax.sched._edges import ScheduleEdge
 from uvms_jax.sched._edges import schedule_edges
 from uvms_jax.sched._exact import exact
 from uvms_jax.sched._greedy import greedy
+from uvms_jax.sched._grasp import DEFAULT_ROUNDS as GRASP_ROUNDS
 from uvms_jax.sched._grasp import THESIS_ALPHAS
 from uvms_jax.sched._grasp import THESIS_NEIGHBOURHOOD
 from uvms_jax.sched._grasp import GraspBatch
@@ -49,6 +50,7 @@ from uvms_jax.sched._thesis import thesis_problem
 SOLVERS = ("greedy", "grasp", "astar", "exact")
 
 __all__ = [
+    "GRASP_ROUNDS",
     "HIGHER_IS_BETTER",
     "METRICS",
     "PAD_NODE",

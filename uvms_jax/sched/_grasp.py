@@ -1,4 +1,13 @@
-"""GRASP (thesis 4.7.2, Algorithms 2–4): every iteration in parallel, in one jitted call."""
+"""GRASP (thesis 4.7.2, Algorithms 2–4): every iteration in parallel, in one jitted call.
+
+Per iteration (written for one iteration, batched with ``vmap``): a randomised greedy
+construction over nodes (``construct``), then a swap local search over its deliveries
+(``local_search``); the best iteration is turned back into a node path (``to_path``).
+Differences from the thesis, all documented where they occur: the local search swaps whole
+deliveries (and bases or objects between them) instead of single nodes, takes the best
+improving swap per round, and re-decides each return to the start; per-step uniforms come
+from a counter-based hash of one threefry seed per iteration.
+"""
 
 from __future__ import annotations
 
@@ -18,8 +27,9 @@ from uvms_jax.sched._schedule import Schedule
 THESIS_ALPHAS = (0.1, 0.2, 0.3, 0.4, 0.6, 0.7, 0.8, 0.9, 1.0)
 #: Thesis 4.7.2.2: each element is swapped with up to three following ones.
 THESIS_NEIGHBOURHOOD = 3
-#: Local-search rounds (best improving swap each); enough to reach the brute-force optimum
-#: on the tested instances, see tests/sched/test_grasp.py.
+#: Local-search rounds (one best improving swap each). With 4, GRASP(1000) reached the
+#: brute-force optimum on every tested instance (tests/sched/test_sched_solvers.py, 5 key
+#: sets); with 2, on 95–98 %.
 DEFAULT_ROUNDS = 4
 _RCL_EPS = 1e-4  # float32 α·|CL| = 2.9999998 must still give an RCL of 3
 
