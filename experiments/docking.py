@@ -36,6 +36,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 from uvms_jax import evo  # noqa: E402
 
 log = logging.getLogger(__name__)
+# Full float32 matrix products on GPUs too (TF32 would break the IK residual check).
+jax.config.update("jax_default_matmul_precision", "highest")
 FIELDS = ("x", "y", "z", "psi")
 
 
@@ -54,6 +56,7 @@ def build(cfg: DictConfig):
         max_generations=g.max_generations,
         n_elites=g.n_elites,
         tournament_size=g.tournament_size,
+        eval_chunk=g.eval_chunk,
     )
     params = evo.GAParams(
         crossover_rate=g.crossover_rate,
@@ -75,9 +78,10 @@ def _timed(fn, *args):
     return out, time.perf_counter() - t0
 
 
-def pose_checks(problem: evo.DockingProblem, pose, p_init) -> dict:
+def pose_checks(problem: evo.DockingProblem, pose, p_init, tol: float) -> dict:
     """Where a pose lies relative to the start: the quarter of the top face nearest ``p_init``
-    (closed for the arm base, open for the docking point) and the heading vs the task area."""
+    (closed, within ``tol`` [m], for the arm base; open for the docking point) and the
+    heading vs the task area."""
     pose = np.asarray(pose, dtype=float)
     sx, sy = np.sign(p_init[0]), np.sign(p_init[1])
     p_d = np.asarray(evo.docking_point(jnp.asarray(pose), problem.p_bp))
@@ -85,7 +89,7 @@ def pose_checks(problem: evo.DockingProblem, pose, p_init) -> dict:
     bearing = np.arctan2(c[1] - pose[1], c[0] - pose[0])
     off = float(np.abs(np.angle(np.exp(1j * (pose[3] - bearing)))))
     return {
-        "base_in_near_quarter": bool(pose[0] * sx >= 0 and pose[1] * sy >= 0),
+        "base_in_near_quarter": bool(pose[0] * sx >= -tol and pose[1] * sy >= -tol),
         "docking_point": p_d.tolist(),
         "docking_point_in_near_quarter": bool(p_d[0] * sx > 0 and p_d[1] * sy > 0),
         "heading_off_task_centre_deg": float(np.degrees(off)),
@@ -106,16 +110,18 @@ def plot_wmax(m: evo.WmaxMap, title: str, path: Path, vmax: float) -> None:
     plt.close(fig)
 
 
-def plot_convergence(ga_hist, cma_hist, grid_f, path: Path) -> None:
+def plot_convergence(ga_hist, cma_hist, references: dict, path: Path) -> None:
     fig, ax = plt.subplots(figsize=(6.5, 4))
     for i, h in enumerate(ga_hist):
         ax.plot(np.arange(1, len(h) + 1), h, color="C0", alpha=0.8, label="GA runs" if i == 0 else None)
     for i, h in enumerate(cma_hist):
         ax.plot(np.arange(1, len(h) + 1), h, color="C1", alpha=0.6, label="CMA-ES runs" if i == 0 else None)
-    ax.axhline(grid_f, color="k", ls="--", label="grid optimum")
+    for (name, f), ls in zip(references.items(), ("--", ":")):
+        ax.axhline(f, color="k", ls=ls, label=name)
+    top = max(references.values())
     finite = [v for h in list(ga_hist) + list(cma_hist) for v in np.asarray(h)[np.isfinite(h)]]
-    lo = np.percentile(finite, 5) if finite else grid_f - 1
-    ax.set_ylim(min(lo, grid_f - 0.5), grid_f + 0.2 * abs(grid_f - lo) + 0.05)
+    lo = np.percentile(finite, 5) if finite else top - 1
+    ax.set_ylim(min(lo, top - 0.5), top + 0.1 * abs(top - lo) + 0.05)
     ax.set(xlabel="generation", ylabel="best fitness (eq. 15)", title="Docking optimisation: convergence")
     ax.legend(loc="lower right")
     fig.tight_layout()
@@ -152,26 +158,30 @@ def main(cfg: DictConfig) -> dict:
     )
     ref = stages[-1] if stages else grid
     ref_eval = evo.evaluate(problem, ref.x)
+    grid_eval = evo.evaluate(problem, grid.x)
     grid_json = {
-        "pose": dict(zip(FIELDS, np.asarray(ref.x).tolist())),
-        "fitness": float(ref.fitness),
-        "Ma": float(ref_eval.M_a),
-        "D": float(ref_eval.D),
-        "candidates": int(grid.n_candidates + sum(s.n_candidates for s in stages)),
-        "seconds": t_grid + t_refine,
-        "global": {
-            "pose": dict(zip(FIELDS, np.asarray(grid.x).tolist())),
-            "fitness": float(grid.fitness),
-            "Ma": float(evo.evaluate(problem, grid.x).M_a),
-            "counts": list(gc.counts),
-            "candidates": int(grid.n_candidates),
-            "seconds": t_grid,
+        # The dense grid's optimum (the reference of the acceptance test) ...
+        "pose": dict(zip(FIELDS, np.asarray(grid.x).tolist())),
+        "fitness": float(grid.fitness),
+        "Ma": float(grid_eval.M_a),
+        "D": float(grid_eval.D),
+        "counts": list(gc.counts),
+        "candidates": int(grid.n_candidates),
+        "seconds": t_grid,
+        # ... and its polish by zoom grids around it (closer to the continuous optimum).
+        "refined": {
+            "pose": dict(zip(FIELDS, np.asarray(ref.x).tolist())),
+            "fitness": float(ref.fitness),
+            "Ma": float(ref_eval.M_a),
+            "D": float(ref_eval.D),
+            "candidates": int(sum(s.n_candidates for s in stages)),
+            "seconds": t_refine,
+            "stages": [float(s.fitness) for s in stages],
         },
-        "refine": [{"fitness": float(s.fitness), "candidates": s.n_candidates} for s in stages],
     }
     (out / "grid_optimum.json").write_text(json.dumps(grid_json, indent=2))
-    log.info("grid: %d candidates in %.1f s, optimum %.4f (global stage %.4f)",
-             grid_json["candidates"], grid_json["seconds"], float(ref.fitness), float(grid.fitness))
+    log.info("grid: %d candidates in %.1f s, optimum %.4f; refined (%d more) %.4f",
+             grid.n_candidates, t_grid, float(grid.fitness), grid_json["refined"]["candidates"], float(ref.fitness))
 
     # CMA-ES (evosax).
     cma_hist = []
@@ -187,7 +197,8 @@ def main(cfg: DictConfig) -> dict:
                      for x, f in zip(cma.best_x, cma.best_fitness)],
             "seconds": t_cma,
             "evaluations_per_run": cc.population_size * cc.generations,
-            "ratio_to_grid": (np.asarray(cma.best_fitness) / float(ref.fitness)).tolist(),
+            "ratio_to_grid": (np.asarray(cma.best_fitness) / float(grid.fitness)).tolist(),
+            "ratio_to_refined_grid": (np.asarray(cma.best_fitness) / float(ref.fitness)).tolist(),
         }, indent=2))
         log.info("CMA-ES: %d runs in %.2f s, best %.4f", cc.n_runs, t_cma, float(np.max(cma.best_fitness)))
 
@@ -217,25 +228,32 @@ def main(cfg: DictConfig) -> dict:
     }, indent=2))
 
     plot_convergence([np.asarray(h)[: int(g)] for h, g in zip(res.history, res.generations)],
-                     cma_hist, float(ref.fitness), out / "convergence.png")
+                     cma_hist, {"grid optimum": float(grid.fitness), "refined grid": float(ref.fitness)},
+                     out / "convergence.png")
 
-    ratios = np.asarray(res.best_fitness) / float(ref.fitness)
-    checks = [pose_checks(problem, x, p_init) for x in np.asarray(res.best_x)]
+    f_ga = np.asarray(res.best_fitness)
+    tol = float(np.max(np.asarray(codec.resolution)[:2]))  # x = 0 / y = 0 is not on the lattice
+    checks = [pose_checks(problem, x, p_init, tol) for x in np.asarray(res.best_x)]
+    references = {"grid": float(grid.fitness), "refined_grid": float(ref.fitness)}
     summary = {
-        "ga_ratio_to_grid": ratios.round(5).tolist(),
-        "ga_runs_within_ratio": int(np.sum(ratios >= cfg.accept_ratio)),
-        "ga_ratio_to_global_grid_stage": (np.asarray(res.best_fitness) / float(grid.fitness)).round(5).tolist(),
+        "ga_fitness": f_ga.tolist(),
+        **{f"ga_ratio_to_{k}": (f_ga / v).round(5).tolist() for k, v in references.items()},
+        **{f"ga_runs_within_{cfg.accept_ratio}_of_{k}": int(np.sum(f_ga >= cfg.accept_ratio * v)) for k, v in references.items()},
         "ga_batch_seconds": t_batch,
         "ga_compile_and_first_batch_seconds": t_compile,
         "ga_generations": np.asarray(res.generations).tolist(),
+        "ga_evaluations": np.asarray(res.evaluations).tolist(),
         "best_pose_checks": checks,
+        "all_bases_in_near_quarter": all(c["base_in_near_quarter"] for c in checks),
+        "all_docking_points_in_near_quarter": all(c["docking_point_in_near_quarter"] for c in checks),
+        "all_face_task_area": all(c["faces_task_area"] for c in checks),
         "zero_w_fraction": {k: m.zero_fraction for k, (_, m) in maps.items()},
         "load_average": os.getloadavg(),
         "device": str(jax.devices()[0]),
     }
     (out / "summary.json").write_text(json.dumps(summary, indent=2))
-    log.info("GA/grid ratios %s; %d/%d ≥ %.2f; zero-w best %.3f, ill-placed %.3f; outputs in %s",
-             summary["ga_ratio_to_grid"], summary["ga_runs_within_ratio"], cfg.n_runs, cfg.accept_ratio,
+    log.info("GA/grid ratios %s (refined grid: %s); zero-w best %.3f, ill-placed %.3f; outputs in %s",
+             summary["ga_ratio_to_grid"], summary["ga_ratio_to_refined_grid"],
              maps["best"][1].zero_fraction, maps["ill_placed"][1].zero_fraction, out)
     return summary
 

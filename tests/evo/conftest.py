@@ -1,8 +1,11 @@
 """Shared fixtures of the evo tests."""
 
+from pathlib import Path
+
 import jax.numpy as jnp
 import pytest
 from flax import struct
+from omegaconf import OmegaConf
 
 
 @struct.dataclass
@@ -18,3 +21,12 @@ class Sphere:
 @pytest.fixture(scope="session")
 def sphere():
     return Sphere(target=jnp.asarray([0.3, -0.45, 0.1, 0.8]))
+
+
+SCENE_YAML = Path(__file__).resolve().parents[2] / "configs" / "docking" / "scene" / "paper.yaml"
+
+
+@pytest.fixture(scope="session")
+def scene() -> dict:
+    """The paper's scene, read from the one place it is written (configs/docking/scene)."""
+    return dict(OmegaConf.to_container(OmegaConf.load(SCENE_YAML)))

@@ -58,11 +58,15 @@ def _jacobian(chain, q):
     return np.array([np.concatenate([v + np.cross(w, p_tool), w]) for v, w in cols]).T
 
 
-def reference(poses, points, a=100.0, b=0.5, p_init=(-2.0, -2.0, 2.0), psi_init=np.pi / 4, p_bp=(-0.3, 0.0, -0.2),
-              face_half=1.0, task_half=0.2, d=0.3):
+def reference(poses, points, scene):
     """Plain loops: per control point, max of sqrt(det(J Jᵀ)) over valid IK branches; then
     min over points; D and Wd per pose. Returns ``(fitness, M_a, D, in_wd)`` lists."""
-    chain = kin.docking_arm()
+    a, b, d, p_bp = scene["a"], scene["b"], scene["d"], np.asarray(scene["p_bp"])
+    p_init, psi_init = np.asarray(scene["p_init"]), scene["psi_init"]
+    face_half, task_half = scene["block_size"][0] / 2, scene["task_size"] / 2
+    assert scene["block_size"][0] == scene["block_size"][1] and scene["task_center"] == [0.0, 0.0, 0.0]
+    assert scene["yaw_mode"] == "heading"
+    chain = kin.docking_arm(*scene["arm_lengths"])
     targets = []
     for x, y, z, psi in poses:
         R_gb, p_gb = _rz(psi), np.array([x, y, z])
@@ -88,8 +92,8 @@ def reference(poses, points, a=100.0, b=0.5, p_init=(-2.0, -2.0, 2.0), psi_init=
                     best = max(best, float(np.sqrt(max(np.linalg.det(J @ J.T), 0.0))))
             per_point.append(best)
         M_a = min(per_point)
-        p_i = np.asarray(p_init) + _rz(psi_init) @ np.asarray(p_bp)
-        p_d = np.array([x, y, z]) + _rz(psi) @ np.asarray(p_bp)
+        p_i = p_init + _rz(psi_init) @ p_bp
+        p_d = np.array([x, y, z]) + _rz(psi) @ p_bp
         D = float(np.sqrt(np.sum((p_i - p_d) ** 2)))
         in_wd = abs(x) <= face_half and abs(y) <= face_half and 0.0 <= z <= d and not (
             abs(x) < task_half and abs(y) < task_half
@@ -99,8 +103,8 @@ def reference(poses, points, a=100.0, b=0.5, p_init=(-2.0, -2.0, 2.0), psi_init=
 
 
 @pytest.fixture(scope="module")
-def problem():
-    return evo.make_docking_problem()
+def problem(scene):
+    return evo.make_docking_problem(**scene)
 
 
 @pytest.fixture(scope="module")
@@ -109,12 +113,12 @@ def random_poses():
     return rng.uniform([-1.0, -1.0, 0.0, -np.pi], [1.0, 1.0, 0.3, np.pi], size=(10, 4))
 
 
-def test_fitness_matches_numpy_loop(problem, random_poses):
+def test_fitness_matches_numpy_loop(problem, random_poses, scene):
     poses = np.concatenate([np.array(FEASIBLE + INFEASIBLE), random_poses])
     got = evo.evaluate(problem, poses)
     corners = np.asarray(problem.p_control)
     assert corners.shape == (4, 3)
-    for k, (pose, (f, M_a, D, in_wd)) in enumerate(zip(poses, reference(poses, corners))):
+    for k, (pose, (f, M_a, D, in_wd)) in enumerate(zip(poses, reference(poses, corners, scene))):
         assert bool(got.feasible[k]) == in_wd, pose
         np.testing.assert_allclose(float(got.M_a[k]), M_a, atol=FIT_ATOL, err_msg=str(pose))
         np.testing.assert_allclose(float(got.D[k]), D, atol=FIT_ATOL, err_msg=str(pose))
@@ -131,8 +135,8 @@ def test_outside_search_set_is_zero(problem):
     assert np.any(np.asarray(got.M_a) > 0)
 
 
-def test_denser_control_grid_never_raises_area_manipulability(problem, random_poses):
-    dense = evo.make_docking_problem(control_points_per_side=5)
+def test_denser_control_grid_never_raises_area_manipulability(problem, random_poses, scene):
+    dense = evo.make_docking_problem(**{**scene, "control_points_per_side": 5})
     poses = np.concatenate([np.array(FEASIBLE), random_poses])
     m2 = np.asarray(evo.evaluate(problem, poses).M_a)
     m5 = np.asarray(evo.evaluate(dense, poses).M_a)
@@ -158,19 +162,19 @@ def test_traced_fitness_equals_eager(problem, random_poses):
     np.testing.assert_allclose(np.asarray(jitted), np.asarray(evo.evaluate(problem, poses).fitness), atol=FIT_ATOL)
 
 
-def test_bad_input_is_rejected(problem):
+def test_bad_input_is_rejected(problem, scene):
     with pytest.raises(ValueError, match="shape"):
         evo.evaluate(problem, np.zeros((3, 3)))
     with pytest.raises(ValueError, match="NaN"):
         evo.evaluate(problem, np.array([np.nan, 0.0, 0.1, 0.0]))
     with pytest.raises(ValueError, match="yaw_mode"):
-        evo.make_docking_problem(yaw_mode="sideways")
+        evo.make_docking_problem(**{**scene, "yaw_mode": "sideways"})
     with pytest.raises(ValueError, match="fit"):
-        evo.make_docking_problem(task_size=2.5)
+        evo.make_docking_problem(**{**scene, "task_size": 2.5})
 
 
-def test_fixed_tool_yaw_mode(problem):
-    fixed = evo.make_docking_problem(yaw_mode="fixed", tool_yaw=0.3)
+def test_fixed_tool_yaw_mode(problem, scene):
+    fixed = evo.make_docking_problem(**{**scene, "yaw_mode": "fixed", "tool_yaw": 0.3})
     pose = np.array([-0.45, 0.0, 0.2, 0.3])
     # With ψ = tool_yaw both modes demand the same tool orientation.
     np.testing.assert_allclose(float(evo.evaluate(fixed, pose).fitness), float(evo.evaluate(problem, pose).fitness), atol=FIT_ATOL)

@@ -10,17 +10,17 @@ ILL_PLACED = (-0.491, -0.464, 0.213, 0.83)
 
 
 @pytest.fixture(scope="module")
-def problem():
-    return evo.make_docking_problem()
+def problem(scene):
+    return evo.make_docking_problem(**scene)
 
 
 @pytest.mark.parametrize("pose", [BEST_NEAR, ILL_PLACED, (0.0, -0.5, 0.25, 2.0)])
-def test_map_corners_and_min_match_area_manipulability(problem, pose):
+def test_map_corners_and_min_match_area_manipulability(problem, pose, scene):
     m = evo.wmax_map(problem, pose, n_per_side=5)
     assert m.w_max.shape == (5, 5) and np.all(m.w_max >= 0)
     corners = m.w_max[[0, 0, -1, -1], [0, -1, 0, -1]]
     np.testing.assert_allclose(corners.min(), float(evo.evaluate(problem, pose).M_a), atol=1e-12)
-    dense = evo.make_docking_problem(control_points_per_side=5)
+    dense = evo.make_docking_problem(**{**scene, "control_points_per_side": 5})
     np.testing.assert_allclose(m.w_max.min(), float(evo.evaluate(dense, pose).M_a), atol=1e-12)
 
 

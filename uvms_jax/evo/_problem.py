@@ -101,22 +101,23 @@ class DockingProblem:
 
 def make_docking_problem(
     *,
-    block_size: tuple[float, float, float] = (2.0, 2.0, 2.0),
-    task_center: tuple[float, float, float] = (0.0, 0.0, 0.0),
-    task_size: float = 0.4,
-    control_points_per_side: int = 2,
-    p_init: tuple[float, float, float] = (-2.0, -2.0, 2.0),
-    psi_init: float = float(np.pi / 4),
-    p_bp: tuple[float, float, float] = (-0.3, 0.0, -0.2),
-    a: float = 100.0,
-    b: float = 0.5,
-    d: float = 0.3,
-    yaw_mode: str = "heading",
-    tool_yaw: float = 0.0,
-    arm_lengths: tuple[float, float, float] = (0.1, 0.4, 0.4),
+    block_size: tuple[float, float, float],
+    task_center: tuple[float, float, float],
+    task_size: float,
+    control_points_per_side: int,
+    p_init: tuple[float, float, float],
+    psi_init: float,
+    p_bp: tuple[float, float, float],
+    a: float,
+    b: float,
+    d: float,
+    yaw_mode: str,
+    tool_yaw: float,
+    arm_lengths: tuple[float, float, float],
     dtype=None,
 ) -> DockingProblem:
-    """Build the docking problem from plain values (SPEC §3; defaults = paper + SPEC defaults).
+    """Build the docking problem from plain values (SPEC §3). The paper's scene with the
+    SPEC defaults is ``configs/docking/scene/paper.yaml``: ``make_docking_problem(**scene)``.
 
     Args:
       block_size: block extents along x, y, z [m]; G is the centre of the top face.
