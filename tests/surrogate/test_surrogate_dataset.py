@@ -8,6 +8,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
 from uvms_jax import indices, kin
 from uvms_jax.surrogate import Sampling, analytic_index, make_dataset, mb_offset, sample_configurations
@@ -24,6 +25,11 @@ def chain():
 
 
 @pytest.fixture(scope="module")
+def q(chain):
+    return np.asarray(sample_configurations(jax.random.key(0), chain, SAMPLING, N, jnp.float64))
+
+
+@pytest.fixture(scope="module")
 def d2(chain):
     return make_dataset(jax.random.key(0), chain, SAMPLING, N, "w", jnp.float64)
 
@@ -33,10 +39,11 @@ def test_mb_offset_is_the_arm_base_of_uvms12():
     np.testing.assert_allclose(mb_offset(kin.uvms12(y_mb=0.5, l1=0.2)), [0.0, 0.5, 0.2], atol=1e-12)
 
 
-def test_manipulator_base_lies_in_the_annulus_sector(chain, d2):
-    # Oracle: the world position of MB from kin's FK (joint 8's frame origin is MB at q = 0 and
-    # lies on the axes of joints 7 and 8, so neither moves it).
-    p_mb = np.asarray(kin.kinematics(chain, d2.q).T_base_joint[:, 7, :3, 3])
+def test_manipulator_base_lies_in_the_annulus_sector(q):
+    # Oracle: joints 1–6 move a vehicle point p to (x, y, z) + R p with R = Rx Ry Rz, i.e. SciPy's
+    # intrinsic "XYZ" Euler angles; MB is (0, y_MB, l1) on the vehicle (checked above).
+    R = Rotation.from_euler("XYZ", q[:, 3:6]).as_matrix()
+    p_mb = q[:, :3] + R @ np.array([0.0, 0.75, 0.1])
     rel = p_mb - np.asarray(SAMPLING.task_point)
     r = np.hypot(rel[:, 0], rel[:, 1])
     assert np.all(r >= SAMPLING.r_min - GEOM_ATOL) and np.all(r <= SAMPLING.r_max + GEOM_ATOL)
@@ -47,8 +54,7 @@ def test_manipulator_base_lies_in_the_annulus_sector(chain, d2):
     assert r.min() < 0.5 and r.max() > 0.8 and angle.min() < -0.15 and angle.max() > 0.15
 
 
-def test_rotations_and_arm_joints_lie_on_the_grid(d2):
-    q = np.asarray(d2.q)
+def test_rotations_and_arm_joints_lie_on_the_grid(q):
     nominal = np.array([0.0, 0.0, SAMPLING.heading + math.pi / 2, *SAMPLING.nominal_arm])
     steps = (q[:, 3:] - nominal) / SAMPLING.step
     np.testing.assert_allclose(steps, np.round(steps), atol=1e-9)
@@ -57,6 +63,15 @@ def test_rotations_and_arm_joints_lie_on_the_grid(d2):
     np.testing.assert_allclose(np.degrees(SAMPLING.grid()), [-15, -10, -5, 0, 5, 10, 15])
 
 
+@pytest.mark.slow
+def test_mb_from_kinematics_matches_the_sampler(chain, q):
+    # Joint 8's frame origin is MB at q = 0 and lies on the axes of joints 7 and 8 (neither moves it).
+    p_mb = np.asarray(kin.kinematics(chain, jnp.asarray(q)).T_base_joint[:, 7, :3, 3])
+    R = Rotation.from_euler("XYZ", q[:, 3:6]).as_matrix()
+    np.testing.assert_allclose(p_mb, q[:, :3] + R @ np.array([0.0, 0.75, 0.1]), atol=GEOM_ATOL)
+
+
+@pytest.mark.slow  # compiles the UVMS kinematics (tens of seconds on a loaded 2-core CPU)
 def test_labels_and_inputs(chain, d2):
     assert d2.inputs == tuple(range(4, 11)) and d2.x.shape == (N, 7)
     np.testing.assert_array_equal(np.asarray(d2.x), np.asarray(d2.q[:, 4:11]))

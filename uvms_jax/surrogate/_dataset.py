@@ -7,10 +7,11 @@ Two datasets on the 12-DOF UVMS (``kin.uvms12``), both from the geometric Jacobi
 - D2 (eq. 12): inputs θ5…θ11 (joint indices 4…10) → ``w = sqrt(det(J Jᵀ))``.
 
 θ12 never enters J (paper §2.2) and is not an input. A network's ``index_fn(q)`` takes the
-full configuration ``q: (..., 12)`` and reads only its input joints; the analytic index
-evaluated on a ``q`` whose non-input joints are held at 0 gives the same value for w (base
-invariance: w depends on θ5…θ11 only) — joints not in a network's input are irrelevant to
-the index, and where a configuration is built from inputs alone they are held at 0.
+full configuration ``q: (..., 12)`` and reads only its input joints. The other joints do not
+change the index: with this Jacobian the singular values of J, hence w and KCI, are invariant
+to θ12 and to the vehicle translation θ1…θ3 and roll θ4 (base invariance; checked numerically
+to 1e-15). Wherever a configuration is built from the inputs alone, the joints not in the
+input are held at 0.
 
 Sampling (paper Fig. 7, "paper" mode): a task point TP; the manipulator base MB (the point
 where the first two arm axes meet) lies in the annulus ``r_min ≤ |MB − TP|_xy ≤ r_max`` at the
@@ -21,7 +22,7 @@ position θ1…θ3 then follows from MB and the vehicle rotation. The nominal ve
 is level with yaw ``heading + π/2`` (the arm, which points along +y of the vehicle, faces TP).
 The nominal arm pose ``(0°, 30°, 60°, 0°, 30°, 0°)`` bends the elbow and the wrist away from
 the arm's singularities (stretched elbow at θm3 = 0, aligned wrist axes at θm5 = ±90°); the
-paper does not give its nominal pose. With it, w stays within ≈ 8.5…10.4 and KCI within
+paper does not give its nominal pose. With it, w stays within ≈ 8.3…10.3 and KCI within
 ≈ 0.39…0.46, far from 0, so the relative error ``|(T − S)/T|`` (eq. 21) is well posed.
 
 "full" mode draws every revolute joint uniformly within the chain's limits (MB still in the
