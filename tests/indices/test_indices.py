@@ -31,6 +31,19 @@ def test_w_equals_product_of_singular_values_and_sqrt_det(model, shape):
     assert np.all((k >= 0) & (k <= 1))
 
 
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_fused_manipulability_equals_two_step(dtype):
+    chain = kin.uvms12()
+    q = random_q(chain, 60, seed=7).reshape(3, 20, 12).astype(dtype)
+    two_step = np.asarray(indices.manipulability(kin.jacobian(chain, q)))
+    fused = indices.manipulability_of(chain, q)
+    assert fused.dtype == dtype and fused.shape == (3, 20)
+    np.testing.assert_allclose(fused, two_step, rtol=1e-5 if dtype == np.float32 else 1e-12)
+    # Traced chain (geometry as a jit argument) gives the same values.
+    traced = jax.jit(indices.manipulability_of)(chain, q)
+    np.testing.assert_allclose(traced, two_step, rtol=1e-5 if dtype == np.float32 else 1e-12)
+
+
 def test_indices_float32():
     chain = kin.uvms12()
     q = random_q(chain, 100, seed=1).astype(np.float32)

@@ -7,6 +7,7 @@ from uvms_jax.indices._area import max_branch_manipulability
 from uvms_jax.indices._indices import joint_torques
 from uvms_jax.indices._indices import kci
 from uvms_jax.indices._indices import manipulability
+from uvms_jax.indices._indices import manipulability_of
 from uvms_jax.indices._indices import normalized_jacobian
 from uvms_jax.indices._indices import payload_wrench
 from uvms_jax.indices._indices import singular_values

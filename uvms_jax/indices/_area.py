@@ -6,11 +6,12 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
-from uvms_jax.indices._indices import manipulability
+from uvms_jax.indices._indices import manipulability_from_rows
 import jax
 
 from uvms_jax.kin import Chain, with_dtype
-from uvms_jax.kin._fk import _geometric_from_spatial, _kinematics_one
+from uvms_jax.kin._fk import _kinematics_one
+from uvms_jax.kin._scalar import geometry, jacobian_rows
 from uvms_jax.kin._ik import _check_pose, elbow_branches, reaches
 from uvms_jax.kin._lie import homogeneous, matmul
 
@@ -44,12 +45,11 @@ def approach_down(yaw) -> Array:
 
 
 def _max_branch_w_one(chain: Chain, T: Array) -> Array:
-    branches = elbow_branches(chain, T)
-    # One FK pass per branch serves both the residual check and the Jacobian.
-    k = jax.vmap(_kinematics_one, in_axes=(None, 0))(chain, branches.q)
-    J = _geometric_from_spatial(k.twists, k.T_base_tool[..., :3, 3])
-    valid = branches.valid & reaches(T, k.T_base_tool)
-    return jnp.max(jnp.where(valid, manipulability(J), 0.0), axis=-1)
+    branches = elbow_branches(chain, T)  # (8, 6)
+    T_reached = jax.vmap(_kinematics_one, in_axes=(None, 0))(chain, branches.q).T_base_tool
+    valid = branches.valid & reaches(T, T_reached)
+    w = manipulability_from_rows(jacobian_rows(geometry(chain), [branches.q[:, i] for i in range(6)]))
+    return jnp.max(jnp.where(valid, w, 0.0), axis=-1)
 
 
 @jax.jit

@@ -9,6 +9,10 @@ import jax
 import jax.numpy as jnp
 from jax import Array
 
+from uvms_jax.kin import Chain
+from uvms_jax.kin._chain import check_joint_array
+from uvms_jax.kin._scalar import compiled_for, jacobian_rows
+
 
 
 def _check_jacobian(J) -> Array:
@@ -29,49 +33,75 @@ def _safe_sqrt(x: Array) -> Array:
     return jnp.where(positive, jnp.sqrt(jnp.where(positive, x, 1.0)), 0.0)
 
 
-def _cholesky_diagonal(A: Array) -> Array:
-    """Diagonal of the Cholesky factor of a symmetric PSD ``(..., m, m)``; unrolled over m.
+def _gram_rows(rows) -> list:
+    """``J Jᵀ`` of a Jacobian given as m rows of n scalars (see ``kin._scalar``)."""
+    m, n = len(rows), len(rows[0])
+    return [[sum(rows[a][k] * rows[b][k] for k in range(n)) for b in range(m)] for a in range(m)]
 
-    A pivot that is not positive (rank-deficient ``J``) yields 0 for that and any later
-    factor entry that divides by it, so ``∏ diag`` = sqrt(det A) stays finite and is 0 at
-    singularities.
+
+def manipulability_from_rows(rows):
+    """``w = ∏ diag(chol(J Jᵀ)) = sqrt(det J Jᵀ)`` for J as m rows of n scalars.
+
+    The Cholesky factorisation is unrolled on scalars, so over a batch it is one fused
+    elementwise kernel. A pivot that is not positive (rank-deficient J) gives 0 for that
+    factor and for every later entry that divides by it: w stays finite, is 0 at
+    singularities, and has finite gradients there.
     """
-    m = A.shape[-1]
+    A = _gram_rows(rows)
+    m = len(A)
     L = [[None] * m for _ in range(m)]
-    diag = []
+    w = 1.0
     for j in range(m):
-        s = A[..., j, j] - sum((L[j][k] ** 2 for k in range(j)), start=jnp.zeros_like(A[..., j, j]))
-        d = _safe_sqrt(s)
+        d = _safe_sqrt(A[j][j] - sum((L[j][k] ** 2 for k in range(j)), start=0.0))
         inv_d = jnp.where(d > 0, 1.0 / jnp.where(d > 0, d, 1.0), 0.0)
-        diag.append(d)
-        L[j][j] = d
+        w = w * d
         for i in range(j + 1, m):
-            t = A[..., i, j] - sum((L[i][k] * L[j][k] for k in range(j)), start=jnp.zeros_like(A[..., i, j]))
-            L[i][j] = t * inv_d
-    return jnp.stack(diag, axis=-1)
+            L[i][j] = (A[i][j] - sum((L[i][k] * L[j][k] for k in range(j)), start=0.0)) * inv_d
+        L[j][j] = d
+    return w
+
+
+def _rows(J: Array) -> list:
+    return [[J[..., a, k] for k in range(J.shape[-1])] for a in range(J.shape[-2])]
 
 
 @jax.jit
 def _manipulability(J: Array) -> Array:
-    return jnp.prod(_cholesky_diagonal(_gram(J)), axis=-1)
+    return manipulability_from_rows(_rows(J))
 
 
 def manipulability(J) -> Array:
     """Yoshikawa manipulability ``w = sqrt(det(J Jᵀ)) = σ1 ⋯ σm``, shape ``(...)``.
 
-    Computed from an unrolled Cholesky factorisation of ``J Jᵀ`` (no SVD, no LU pivoting),
-    which fuses into one elementwise kernel over large batches. ``w ≥ 0`` and exactly 0 at
-    singular configurations, with finite gradients there.
+    From an unrolled Cholesky factorisation of ``J Jᵀ`` (no SVD, no pivoting). ``w ≥ 0``,
+    exactly 0 at singular configurations, with finite gradients there. For w of a chain at
+    many configurations, :func:`manipulability_of` is much faster (it never stores J).
     """
     return _manipulability(_check_jacobian(J))
 
 
-@jax.jit
-def _kci(J: Array) -> Array:
-    eig = jnp.linalg.eigvalsh(_gram(J))  # ascending σ_i²
+def _w_kernel(geom, q):
+    return manipulability_from_rows(jacobian_rows(geom, [q[..., i] for i in range(q.shape[-1])]))
+
+
+def manipulability_of(chain: Chain, q) -> Array:
+    """w of ``chain`` at ``q: (..., n)`` — equal to ``manipulability(jacobian(chain, q))``,
+    computed in one fused kernel specialised to the chain (the fast path for populations,
+    grids and datasets)."""
+    q = check_joint_array(chain, q)
+    return compiled_for(chain, _w_kernel)(q)
+
+
+def _kci_from_gram(A: Array) -> Array:
+    eig = jnp.linalg.eigvalsh(A)  # ascending σ_i²
     smax2 = eig[..., -1]
     ratio = jnp.clip(eig[..., 0], 0.0, None) / jnp.where(smax2 > 0, smax2, 1.0)
     return jnp.where(smax2 > 0, _safe_sqrt(ratio), 0.0)
+
+
+@jax.jit
+def _kci(J: Array) -> Array:
+    return _kci_from_gram(_gram(J))
 
 
 def kci(J) -> Array:

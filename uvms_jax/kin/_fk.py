@@ -9,6 +9,7 @@ import jax.numpy as jnp
 from jax import Array
 
 from uvms_jax.kin._chain import Chain, check_joint_array, with_dtype
+from uvms_jax.kin._scalar import Geometry, compiled_for, jacobian_rows, stack_rows
 from uvms_jax.kin._lie import adjoint_twist, exp_twist, homogeneous, matmul, matvec
 
 
@@ -43,13 +44,6 @@ def _kinematics_one(chain: Chain, q: Array) -> Kinematics:
     )
 
 
-def _geometric_from_spatial(spatial_twists: Array, p_tool: Array) -> Array:
-    """Rows (tool-point linear velocity, angular velocity): ``v_p = v + ω × p``; ``(..., n, 6)`` → ``(..., 6, n)``."""
-    v, w = spatial_twists[..., :3], spatial_twists[..., 3:]
-    linear = v + jnp.cross(w, p_tool[..., None, :])
-    return jnp.swapaxes(jnp.concatenate([linear, w], axis=-1), -1, -2)
-
-
 def _batched(kernel):
     """Apply a one-configuration kernel to ``q`` of any leading shape, in the dtype of ``q``."""
 
@@ -62,13 +56,12 @@ def _batched(kernel):
     return jax.jit(run)
 
 
-def _jacobian_one(chain: Chain, q: Array) -> Array:
-    k = _kinematics_one(chain, q)
-    return _geometric_from_spatial(k.twists, k.T_base_tool[:3, 3])
+def _jacobian_kernel(geom: Geometry, q: Array) -> Array:
+    rows = jacobian_rows(geom, [q[..., i] for i in range(q.shape[-1])])
+    return stack_rows(rows, q.shape[:-1], q.dtype)
 
 
 _kinematics = _batched(_kinematics_one)
-_jacobian = _batched(_jacobian_one)
 
 
 def kinematics(chain: Chain, q) -> Kinematics:
@@ -91,7 +84,8 @@ def jacobian(chain: Chain, q) -> Array:
     Rows 0–2: linear velocity of the tool point [m/s per unit joint rate]; rows 3–5: angular
     velocity [rad/s per unit joint rate]; both expressed in the base frame.
     """
-    return _jacobian(chain, check_joint_array(chain, q))
+    q = check_joint_array(chain, q)
+    return compiled_for(chain, _jacobian_kernel)(q)
 
 
 def spatial_jacobian(chain: Chain, q) -> Array:

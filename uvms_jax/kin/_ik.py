@@ -10,7 +10,8 @@ import numpy as np
 from jax import Array
 
 from uvms_jax.kin._chain import Chain, with_dtype
-from uvms_jax.kin._fk import _geometric_from_spatial, _kinematics_one
+from uvms_jax.kin._fk import _kinematics_one
+from uvms_jax.kin._scalar import geometry, jacobian_rows, stack_rows
 from uvms_jax.kin._lie import exp_twist, homogeneous, matmul, matvec, pose_error
 from uvms_jax.kin import _paden_kahan as pk
 
@@ -157,9 +158,8 @@ def _dls_one(chain: Chain, T: Array, q0: Array, iterations: int, damping: float)
     eye = jnp.eye(6, dtype=q0.dtype)
 
     def step(_, q):
-        k = _kinematics_one(chain, q)
-        J = _geometric_from_spatial(k.twists, k.T_base_tool[:3, 3])
-        e = pose_error(T, k.T_base_tool)
+        J = stack_rows(jacobian_rows(geometry(chain), list(q)), (), q.dtype)
+        e = pose_error(T, _kinematics_one(chain, q).T_base_tool)
         # Error-scaled damping: robust far from the target and near singularities, and
         # Gauss–Newton-fast as the error vanishes (Levenberg–Marquardt flavour of DLS).
         lam2 = damping**2 * (jnp.sum(e * e) + 1e-6)

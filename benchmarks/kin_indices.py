@@ -1,0 +1,116 @@
+"""Throughput of w and KCI for the 12-DOF UVMS: uvms_jax vs pytorch-kinematics, one process.
+
+Prints one JSON object. Both sides evaluate the same chain (pytorch-kinematics loads the URDF
+exported by ``uvms_jax.kin.to_urdf``) on the same device, in float32:
+  uvms_jax: one jitted call ``manipulability_of(chain, q)`` (fused Jacobian + unrolled
+            Cholesky) / ``kci(jacobian(chain, q))``;
+  peer:     ``chain.jacobian(q)`` then ``sqrt(det(J Jᵀ))`` / ``svdvals`` in torch.
+
+Usage: python benchmarks/kin_indices.py [--device cpu|cuda] [--batches 1e3,1e4,1e5,1e6]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import platform
+import time
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytorch_kinematics as pk
+import torch
+
+from uvms_jax import indices, kin
+
+
+def best_time(fn, repeats: int, budget_s: float = 20.0) -> float:
+    """Best wall time of ``fn()`` over ``repeats`` runs (after one warm-up), within a budget."""
+    fn()
+    times = []
+    start = time.perf_counter()
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+        if time.perf_counter() - start > budget_s:
+            break
+    return min(times)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--device", default="cpu", choices=["cpu", "cuda"])
+    parser.add_argument("--batches", default="1e3,1e4,1e5,1e6")
+    parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("--peer-max-batch", type=float, default=1e7, help="skip the peer above this batch")
+    args = parser.parse_args()
+    batches = [int(float(b)) for b in args.batches.split(",")]
+
+    chain = kin.uvms12()
+    lo = np.maximum(np.asarray(chain.lower), -1.0)
+    hi = np.minimum(np.asarray(chain.upper), 1.0)
+    w_fn = jax.jit(lambda q: indices.manipulability_of(chain, q))
+    kci_fn = jax.jit(lambda q: indices.kci(kin.jacobian(chain, q)))
+
+    tdev = torch.device(args.device)
+    peer = pk.build_serial_chain_from_urdf(kin.to_urdf(chain), "tool").to(dtype=torch.float32, device=tdev)
+
+    def peer_w(q):
+        J = peer.jacobian(q)
+        return torch.sqrt(torch.clamp(torch.linalg.det(J @ J.transpose(-1, -2)), min=0.0))
+
+    def peer_kci(q):
+        s = torch.linalg.svdvals(peer.jacobian(q))
+        return s[..., -1] / s[..., 0]
+
+    def sync():
+        if args.device == "cuda":
+            torch.cuda.synchronize()
+
+    rows = []
+    for n in batches:
+        key = jax.random.key(n)
+        q = jax.random.uniform(key, (n, 12), jnp.float32, lo, hi)
+        q.block_until_ready()
+        row = {"batch": n}
+        check = np.asarray(q[: min(n, 1000)])  # both sides must compute the same numbers
+        t = best_time(lambda: w_fn(q).block_until_ready(), args.repeats)
+        row["uvms_jax_w_per_s"] = n / t
+        t = best_time(lambda: kci_fn(q).block_until_ready(), args.repeats)
+        row["uvms_jax_kci_per_s"] = n / t
+        if n <= args.peer_max_batch:
+            qt = torch.from_numpy(np.array(q)).to(tdev)
+            ours = np.asarray(w_fn(jnp.asarray(check)))
+            theirs = peer_w(torch.from_numpy(check.copy()).to(tdev)).cpu().numpy()
+            row["max_rel_diff_w"] = float(np.max(np.abs(ours - theirs) / np.maximum(np.abs(theirs), 1e-6)))
+            with torch.no_grad():
+                t = best_time(lambda: (peer_w(qt), sync()), args.repeats)
+                row["peer_w_per_s"] = n / t
+                t = best_time(lambda: (peer_kci(qt), sync()), args.repeats)
+                row["peer_kci_per_s"] = n / t
+            row["w_speedup"] = row["uvms_jax_w_per_s"] / row["peer_w_per_s"]
+            row["kci_speedup"] = row["uvms_jax_kci_per_s"] / row["peer_kci_per_s"]
+        rows.append(row)
+
+    print(
+        json.dumps(
+            {
+                "benchmark": "kin_indices",
+                "chain": "uvms12",
+                "dtype": "float32",
+                "jax_device": str(jax.devices()[0]),
+                "torch_device": args.device,
+                "machine": platform.machine(),
+                "jax": jax.__version__,
+                "torch": torch.__version__,
+                "results": rows,
+            },
+            indent=1,
+        )
+    )
+
+
+if __name__ == "__main__":
+    main()
