@@ -219,7 +219,8 @@ def main(cfg: DictConfig) -> dict:
     }
     vmax = max(float(m.w_max.max()) for _, m in maps.values())
     for name, (pose, m) in maps.items():
-        plot_wmax(m, f"{name.replace('_', '-')} pose {np.round(pose, 3).tolist()}", out / f"wmax_{name}.png", vmax)
+        label = ", ".join(f"{float(v):.3f}" for v in pose)
+        plot_wmax(m, f"{name.replace('_', '-')} pose [{label}]", out / f"wmax_{name}.png", vmax)
     (out / "wmax.json").write_text(json.dumps({
         name: {"pose": dict(zip(FIELDS, np.asarray(pose, dtype=float).tolist())),
                "zero_w_fraction": m.zero_fraction, "Ma": float(evo.evaluate(problem, pose).M_a),

@@ -25,6 +25,7 @@ from uvms_jax.evo._problem import DockingProblem
 from uvms_jax.evo._problem import base_transform
 from uvms_jax.evo._problem import docking_point
 from uvms_jax.evo._problem import evaluate
+from uvms_jax.evo._problem import evaluate_traced
 from uvms_jax.evo._problem import in_search_set
 from uvms_jax.evo._problem import make_docking_problem
 from uvms_jax.evo._wmax import WmaxMap

@@ -6,7 +6,6 @@ from typing import NamedTuple
 
 import jax.numpy as jnp
 import numpy as np
-from jax import Array
 
 from uvms_jax.evo._problem import DockingProblem, _targets_jit, max_branch_w_bucketed
 
