@@ -42,6 +42,10 @@ def test_fused_manipulability_equals_two_step(dtype):
     # Traced chain (geometry as a jit argument) gives the same values.
     traced = jax.jit(indices.manipulability_of)(chain, q)
     np.testing.assert_allclose(traced, two_step, rtol=1e-5 if dtype == np.float32 else 1e-12)
+    sigma = np.linalg.svd(np.asarray(kin.jacobian(chain, q.astype(np.float64))), compute_uv=False)
+    kci = indices.kci_of(chain, q)
+    assert kci.dtype == dtype
+    np.testing.assert_allclose(kci, sigma[..., -1] / sigma[..., 0], rtol=1e-4 if dtype == np.float32 else 1e-10)
 
 
 def test_indices_float32():

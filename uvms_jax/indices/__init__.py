@@ -6,6 +6,7 @@ from uvms_jax.indices._area import control_points
 from uvms_jax.indices._area import max_branch_manipulability
 from uvms_jax.indices._indices import joint_torques
 from uvms_jax.indices._indices import kci
+from uvms_jax.indices._indices import kci_of
 from uvms_jax.indices._indices import manipulability
 from uvms_jax.indices._indices import manipulability_of
 from uvms_jax.indices._indices import normalized_jacobian

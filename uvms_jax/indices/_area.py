@@ -79,7 +79,8 @@ def area_manipulability(chain: Chain, T_world_base, p_world_points, R_world_tool
       chain: 6R elbow arm.
       T_world_base: ``(..., 4, 4)`` arm base poses (e.g. a GA population).
       p_world_points: ``(k, 3)`` control points [m].
-      R_world_tool: ``(3, 3)`` or ``(k, 3, 3)`` demanded tool orientation at the points.
+      R_world_tool: demanded tool orientation, ``(3, 3)``, ``(k, 3, 3)`` per point, or
+        ``(..., k, 3, 3)`` per base pose and point (e.g. a yaw that follows each candidate).
 
     Returns:
       ``(...)`` M_a; 0 for a base pose from which some control point has no valid branch.
@@ -88,8 +89,9 @@ def area_manipulability(chain: Chain, T_world_base, p_world_points, R_world_tool
     points = jnp.asarray(p_world_points, dtype=T_world_base.dtype)
     if points.ndim != 2 or points.shape[-1] != 3:
         raise ValueError(f"p_world_points must have shape (k, 3), got {points.shape}")
-    R = jnp.broadcast_to(jnp.asarray(R_world_tool, dtype=T_world_base.dtype), points.shape[:1] + (3, 3))
-    T_world_tool = homogeneous(R, points)  # (k, 4, 4)
+    R = jnp.asarray(R_world_tool, dtype=T_world_base.dtype)
+    R = jnp.broadcast_to(R, jnp.broadcast_shapes(R.shape, points.shape[:1] + (3, 3)))
+    T_world_tool = homogeneous(R, jnp.broadcast_to(points, R.shape[:-1]))  # (..., k, 4, 4)
     R_wb, p_wb = T_world_base[..., :3, :3], T_world_base[..., :3, 3]
     R_bw = jnp.swapaxes(R_wb, -1, -2)
     T_base_world = homogeneous(R_bw, -jnp.sum(R_bw * p_wb[..., None, :], axis=-1))

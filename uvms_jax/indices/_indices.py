@@ -5,6 +5,8 @@ All functions take ``J: (..., m, n)`` with ``m ≤ n`` and broadcast over leadin
 
 from __future__ import annotations
 
+import functools
+
 import jax
 import jax.numpy as jnp
 from jax import Array
@@ -84,6 +86,10 @@ def _w_kernel(geom, q):
     return manipulability_from_rows(jacobian_rows(geom, [q[..., i] for i in range(q.shape[-1])]))
 
 
+def _kci_kernel(geom, q):
+    return kci_from_rows(jacobian_rows(geom, [q[..., i] for i in range(q.shape[-1])]))
+
+
 def manipulability_of(chain: Chain, q) -> Array:
     """w of ``chain`` at ``q: (..., n)`` — equal to ``manipulability(jacobian(chain, q))``,
     computed in one fused kernel specialised to the chain (the fast path for populations,
@@ -92,16 +98,63 @@ def manipulability_of(chain: Chain, q) -> Array:
     return compiled_for(chain, _w_kernel)(q)
 
 
-def _kci_from_gram(A: Array) -> Array:
-    eig = jnp.linalg.eigvalsh(A)  # ascending σ_i²
-    smax2 = eig[..., -1]
-    ratio = jnp.clip(eig[..., 0], 0.0, None) / jnp.where(smax2 > 0, smax2, 1.0)
-    return jnp.where(smax2 > 0, _safe_sqrt(ratio), 0.0)
+def kci_of(chain: Chain, q) -> Array:
+    """KCI of ``chain`` at ``q: (..., n)``, equal to ``kci(jacobian(chain, q))``, fused."""
+    q = check_joint_array(chain, q)
+    return compiled_for(chain, _kci_kernel)(q)
+
+
+JACOBI_SWEEPS = 8  # cyclic sweeps; quadratic convergence reaches float64 round-off on 6×6 by ~6
+
+
+def symmetric_eigenvalues_from_rows(A) -> list:
+    """Eigenvalues of a small symmetric matrix given as nested scalar lists (cyclic Jacobi).
+
+    Unrolled on scalars, so a batch is one fused elementwise kernel (batched LAPACK/cuSOLVER
+    calls are slow for 6×6 and cuSOLVER's batched ``syevj`` rejects some batch shapes). Each
+    rotation zeroes ``a_pq`` with ``t = 2 a_pq sgn(d) / (|d| + sqrt(d² + 4 a_pq²))``,
+    ``d = a_qq − a_pp`` (Golub & Van Loan §8.5, written without dividing by ``a_pq``).
+
+    Returns the m eigenvalues, unordered.
+    """
+    m = len(A)
+
+    def sweep(_, A):
+        A = [list(row) for row in A]
+        for p in range(m - 1):
+            for q in range(p + 1, m):
+                apq, d = A[p][q], A[q][q] - A[p][p]
+                den = jnp.abs(d) + _safe_sqrt(d * d + 4.0 * apq * apq)
+                t = jnp.where(den > 0, 2.0 * apq * jnp.where(d < 0, -1.0, 1.0) / jnp.where(den > 0, den, 1.0), 0.0)
+                c = 1.0 / jnp.sqrt(1.0 + t * t)
+                s = t * c
+                for r in range(m):
+                    if r not in (p, q):
+                        arp, arq = A[r][p], A[r][q]
+                        A[r][p] = A[p][r] = c * arp - s * arq
+                        A[r][q] = A[q][r] = s * arp + c * arq
+                A[p][p], A[q][q] = A[p][p] - t * apq, A[q][q] + t * apq
+                A[p][q] = A[q][p] = jnp.zeros_like(apq)
+        return A
+
+    # One sweep is unrolled; the sweeps run in a loop to keep compile time small.
+    flat = jnp.broadcast_arrays(*[x for row in A for x in row])
+    A = [list(flat[i * m : (i + 1) * m]) for i in range(m)]
+    A = jax.lax.fori_loop(0, JACOBI_SWEEPS, sweep, A)
+    return [A[i][i] for i in range(m)]
+
+
+def kci_from_rows(rows):
+    """KCI ``σ_min / σ_max = sqrt(λ_min / λ_max)`` of ``J Jᵀ``, J as m rows of n scalars."""
+    eig = symmetric_eigenvalues_from_rows(_gram_rows(rows))
+    lmin, lmax = functools.reduce(jnp.minimum, eig), functools.reduce(jnp.maximum, eig)
+    ratio = jnp.maximum(lmin, 0.0) / jnp.where(lmax > 0, lmax, 1.0)
+    return jnp.where(lmax > 0, _safe_sqrt(ratio), 0.0)
 
 
 @jax.jit
 def _kci(J: Array) -> Array:
-    return _kci_from_gram(_gram(J))
+    return kci_from_rows(_rows(J))
 
 
 def kci(J) -> Array:

@@ -163,7 +163,7 @@ def _dls_one(chain: Chain, T: Array, q0: Array, iterations: int, damping: float)
         # Error-scaled damping: robust far from the target and near singularities, and
         # Gauss–Newton-fast as the error vanishes (Levenberg–Marquardt flavour of DLS).
         lam2 = damping**2 * (jnp.sum(e * e) + 1e-6)
-        dq = J.T @ jnp.linalg.solve(J @ J.T + lam2 * eye, e)
+        dq = matvec(J.T, jnp.linalg.solve(matmul(J, J.T) + lam2 * eye, e))
         # Box-constrained DLS: iterates stay inside the limits (an algorithmic projection;
         # solutions are still accepted only if FK reaches the target).
         return jnp.clip(q + dq, chain.lower, chain.upper)

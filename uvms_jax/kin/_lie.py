@@ -13,13 +13,17 @@ from jax import Array
 
 
 def matmul(a: Array, b: Array) -> Array:
-    """Product of small matrices ``(..., m, k) @ (..., k, n)``, broadcasting leading axes."""
-    return jnp.matmul(a, b)
+    """Product of small matrices ``(..., m, k) @ (..., k, n)``, broadcasting leading axes.
+
+    Full float32 precision: GPUs default to TF32 products (~1e-3 relative), far too coarse
+    for kinematics (it made every IK residual check fail on an H100).
+    """
+    return jnp.matmul(a, b, precision=jax.lax.Precision.HIGHEST)
 
 
 def matvec(a: Array, x: Array) -> Array:
     """``(..., m, k) @ (..., k)``, broadcasting leading axes."""
-    return jnp.matmul(a, x[..., None])[..., 0]
+    return matmul(a, x[..., None])[..., 0]
 
 
 def skew(w: Array) -> Array:
