@@ -6,15 +6,16 @@ flattened with dotted keys (``solvers.exact.cost``). Lists of scalars are joined
 lists of objects (e.g. a GRASP sweep) are left out. A job without its result file is reported
 with ``status = missing`` (a crashed job is never silently dropped).
 
-Writes ``gathered.csv`` (every column) and ``gathered.md`` (the overrides plus the chosen
-columns: ``--columns`` patterns, or by default every column whose value differs between jobs)
+Writes ``gathered.csv`` (every column) and ``gathered.md`` (the overrides that differ between
+jobs plus the chosen columns: ``--columns`` patterns, or by default every column whose value
+differs between jobs; overrides shared by all jobs are listed above the table)
 into the sweep folder (or ``--out``), and prints the markdown.
 
     python experiments/schedule.py --multirun sched/source=synthetic \\
         sched/weights=equal,speed,security,planning_time,only_max_torque \\
         'sched.iterations_sweep=[]' hydra.sweep.dir=multirun/weights
     python experiments/gather.py multirun/weights \\
-        --columns weights_name 'solvers.*.cost' solvers.exact.path
+        --columns 'solvers.*.cost' solvers.exact.path
 
 The result file defaults to the first of ``results.json`` (schedule, pipeline),
 ``summary.json`` (docking, plan) and ``report.json`` (surrogate) found in the first job.
@@ -138,7 +139,12 @@ def write(rows: list[dict[str, Any]], override_keys: list[str], out: Path,
         w = csv.DictWriter(f, fieldnames=all_cols)
         w.writeheader()
         w.writerows([{c: _fmt(r.get(c)) for c in all_cols} for r in rows])
-    md_path.write_text(to_markdown(rows, select_columns(rows, override_keys, patterns)))
+    # Overrides shared by every job go above the table; the table keeps the ones that vary.
+    common = [k for k in override_keys if len({str(r.get(k)) for r in rows}) == 1]
+    varying = [k for k in override_keys if k not in common]
+    head = f"Common overrides: {', '.join(f'`{k}={rows[0].get(k)}`' for k in common)}\n\n" if common else ""
+    columns = [c for c in select_columns(rows, override_keys, patterns) if c not in common]
+    md_path.write_text(head + to_markdown(rows, columns))
     return csv_path, md_path
 
 

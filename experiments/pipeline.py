@@ -82,6 +82,7 @@ class StageReport:
     results: dict[str, Any] = field(default_factory=dict)  # key figures (flat-ish, JSON)
     notes: list[str] = field(default_factory=list)
     seconds: float = math.nan
+    cpu_seconds: float = math.nan  # process CPU time (all threads): a load-independent size of the work
 
 
 def _experiment(name: str) -> ModuleType:
@@ -158,11 +159,11 @@ def stage_docking(cfg: DictConfig, out: Path, ctx: dict) -> StageReport:
         runs = list(csv.DictReader(f))
     grid = json.loads((out / "grid_optimum.json").read_text())
     wmax = json.loads((out / "wmax.json").read_text())
-    rows = [[i + 1, *(round(float(r[k]), 3) for k in ("x", "y", "z", "psi")), float(r["fitness"]), float(r["Ma"]),
+    rows = [[i + 1, *(round(float(r[k]), 3) + 0.0 for k in ("x", "y", "z", "psi")), float(r["fitness"]), float(r["Ma"]),
              int(r["generations"])] for i, r in enumerate(runs)]
     pp = PAPER_DOCKING
     rows.append(["paper Table 3", *pp["pose"], None, f"{pp['Ma'][0]}–{pp['Ma'][1]}", "≤ 500"])
-    rows.append(["grid optimum", *(round(v, 3) for v in grid["pose"].values()), grid["fitness"], grid["Ma"],
+    rows.append(["grid optimum", *(round(v, 3) + 0.0 for v in grid["pose"].values()), grid["fitness"], grid["Ma"],
                  f"{grid['candidates']} candidates"])
     t1 = md_table(["GA run", "x [m]", "y [m]", "z [m]", "ψ [rad]", "fitness (eq. 15)", "M_a (eq. 1)", "generations"], rows)
     t2 = md_table(
@@ -222,6 +223,47 @@ def stage_surrogate(cfg: DictConfig, out: Path, ctx: dict) -> StageReport:
     return StageReport("surrogate", "Surrogates of w and KCI (SPEC §4, dexterity paper Tables 4–5)", [table], res, notes)
 
 
+def plot_paths(scene, chain, results, path: Path) -> None:
+    """End-effector paths of every planned edge over the scene (3-D and top view).
+
+    Like experiments/plan.py's plot, but all densified paths go through one ``kin.fk`` call
+    (one XLA compilation instead of one per path length)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    ok = [r for r in results if r.success]
+    dense = [np.asarray(P.densify(r.plan.path, 0.02)) for r in ok]
+    p_all = np.asarray(kin.fk(chain, np.concatenate(dense)))[:, :, 3] if dense else np.zeros((0, 4))
+    p_world = (scene.T_world_base @ p_all.T).T[:, :3]
+    fig = plt.figure(figsize=(13, 6))
+    ax3 = fig.add_subplot(1, 2, 1, projection="3d")
+    ax2 = fig.add_subplot(1, 2, 2)
+    corners = np.array([(-1, -1), (1, -1), (1, 1), (-1, 1), (-1, -1)])
+    for t in scene.spec.tables[1:]:  # the first table is the floor under everything
+        c = corners * np.asarray(t.size[:2]) / 2
+        pts = (t.T_world_top @ np.c_[c, np.zeros(5), np.ones(5)].T).T[:, :3]
+        ax3.plot(*pts.T, color="0.5")
+        ax2.plot(pts[:, 0], pts[:, 1], color="0.5")
+    for node in list(scene.objects) + list(scene.bases):
+        T = scene.T_world_object(node) if node in scene.objects else scene.T_world_base_top(node)
+        ax3.scatter(*T[:3, 3], color="tab:orange" if node in scene.objects else "tab:red")
+        ax2.annotate(str(node), T[:2, 3])
+    cmap = plt.get_cmap("viridis")
+    bounds = np.cumsum([0] + [len(d) for d in dense])
+    for i, (a, b) in enumerate(zip(bounds[:-1], bounds[1:])):
+        color = cmap(i / max(1, len(dense)))
+        ax3.plot(*p_world[a:b].T, color=color, lw=0.8)
+        ax2.plot(p_world[a:b, 0], p_world[a:b, 1], color=color, lw=0.8)
+    name = results[0].planner if results else ""
+    ax3.set(xlabel="x [m]", ylabel="y [m]", zlabel="z [m]", title=f"{name}: end-effector paths ({len(ok)} edges)")
+    ax2.set(xlabel="x [m]", ylabel="y [m]", title="top view (node numbers)", aspect="equal")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
 def stage_plan(cfg: DictConfig, out: Path, ctx: dict) -> StageReport:
     """IK targets and OMPL plans of every task-graph edge (glue around uvms_jax.plan, as in
     experiments/plan.py, keeping scene/targets/trajectories for the plan.json of the winner)."""
@@ -247,12 +289,14 @@ def stage_plan(cfg: DictConfig, out: Path, ctx: dict) -> StageReport:
               max_velocity=pc.max_velocity, max_acceleration=pc.max_acceleration, chain=chain)
     rows, by_planner, table_rows, res = [], {}, [], {"ik_seconds": t_ik}
     for planner in pc.planners:
-        results = []
+        results, t0 = [], time.perf_counter()
         for src, dst in tqdm(edges, desc=f"plan {planner}", unit="edge", leave=False, disable=None):
             r = P.plan_edge(scene, checker, targets, src, dst, planner, **kw)
             results.append(r)
             rows.append(r.row())
         by_planner[planner] = results
+        log.info("%s: %d edges planned, re-checked and measured in %.1f s", planner, len(results),
+                 time.perf_counter() - t0)
         mats = P.metric_matrices(scene, results)
         (out / f"metrics_{planner}.json").write_text(json.dumps(
             {k: np.where(np.isnan(v), None, v).tolist() for k, v in mats.items()}))
@@ -263,7 +307,7 @@ def stage_plan(cfg: DictConfig, out: Path, ctx: dict) -> StageReport:
                            float(ms.mean()), float(ms.max())])
         res[f"{planner}_success"] = ok
         res[f"{planner}_median_ms"] = float(np.median(ms))
-        ex._plot_paths(scene, chain, results, targets, out / f"ee_paths_{planner}.png")
+        plot_paths(scene, chain, results, out / f"ee_paths_{planner}.png")
     ex._edge_rows_csv(out / "edges.csv", rows)
     ctx["plan"] = {"scene": scene, "checker": checker, "targets": targets, "by_planner": by_planner,
                    "edges_csv": out / "edges.csv"}
@@ -320,11 +364,13 @@ def stage_schedule(cfg: DictConfig, out: Path, ctx: dict) -> StageReport:
            "winner_path": winner["path"], "winner_cost": winner["cost"], "optimal_cost": results["optimal_cost"],
            **{f"{k}_cost": v["cost"] for k, v in solvers.items()},
            **{f"{k}_ms": v["time_ms"] for k, v in solvers.items()}, **thesis_res}
-    notes = [f"Cost matrix: {results['source']}, weights `{results['weights_name']}` {results['weights']}. "
-             f"Winner: **{winner['solver']}** `{winner['path']}` (cost {winner['cost']:.4f}).",
-             "Normalised metric sums along each schedule (thesis Table 5.2 layout; lower is better, security "
-             "already inverted):\n\n" + t_metrics,
-             "Thesis instance (eq. 4.1 matrix, Table 5.1 nodes), same solvers:\n\n" + t2]
+    weights_note = "" if results["weights_used"] else " (not used by a ready matrix)"
+    notes = [f"Cost matrix: {results['source']}, weights `{results['weights_name']}`{weights_note} "
+             f"{results['weights']}. Winner: **{winner['solver']}** `{winner['path']}` (cost {winner['cost']:.4f})."]
+    if results["weights_used"]:
+        notes.append("Normalised metric sums along each schedule (thesis Table 5.2 layout; lower is better, "
+                     "security already inverted):\n\n" + t_metrics)
+    notes.append("Thesis instance (eq. 4.1 matrix, Table 5.1 nodes), same solvers:\n\n" + t2)
     sequence = [int(v) for v in winner["path"].split("-")]
     ctx["schedule_sequence"] = sequence
     if planned:
@@ -428,8 +474,11 @@ def write_summary(out: Path, reports: list[StageReport], total_s: float, cfg: Di
              f"device {dev.platform} ({dev.device_kind}) · Python {platform.python_version()}, jax {jax.__version__} · "
              f"load average {', '.join(f'{v:.1f}' for v in os.getloadavg())} · total wall time **{total_s:.1f} s**", "",
              "## Stage times", "",
-             md_table(["stage", "folder", "wall [s]"], [[r.title.split(" (")[0], f"[{r.name}/]({r.name}/)", r.seconds]
-                                                       for r in reports] + [["total", "", total_s]]), ""]
+             md_table(["stage", "folder", "wall [s]", "CPU [s]"],
+                      [[r.title.split(" (")[0], f"[{r.name}/]({r.name}/)", r.seconds, r.cpu_seconds] for r in reports]
+                      + [["total", "", total_s, sum(r.cpu_seconds for r in reports)]]), "",
+             "Wall times include JAX/XLA compilation. CPU = process CPU time over all threads; on a busy "
+             "machine wall time exceeds it by the share other jobs take.", ""]
     for r in reports:
         lines += [f"## {r.title}", ""]
         for t in r.tables:
@@ -462,13 +511,14 @@ def run_pipeline(cfg: DictConfig, out: Path) -> dict:
         stage_out = out / name
         stage_out.mkdir(parents=True, exist_ok=True)
         log.info("== stage %s", name)
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         rep = STAGE_FNS[name](cfg, stage_out, ctx)
-        rep.seconds = time.perf_counter() - t0
+        rep.seconds, rep.cpu_seconds = time.perf_counter() - t0, time.process_time() - c0
         reports.append(rep)
         log.info("== stage %s done in %.1f s: %s", name, rep.seconds, rep.results)
     total = time.perf_counter() - t_start
     results = {"total_seconds": total, "stage_seconds": {r.name: r.seconds for r in reports},
+               "stage_cpu_seconds": {r.name: r.cpu_seconds for r in reports},
                **{r.name: r.results for r in reports}}
     (out / "results.json").write_text(json.dumps(results, indent=1, default=str))
     summary = write_summary(out, reports, total, cfg)

@@ -7,8 +7,6 @@ import json
 import subprocess
 import sys
 
-import pytest
-
 from _pipeline_helpers import ROOT, load_experiment
 
 WEIGHTS = ["equal", "speed", "security", "planning_time", "only_max_torque"]
@@ -47,6 +45,10 @@ def test_gather_fake_sweep(gather, tmp_path):
     md = (tmp_path / "gathered.md").read_text().splitlines()
     assert md[0] == "| job | status | sched/weights | seed | solvers.exact.cost | solvers.greedy.cost |"
     assert len(md) == 2 + 3
+    (tmp_path / "3" / ".hydra").mkdir(parents=True)  # a fourth job with the same seed as job 0 ...
+    (tmp_path / "3" / ".hydra" / "overrides.yaml").write_text("- sched/weights=speed\n- seed=0\n")
+    _, md_path = gather.write(*gather.gather(tmp_path), tmp_path / "again")
+    assert md_path.read_text().splitlines()[0].startswith("| job | status | sched/weights | seed |")
     with open(tmp_path / "gathered.csv") as f:
         table = list(csv.DictReader(f))
     assert len(table) == 3 and table[0]["solvers.greedy.path"] == "0-1-9" and table[1]["status"] == "missing"
@@ -64,17 +66,20 @@ def test_gather_refuses_a_folder_without_jobs(gather, tmp_path):
     assert gather.main([str(tmp_path)]) == 2
 
 
-@pytest.mark.slow
 def test_weight_sweep_multirun_and_gather(tmp_path):
-    """Acceptance: a multirun of 5 weight sets → 5 result folders → one combined table."""
+    """Acceptance: a multirun of 5 weight sets → 5 result folders → one combined table (~10 s)."""
     sweep = tmp_path / "weights"
     cmd = [sys.executable, "experiments/schedule.py", "--multirun", "sched/source=synthetic",
            f"sched/weights={','.join(WEIGHTS)}", "sched.iterations_sweep=[]", "sched.timing_repeats=1",
            "sched.grasp.iterations=100", "sched.plots=false", f"hydra.sweep.dir={sweep}"]
     subprocess.run(cmd, cwd=ROOT, check=True, capture_output=True, timeout=600)
     assert sorted(p.name for p in sweep.iterdir() if p.is_dir()) == [str(i) for i in range(5)]
-    out = subprocess.run([sys.executable, "experiments/gather.py", str(sweep), "--columns", "weights_name",
-                          "solvers.*.cost", "solvers.exact.path"], cwd=ROOT, check=True, capture_output=True, text=True)
+    out = subprocess.run([sys.executable, "experiments/gather.py", str(sweep), "--columns", "solvers.*.cost",
+                          "solvers.exact.path"], cwd=ROOT, check=True, capture_output=True, text=True)
     lines = out.stdout.splitlines()
-    assert len(lines) == 2 + 5 and all(w in out.stdout for w in WEIGHTS)
+    assert lines[0].startswith("Common overrides: `sched/source=synthetic`")
+    table = lines[2:]
+    assert table[0] == ("| job | status | sched/weights | solvers.greedy.cost | solvers.grasp.cost | "
+                        "solvers.astar.cost | solvers.exact.cost | solvers.exact.path |")
+    assert len(table) == 2 + 5 and all(w in out.stdout for w in WEIGHTS)
     assert (sweep / "gathered.csv").exists()
