@@ -6,10 +6,10 @@ flattened with dotted keys (``solvers.exact.cost``). Lists of scalars are joined
 lists of objects (e.g. a GRASP sweep) are left out. A job without its result file is reported
 with ``status = missing`` (a crashed job is never silently dropped).
 
-Writes ``gathered.csv`` (every column) and ``gathered.md`` (the overrides that differ between
-jobs plus the chosen columns: ``--columns`` patterns, or by default every column whose value
-differs between jobs; overrides shared by all jobs are listed above the table)
-into the sweep folder (or ``--out``), and prints the markdown.
+Writes ``gathered.csv`` (every column) and ``gathered.md`` into the sweep folder (or ``--out``)
+and prints the markdown: the overrides that differ between jobs plus the chosen columns
+(``--columns`` patterns, or by default the first 12 columns whose values differ between jobs);
+overrides shared by all jobs are listed above the table.
 
     python experiments/schedule.py --multirun sched/source=synthetic \\
         sched/weights=equal,speed,security,planning_time,only_max_torque \\
@@ -37,6 +37,7 @@ import yaml
 
 DEFAULT_FILES = ("results.json", "summary.json", "report.json")
 FIXED = ("job", "status")
+MAX_DEFAULT_COLUMNS = 12  # without --columns, the markdown keeps the first 12 varying columns
 
 
 def flatten(obj: Any, prefix: str = "") -> dict[str, Any]:
@@ -118,7 +119,7 @@ def select_columns(rows: list[dict[str, Any]], override_keys: list[str], pattern
         for pat in patterns:
             chosen += [c for c in rest if fnmatch.fnmatchcase(c, pat) and c not in chosen]
     else:
-        chosen = [c for c in rest if len({_fmt(r.get(c)) for r in rows}) > 1]
+        chosen = [c for c in rest if len({_fmt(r.get(c)) for r in rows}) > 1][:MAX_DEFAULT_COLUMNS]
     return head + chosen
 
 
