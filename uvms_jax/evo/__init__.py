@@ -28,5 +28,8 @@ from uvms_jax.evo._problem import evaluate
 from uvms_jax.evo._problem import evaluate_traced
 from uvms_jax.evo._problem import in_search_set
 from uvms_jax.evo._problem import make_docking_problem
+from uvms_jax.evo._shard import ShardedProblem
+from uvms_jax.evo._shard import device_mesh
+from uvms_jax.evo._shard import shard_over_devices
 from uvms_jax.evo._wmax import WmaxMap
 from uvms_jax.evo._wmax import wmax_map
