@@ -20,7 +20,8 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from uvms_jax import kin
+
+from uvms_jax import kin, sched
 from uvms_jax.plan._collision import CollisionChecker, densify
 from uvms_jax.plan._metrics import METRIC_NAMES, EdgeMetrics, trajectory_metrics
 from uvms_jax.plan._planning import PlanResult, Trajectory, check_trajectory, plan_motion, time_parameterize
@@ -164,15 +165,9 @@ def cost_matrix(matrices: Mapping[str, np.ndarray], weights: Mapping[str, float]
     unknown = set(weights) - set(METRIC_NAMES)
     if unknown:
         raise ValueError(f"unknown metrics {sorted(unknown)} (known: {METRIC_NAMES})")
-    C = None
-    for k, w in weights.items():
-        X = matrices[k]
-        lo, hi = np.nanmin(X), np.nanmax(X)
-        N = (X - lo) / (hi - lo) if hi > lo else np.where(np.isnan(X), np.nan, 0.0)
-        if k == "min_clearance":
-            N = 1.0 - N
-        C = w * N if C is None else C + w * N
-    return C
+    # METRIC_NAMES follows sched.METRICS (security = min_clearance); sched owns the formula.
+    stacked = np.stack([np.asarray(matrices[k], dtype=np.float64) for k in METRIC_NAMES])
+    return sched.cost_matrix(sched.normalise_metrics(stacked), [weights.get(k, 0.0) for k in METRIC_NAMES])
 
 
 def _segment(name: str, traj: Trajectory, gripper_mm: float | None = None) -> dict:
