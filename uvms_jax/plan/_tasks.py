@@ -20,7 +20,6 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-
 from uvms_jax import kin, sched
 from uvms_jax.plan._collision import CollisionChecker, densify
 from uvms_jax.plan._metrics import METRIC_NAMES, EdgeMetrics, trajectory_metrics
