@@ -1,7 +1,6 @@
 """FK and Jacobians against finite differences and against pytorch-kinematics on exported URDFs."""
 
 import jax
-import jax.numpy as jnp
 import numpy as np
 import pytest
 import pytorch_kinematics as pk

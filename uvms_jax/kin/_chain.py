@@ -11,7 +11,7 @@ import numpy as np
 from flax import struct
 from jax import Array
 
-from uvms_jax.kin._lie import homogeneous, matmul, rpy_matrix
+from uvms_jax.kin._lie import rpy_matrix
 
 REVOLUTE = "revolute"
 PRISMATIC = "prismatic"

@@ -6,7 +6,7 @@ from typing import Sequence
 
 import numpy as np
 
-from uvms_jax.kin._chain import PRISMATIC, REVOLUTE, Chain, UrdfJoint
+from uvms_jax.kin._chain import REVOLUTE, Chain, UrdfJoint
 from uvms_jax.kin._lie import rpy_matrix
 from uvms_jax.kin._models import BRAVO7_JAWS, BRAVO7_JOINTS, BRAVO7_TOOL_XYZ
 
@@ -140,7 +140,7 @@ def bravo7_mjcf_body(
     pad = "  " * depth
     tz = BRAVO7_TOOL_XYZ
     lines.append(f'{pad}<site name="tool" pos="{_fmt(tz)}" size="0.01"/>')
-    finger = f'size="0.008 0.015 0.04"'
+    finger = 'size="0.008 0.015 0.04"'
     for side, sign in (("left", 1.0), ("right", -1.0)):
         fx = sign * (jaws_open / 2.0 + 0.008)
         lines.append(

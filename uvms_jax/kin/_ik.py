@@ -6,13 +6,12 @@ from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
-import numpy as np
 from jax import Array
 
 from uvms_jax.kin._chain import Chain, with_dtype
 from uvms_jax.kin._fk import _kinematics_one
 from uvms_jax.kin._scalar import geometry, jacobian_rows, stack_rows
-from uvms_jax.kin._lie import exp_twist, homogeneous, matmul, matvec, pose_error
+from uvms_jax.kin._lie import exp_twist, matmul, matvec, pose_error
 from uvms_jax.kin import _paden_kahan as pk
 
 POSITION_TOL = {jnp.dtype("float32"): 1e-4, jnp.dtype("float64"): 1e-8}  # [m] accepted FK(IK(T)) residual
