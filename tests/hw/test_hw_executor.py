@@ -204,6 +204,33 @@ def test_thesis_plan_in_simulated_time(sim):
         assert last_packets_are_hold(run)
 
 
+def test_closing_jaws_grip_an_object():
+    """Jaws that stall on an object pass the grasp gate; later arm gates expect them there."""
+    plan = load_plan(EXAMPLE)
+    width = 12.0  # between the example's closed (5 mm) and open (30 mm) jaws
+    run = SimRun(SimConfig(object_width_mm=width), q0=plan.segments[0].q[0])
+    res = run.executor.run(plan)
+    assert res.ok, res.reason
+    assert res.max_gate_error_rad <= GATE
+    jaw_goals = [s.jaws_mm for s in plan.segments if s.jaws_mm is not None]
+    jaw_gates = [g for g in res.gates if g.waypoint == -1]
+    assert [g.gripped for g in jaw_gates] == [goal < width for goal in jaw_goals]
+    for g, goal in zip(jaw_gates, jaw_goals):
+        if g.gripped:  # stopped on the object, short of the commanded opening
+            assert g.error_mm == pytest.approx(width - goal, abs=HwConfig().gate_threshold_mm)
+    assert run.arm.limit_violations == 0
+
+
+def test_stalled_jaws_abort_when_settling_is_not_allowed():
+    """Without time to settle on the object, the grasp gate times out and the arm holds."""
+    plan = load_plan(EXAMPLE)
+    hw = HwConfig(gate_timeout_s=0.5, grip_settle_s=1.0)
+    run = SimRun(SimConfig(object_width_mm=12.0), hw=hw, q0=plan.segments[0].q[0])
+    res = run.executor.run(plan)
+    assert not res.ok and "gate not reached" in res.reason and "joint A" in res.reason
+    assert last_packets_are_hold(run)
+
+
 @pytest.mark.slow
 def test_thesis_plan_cli_real_time(tmp_path):
     """Acceptance run: ``uvms-hw run examples/thesis_plan.json --sim`` (about a minute)."""

@@ -39,6 +39,9 @@ class HwConfig:
       connect_retries: state requests tried before the link is declared down at start.
       limit_margin_rad: abort if a measured arm angle leaves its limits by more than this [rad].
       limit_margin_mm: the same for the jaws [mm].
+      grip_settle_s: a closing jaws step also passes its gate when the jaws stop short of the
+        goal on an object: their position changed by less than ``gate_threshold_mm`` for this
+        long after the profile ended [s]. Later gates then expect the jaws at that opening.
     """
 
     rate_hz: float = 50.0
@@ -56,11 +59,13 @@ class HwConfig:
     connect_retries: int = 10
     limit_margin_rad: float = 0.05
     limit_margin_mm: float = 1.0
+    grip_settle_s: float = 0.3
 
     def __post_init__(self) -> None:
         positive = ("rate_hz", "gate_threshold_rad", "gate_threshold_mm", "gate_timeout_s",
                     "tracking_error_rad", "link_timeout_s", "request_timeout_s", "status_period_s",
-                    "continuity_tol_rad", "start_tolerance_rad", "limit_margin_rad", "limit_margin_mm")
+                    "continuity_tol_rad", "start_tolerance_rad", "limit_margin_rad", "limit_margin_mm",
+                    "grip_settle_s")
         for name in positive:
             if not getattr(self, name) > 0:
                 raise ValueError(f"HwConfig.{name} must be positive, got {getattr(self, name)!r}")
@@ -85,6 +90,8 @@ class SimConfig:
       fault_joint: letter of a joint that reports ``fault_bits`` ("" = none).
       fault_bits: hardware-status bits reported by ``fault_joint``.
       fault_after_s: simulated time after which the fault appears [s].
+      object_width_mm: an object between the jaws: closing jaws stop at this opening, as a
+        real gripper stalls on what it grasps [mm] (0 = nothing to grasp).
       seed: seed of the fault-injection random generator.
     """
 
@@ -97,14 +104,15 @@ class SimConfig:
     fault_joint: str = ""
     fault_bits: int = 0
     fault_after_s: float = 0.0
+    object_width_mm: float = 0.0
     seed: int = 0
 
     def __post_init__(self) -> None:
         for name in ("drop", "corrupt"):
             if not 0 <= getattr(self, name) <= 1:
                 raise ValueError(f"SimConfig.{name} must be a probability, got {getattr(self, name)!r}")
-        if self.latency_s < 0 or self.fault_after_s < 0:
-            raise ValueError("SimConfig latency_s and fault_after_s must be non-negative")
+        if self.latency_s < 0 or self.fault_after_s < 0 or self.object_width_mm < 0:
+            raise ValueError("SimConfig latency_s, fault_after_s and object_width_mm must be non-negative")
         if not (self.physics_dt > 0 and self.servo_gain > 0):
             raise ValueError("SimConfig physics_dt and servo_gain must be positive")
         for name in ("stuck_joint", "fault_joint"):

@@ -4,7 +4,9 @@ Per move (waypoint to waypoint, or a jaws step) the executor streams POSITION de
 synchronised, velocity- and acceleration-limited profile at ``rate_hz``, reads the measured
 state every tick, and after the profile ends holds the goal until the reached-gate passes:
 every encoder within ``gate_threshold_rad`` (jaws ``gate_threshold_mm``). Only then does the
-next move start.
+next move start. A closing jaws step that stalls on an object (still for ``grip_settle_s``,
+short of its goal) has gripped it: its gate passes, and later gates expect the jaws at the
+opening where they stopped, so a dropped object stops the run.
 
 Safety: the plan is dry-run checked before anything is sent (:class:`PlanError`); every demand
 passes the client's send guard. A lost link (no state for ``link_timeout_s``), a non-zero
@@ -47,6 +49,8 @@ class GateRecord:
       error_rad: max |measured - goal| over the arm joints when the gate passed [rad].
       error_mm: |measured - goal| of the jaws [mm].
       wait_s: time from the end of the profile to the gate [s].
+      gripped: a closing jaws step stopped on an object; ``error_mm`` is then how far short of
+        the goal the jaws stopped.
     """
 
     segment: int
@@ -54,6 +58,7 @@ class GateRecord:
     error_rad: float
     error_mm: float
     wait_s: float
+    gripped: bool = False
 
 
 @dataclasses.dataclass(frozen=True)
@@ -128,6 +133,7 @@ class Executor:
         self._arm = np.arange(n - 1)
         self._cmd = np.full(n, math.nan)
         self._goal = np.full(n, math.nan)
+        self._expected = np.full(n, math.nan)  # what the encoders read at a gate (jaws: on the object)
         self._ticks = self._timeouts = 0
         self._last_state_t = -math.inf
         self._next_status_t = -math.inf
@@ -191,6 +197,7 @@ class Executor:
             raise AbortRun(f"arm is {err[j]:.3f} rad from the plan start on joint {self.joints[j].name} "
                            f"(tolerance {cfg.start_tolerance_rad} rad); move it there first or allow the approach move")
         self._goal = meas.copy()
+        self._expected = meas.copy()
         self._cmd = meas.copy()
         self.client.set_mode(Mode.POSITION)
 
@@ -200,9 +207,12 @@ class Executor:
         moving = np.flatnonzero(np.abs(goal - self._goal) > 0) if np.all(np.isfinite(self._goal)) \
             else np.arange(len(goal))
         move: Move = synchronised_move(self._goal, goal, self._vmax, self._amax, min_duration)
+        closing = goal[-1] < self._goal[-1]
+        expected = np.where(goal != self._goal, goal, self._expected)
         start = self.clock()
         self._move_start = start
         self._goal = goal.copy()
+        still_since, still_at = math.inf, math.nan  # jaws stall detection after the profile
         phase = "gripper" if wp < 0 else "move"
         dt = 1.0 / cfg.rate_hz
         k = 0
@@ -223,17 +233,26 @@ class Executor:
                     raise AbortRun(f"segment {seg} waypoint {wp}: joint {self.joints[j].name} lags its demand by "
                                    f"{lag[j]:.3f} rad > {cfg.tracking_error_rad} rad")
                 if t >= move.duration:
-                    err = np.abs(meas - goal)
+                    err = np.abs(meas - expected)
                     if np.all(err <= self._gate):
+                        self._expected = expected
                         return GateRecord(seg, wp, float(np.max(err[self._arm])), float(err[-1]),
                                           t - move.duration)
+                    if not abs(meas[-1] - still_at) <= self._gate[-1]:
+                        still_since, still_at = t, meas[-1]
+                    gripped = (closing and meas[-1] > goal[-1] and t - still_since >= cfg.grip_settle_s
+                               and np.all(err[self._arm] <= self._gate[self._arm]))
+                    if gripped:
+                        self._expected = np.append(expected[:-1], meas[-1])
+                        return GateRecord(seg, wp, float(np.max(err[self._arm])), float(err[-1]),
+                                          t - move.duration, gripped=True)
             if t >= move.duration + cfg.gate_timeout_s:
                 detail = ""
                 if meas is not None:
-                    ratio = np.abs(meas - goal) / self._gate
+                    ratio = np.abs(meas - expected) / self._gate
                     j = int(np.argmax(ratio))
                     unit = self.joints[j].unit
-                    detail = (f"; joint {self.joints[j].name} error {abs(meas[j] - goal[j]):.4f} {unit}"
+                    detail = (f"; joint {self.joints[j].name} error {abs(meas[j] - expected[j]):.4f} {unit}"
                               f" > {self._gate[j]} {unit}")
                 raise AbortRun(f"segment {seg} waypoint {wp}: gate not reached within "
                                f"{cfg.gate_timeout_s} s after the move{detail}")

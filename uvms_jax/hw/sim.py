@@ -161,6 +161,7 @@ class SimArm:
         """Advance physics (and the servo, every step) up to simulated time ``t`` [s]."""
         dt = self.model.opt.timestep
         q_idx, d_idx = self._qadr, self._dadr
+        width = self.config.object_width_mm * _MM if self.config.object_width_mm > 0 else -math.inf
         while self.data.time + 0.5 * dt <= t:
             q = self.data.qpos[q_idx] / self._scale
             v = np.where(self.mode == Mode.POSITION, self.config.servo_gain * (self.target - q),
@@ -168,11 +169,15 @@ class SimArm:
             v = np.clip(v, -self._vmax, self._vmax)
             if self.stuck >= 0:
                 v[self.stuck] = 0.0
+            jaws_before = self.data.qpos[q_idx[-1]]
             self.data.ctrl[self._act] = v * self._scale
             self._mj.mj_step(self.model, self.data)
             if self.stuck >= 0:
                 self.data.qpos[q_idx[self.stuck]] = self._stuck_q[self.stuck]
                 self.data.qvel[d_idx[self.stuck]] = 0.0
+            if jaws_before >= width > self.data.qpos[q_idx[-1]]:  # closed onto the object: stall there
+                self.data.qpos[q_idx[-1]] = width
+                self.data.qvel[d_idx[-1]] = 0.0
 
     def hardware_status(self, i: int) -> HardwareStatus:
         """Status bits of joint index ``i`` at the current simulated time."""
