@@ -142,7 +142,6 @@ def write(rows: list[dict[str, Any]], override_keys: list[str], out: Path,
         w.writerows([{c: _fmt(r.get(c)) for c in all_cols} for r in rows])
     # Overrides shared by every job go above the table; the table keeps the ones that vary.
     common = [k for k in override_keys if len({str(r.get(k)) for r in rows}) == 1]
-    varying = [k for k in override_keys if k not in common]
     head = f"Common overrides: {', '.join(f'`{k}={rows[0].get(k)}`' for k in common)}\n\n" if common else ""
     columns = [c for c in select_columns(rows, override_keys, patterns) if c not in common]
     md_path.write_text(head + to_markdown(rows, columns))

@@ -22,9 +22,9 @@ and ``results.json`` (key figures, for ``experiments/gather.py``) in the run dir
 
 Call :func:`run_pipeline` with a composed config and an output folder to drive it from Python
 (tests do). The docking and surrogate experiments are run through their ``main`` with a config
-composed from their own YAML plus ``<stage>.overrides``; the planning stage is glue around
-``uvms_jax.plan`` (it keeps the scene, IK targets and trajectories in memory so that the
-schedule's winner can be turned into a plan.json without planning twice).
+composed from their own YAML plus ``<stage>.overrides``; planning and scheduling through their
+``run`` functions (the planning result stays in memory so that the schedule's winner becomes a
+plan.json without planning twice).
 """
 
 from __future__ import annotations
@@ -55,8 +55,7 @@ from hydra.core.hydra_config import HydraConfig  # noqa: E402
 from omegaconf import DictConfig, OmegaConf, open_dict  # noqa: E402
 from tqdm import tqdm  # noqa: E402
 
-from uvms_jax import hw, kin, sched  # noqa: E402
-from uvms_jax import plan as P  # noqa: E402
+from uvms_jax import hw, sched  # noqa: E402
 
 log = logging.getLogger("pipeline")
 
@@ -140,13 +139,6 @@ def md_table(header: list[str], rows: list[list[Any]]) -> str:
     return "\n".join(lines)
 
 
-def _write_csv(path: Path, rows: list[dict]) -> None:
-    with path.open("w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
-
-
 # -- stages ----------------------------------------------------------------------------------
 def stage_docking(cfg: DictConfig, out: Path, ctx: dict) -> StageReport:
     """Docking GA (+ grid/CMA-ES references) and w_max maps via experiments/docking.py."""
@@ -223,97 +215,26 @@ def stage_surrogate(cfg: DictConfig, out: Path, ctx: dict) -> StageReport:
     return StageReport("surrogate", "Surrogates of w and KCI (SPEC §4, dexterity paper Tables 4–5)", [table], res, notes)
 
 
-def plot_paths(scene, chain, results, path: Path) -> None:
-    """End-effector paths of every planned edge over the scene (3-D and top view).
-
-    Like experiments/plan.py's plot, but all densified paths go through one ``kin.fk`` call
-    (one XLA compilation instead of one per path length)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    ok = [r for r in results if r.success]
-    dense = [np.asarray(P.densify(r.plan.path, 0.02)) for r in ok]
-    p_all = np.asarray(kin.fk(chain, np.concatenate(dense)))[:, :, 3] if dense else np.zeros((0, 4))
-    p_world = (scene.T_world_base @ p_all.T).T[:, :3]
-    fig = plt.figure(figsize=(13, 6))
-    ax3 = fig.add_subplot(1, 2, 1, projection="3d")
-    ax2 = fig.add_subplot(1, 2, 2)
-    corners = np.array([(-1, -1), (1, -1), (1, 1), (-1, 1), (-1, -1)])
-    for t in scene.spec.tables[1:]:  # the first table is the floor under everything
-        c = corners * np.asarray(t.size[:2]) / 2
-        pts = (t.T_world_top @ np.c_[c, np.zeros(5), np.ones(5)].T).T[:, :3]
-        ax3.plot(*pts.T, color="0.5")
-        ax2.plot(pts[:, 0], pts[:, 1], color="0.5")
-    for node in list(scene.objects) + list(scene.bases):
-        T = scene.T_world_object(node) if node in scene.objects else scene.T_world_base_top(node)
-        ax3.scatter(*T[:3, 3], color="tab:orange" if node in scene.objects else "tab:red")
-        ax2.annotate(str(node), T[:2, 3])
-    cmap = plt.get_cmap("viridis")
-    bounds = np.cumsum([0] + [len(d) for d in dense])
-    for i, (a, b) in enumerate(zip(bounds[:-1], bounds[1:])):
-        color = cmap(i / max(1, len(dense)))
-        ax3.plot(*p_world[a:b].T, color=color, lw=0.8)
-        ax2.plot(p_world[a:b, 0], p_world[a:b, 1], color=color, lw=0.8)
-    name = results[0].planner if results else ""
-    ax3.set(xlabel="x [m]", ylabel="y [m]", zlabel="z [m]", title=f"{name}: end-effector paths ({len(ok)} edges)")
-    ax2.set(xlabel="x [m]", ylabel="y [m]", title="top view (node numbers)", aspect="equal")
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-
-
 def stage_plan(cfg: DictConfig, out: Path, ctx: dict) -> StageReport:
-    """IK targets and OMPL plans of every task-graph edge (glue around uvms_jax.plan, as in
-    experiments/plan.py, keeping scene/targets/trajectories for the plan.json of the winner)."""
+    """IK targets and OMPL plans of every task-graph edge via experiments/plan.py's ``run``,
+    kept in memory so the schedule's winner becomes a plan.json without planning twice."""
     jax.config.update("jax_enable_x64", True)  # as experiments/plan.py: IK in float64
-    ex = _experiment("plan")
     pc = cfg.plan
-    P.seed_ompl(int(pc.seed))  # once per process, before any planner (NOTES.md)
-    scene = P.build_scene(OmegaConf.to_container(cfg.scenario, resolve=True))
-    checker = P.CollisionChecker(scene, margin=pc.margin, clearance_max=pc.clearance_max)
     t0 = time.perf_counter()
-    targets = P.pick_place_targets(scene, checker, jax.random.PRNGKey(int(pc.seed)), n_seeds=pc.ik.n_seeds,
-                                   iterations=pc.ik.iterations, n_yaw_continuous=pc.ik.n_yaw_continuous,
-                                   max_branch_jump=pc.ik.max_branch_jump, resolution=pc.recheck_resolution)
-    t_ik = time.perf_counter() - t0
-    log.info("IK targets for %d nodes in %.1f s (compilation included)", len(targets), t_ik)
-    (out / "targets.json").write_text(json.dumps({
-        str(n): {"q_pre": t.q_pre.tolist(), "q_at": t.q_at.tolist(), "yaw": t.yaw, "manipulability": t.manipulability}
-        for n, t in targets.items()} | {"start": list(scene.spec.start_q)}, indent=1))
-    chain = kin.bravo7()
-    edges = P.task_edges(scene)
-    kw = dict(budget_s=pc.budget_s, resolution=pc.resolution, recheck_resolution=pc.recheck_resolution,
-              clearance_resolution=pc.clearance_resolution, simplify_s=pc.simplify_s,
-              max_velocity=pc.max_velocity, max_acceleration=pc.max_acceleration, chain=chain)
-    rows, by_planner, table_rows, res = [], {}, [], {"ik_seconds": t_ik}
-    for planner in pc.planners:
-        results, t0 = [], time.perf_counter()
-        for src, dst in tqdm(edges, desc=f"plan {planner}", unit="edge", leave=False, disable=None):
-            r = P.plan_edge(scene, checker, targets, src, dst, planner, **kw)
-            results.append(r)
-            rows.append(r.row())
-        by_planner[planner] = results
-        log.info("%s: %d edges planned, re-checked and measured in %.1f s", planner, len(results),
-                 time.perf_counter() - t0)
-        mats = P.metric_matrices(scene, results)
-        (out / f"metrics_{planner}.json").write_text(json.dumps(
-            {k: np.where(np.isnan(v), None, v).tolist() for k, v in mats.items()}))
-        np.savetxt(out / f"cost_{planner}.csv", P.cost_matrix(mats, dict(pc.weights)), delimiter=",", fmt="%.6g")
-        ms = np.array([r.plan.planning_time_s for r in results]) * 1e3
-        ok, rechecked = sum(r.success for r in results), sum(r.revalidated for r in results)
-        table_rows.append([planner, f"{ok}/{len(results)}", f"{rechecked}/{len(results)}", float(np.median(ms)),
-                           float(ms.mean()), float(ms.max())])
-        res[f"{planner}_success"] = ok
-        res[f"{planner}_median_ms"] = float(np.median(ms))
-        plot_paths(scene, chain, results, out / f"ee_paths_{planner}.png")
-    ex._edge_rows_csv(out / "edges.csv", rows)
-    ctx["plan"] = {"scene": scene, "checker": checker, "targets": targets, "by_planner": by_planner,
-                   "edges_csv": out / "edges.csv"}
-    table = md_table(["planner", "planned", "re-checked OK", "median [ms]", "mean [ms]", "max [ms]"], table_rows)
-    notes = [f"{len(edges)} task-graph edges (thesis Table 5.1 / eq. 4.1 structure), budget {pc.budget_s} s per edge; "
-             f"IK targets {t_ik:.1f} s (mostly XLA compilation). Every path re-checked at "
+    planned = _experiment("plan").run(cfg, out)
+    log.info("%d planners over the task graph in %.1f s", len(planned.by_planner), time.perf_counter() - t0)
+    ctx["plan"] = planned
+    rows, res = [], {"ik_seconds": planned.ik_seconds}
+    for planner, s in planned.summary.items():
+        rows.append([planner, f"{s['success']}/{s['edges']}", f"{s['revalidated']}/{s['edges']}",
+                     1e3 * s["median_planning_time_s"], 1e3 * s["mean_planning_time_s"],
+                     1e3 * s["max_planning_time_s"]])
+        res[f"{planner}_success"] = s["success"]
+        res[f"{planner}_median_ms"] = 1e3 * s["median_planning_time_s"]
+    table = md_table(["planner", "planned", "re-checked OK", "median [ms]", "mean [ms]", "max [ms]"], rows)
+    n_edges = len(next(iter(planned.by_planner.values()), []))
+    notes = [f"{n_edges} task-graph edges (thesis Table 5.1 / eq. 4.1 structure), budget {pc.budget_s} s per edge; "
+             f"IK targets {planned.ik_seconds:.1f} s (mostly XLA compilation). Every path re-checked at "
              f"{pc.recheck_resolution} rad with margin 0 and time-parameterised ({pc.max_velocity} rad/s). "
              "The thesis publishes no per-edge planning times; BENCHMARKS.md has a 5 s-budget run of all three planners."]
     return StageReport("plan", "Bravo 7 planning of the thesis cage (SPEC §5, thesis ch. 5.1)", [table], res, notes)
@@ -327,7 +248,7 @@ def stage_schedule(cfg: DictConfig, out: Path, ctx: dict) -> StageReport:
     overrides = list(cfg.sched.overrides)
     planner = cfg.sched.planner or (cfg.plan.planners[0] if planned else None)
     if planned:
-        overrides = ["sched/source=edges_csv", f"sched.source.path={planned['edges_csv']}",
+        overrides = ["sched/source=edges_csv", f"sched.source.path={planned.edges_csv}",
                      f"sched.source.planner={planner}", *overrides]
     scfg = compose_stage("schedule", overrides)
     _merge_into(scfg, "seed", int(cfg.seed))
@@ -374,14 +295,7 @@ def stage_schedule(cfg: DictConfig, out: Path, ctx: dict) -> StageReport:
     sequence = [int(v) for v in winner["path"].split("-")]
     ctx["schedule_sequence"] = sequence
     if planned:
-        pc = cfg.plan
-        jp = pc.plan_json
-        emap = {(r.src, r.dst): r for r in planned["by_planner"][planner]}
-        plan_obj = P.plan_json(planned["scene"], planned["targets"], emap, sequence, jaws_open_mm=jp.jaws_open_mm,
-                               jaws_closed_mm=jp.jaws_closed_mm, max_velocity=pc.max_velocity,
-                               max_acceleration=pc.max_acceleration, checker=planned["checker"])
-        (out / "plan.json").write_text(json.dumps(plan_obj, indent=1))
-        _experiment("plan")._plot_joints(plan_obj, out / "joints.png")
+        _experiment("plan").write_plan_json(planned, cfg.plan, planner, sequence, out)
         ctx["plan_json"] = out / "plan.json"
         notes.append(f"`schedule/plan.json`: the winner's moves ({planner} trajectories) with the grasp/release "
                      "steps, in the `uvms_jax.hw.plan` format.")

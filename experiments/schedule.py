@@ -19,7 +19,6 @@ import csv
 import json
 import logging
 import math
-import time
 from pathlib import Path
 
 import hydra
