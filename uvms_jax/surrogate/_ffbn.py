@@ -19,6 +19,7 @@ from jax import Array
 
 from uvms_jax.surrogate._adam import fit_adam
 from uvms_jax.surrogate._dataset import Dataset
+from uvms_jax.surrogate._inputs import JointInputs
 from uvms_jax.surrogate._lm import LMHyperParams, LMState, fit_lm
 from uvms_jax.surrogate._scaler import Scaler, fit_scaler
 
@@ -46,7 +47,7 @@ def mlp_apply(params: Any, x: Array) -> Array:
 
 
 @struct.dataclass
-class FFBN:
+class FFBN(JointInputs):
     """A trained (or initialised) FFBN surrogate of one index.
 
     Attributes:
@@ -72,10 +73,6 @@ class FFBN:
         return int(self.params["hidden"]["kernel"].shape[-1])
 
     @property
-    def n_inputs(self) -> int:
-        return len(self.inputs)
-
-    @property
     def operation_count(self) -> int:
         """Additions + multiplications per evaluation, paper convention: ``H (2d + 2 + 7)``."""
         return self.hidden * (2 * self.n_inputs + 2 + TANH_OPS)
@@ -83,11 +80,6 @@ class FFBN:
     def predict(self, x: Array) -> Array:
         """Index estimate for network inputs ``x: (..., d)`` → ``(...)``, in the dtype of ``x``."""
         return _predict(self, jnp.asarray(x))
-
-    def index_fn(self, q: Array) -> Array:
-        """Stand-in for the analytic index: ``q: (..., n_joints)`` [m, rad] → ``(...)``."""
-        q = _check_q(q, self.n_joints)
-        return self.predict(q[..., list(self.inputs)])
 
 
 @jax.jit
@@ -99,15 +91,6 @@ def _predict(net: FFBN, x: Array) -> Array:
 @partial(jax.jit, static_argnums=2)
 def _init_params(key: Array, x: Array, hidden: int) -> Any:
     return MLP(hidden).init(key, x)["params"]
-
-
-def _check_q(q, n_joints: int) -> Array:
-    q = jnp.asarray(q)
-    if q.ndim == 0 or q.shape[-1] != n_joints:
-        raise ValueError(f"q must have shape (..., {n_joints}), got {q.shape}")
-    if not jnp.issubdtype(q.dtype, jnp.floating):
-        q = q.astype(jnp.float32)
-    return q
 
 
 def init_ffbn(key: Array, hidden: int, data: Dataset) -> FFBN:

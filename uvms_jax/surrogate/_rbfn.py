@@ -24,7 +24,7 @@ from flax import struct
 from jax import Array
 
 from uvms_jax.surrogate._dataset import Dataset
-from uvms_jax.surrogate._ffbn import _check_q
+from uvms_jax.surrogate._inputs import JointInputs
 from uvms_jax.surrogate._scaler import Scaler, fit_scaler
 
 SPREAD_CONSTANT = math.sqrt(math.log(2.0))  # 0.8326: φ(spread) = 0.5
@@ -34,7 +34,7 @@ DEPENDENT_COLUMN_RTOL = 1e-7
 
 
 @struct.dataclass
-class RBFN:
+class RBFN(JointInputs):
     """A Gaussian RBF network of one index.
 
     Attributes:
@@ -62,10 +62,6 @@ class RBFN:
         return int(self.centres.shape[0])
 
     @property
-    def n_inputs(self) -> int:
-        return len(self.inputs)
-
-    @property
     def operation_count(self) -> int:
         """Additions + multiplications per evaluation, paper convention (exp = 1 multiplication).
 
@@ -79,11 +75,6 @@ class RBFN:
     def predict(self, x: Array) -> Array:
         """Index estimate for network inputs ``x: (..., d)`` → ``(...)``, in the dtype of ``x``."""
         return _predict(self, jnp.asarray(x))
-
-    def index_fn(self, q: Array) -> Array:
-        """Stand-in for the analytic index: ``q: (..., n_joints)`` [m, rad] → ``(...)``."""
-        q = _check_q(q, self.n_joints)
-        return self.predict(q[..., list(self.inputs)])
 
 
 @jax.jit
