@@ -155,9 +155,11 @@ def test_property_no_command_outside_limits(start, deltas, slack, jaws, drop):
 
 
 def _udp_run(sim: SimConfig):
+    # Real time over a socket: a generous link timeout keeps a busy test machine (another test
+    # worker compiling) from reading as a lost link; the fault tests cover the short one.
     with SimServer(SimArm(sim, Q0 + [0.0])) as server:
         with Bravo7(UdpTransport(*server.address)) as client:
-            res = Executor(client, HwConfig()).run(short_plan())
+            res = Executor(client, HwConfig(link_timeout_s=3.0)).run(short_plan())
         assert server.error is None
     return res, server
 
