@@ -352,7 +352,8 @@ def stage_hw(cfg: DictConfig, out: Path, ctx: dict) -> StageReport:
         runlog.plot(out / "run.png")
     res = {"ok": result.ok, "reason": result.reason, "gates": len(result.gates),
            "max_gate_error_rad": None if math.isnan(result.max_gate_error_rad) else result.max_gate_error_rad,
-           "max_gate_error_mm": max((g.error_mm for g in result.gates), default=None),
+           "max_gate_error_mm": None if math.isnan(result.max_gate_error_mm) else result.max_gate_error_mm,
+           "grips": result.grips,
            "simulated_s" if hc.link == "loopback" else "duration_s": result.duration_s, "wall_s": wall,
            "ticks": result.ticks, "link_timeouts": result.link_timeouts,
            "limit_violations": arm.limit_violations, "dropped": link.dropped, "corrupted": link.corrupted,

@@ -87,6 +87,17 @@ class RunResult:
     abort_after_s: float
     summary: PlanSummary
 
+    @property
+    def max_gate_error_mm(self) -> float:
+        """Max jaws error over the gates the jaws reached (grips excluded) [mm]; NaN if none."""
+        errs = [g.error_mm for g in self.gates if not g.gripped]
+        return max(errs) if errs else math.nan
+
+    @property
+    def grips(self) -> int:
+        """Jaws steps that stopped on an object."""
+        return sum(g.gripped for g in self.gates)
+
 
 class Executor:
     """Runs plans through a :class:`Bravo7` client.
