@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from pathlib import Path
@@ -231,6 +232,24 @@ def test_closing_jaws_grip_an_object():
     assert res.grips == sum(goal < width for goal in jaw_goals) > 0
     assert res.max_gate_error_mm <= HwConfig().gate_threshold_mm  # the jaws gates that were reached
     assert run.arm.limit_violations == 0
+
+
+def test_object_slipping_out_stops_the_run():
+    """After a grip, jaws that close further (the object is gone) fail the next gate: hold."""
+    plan = load_plan(EXAMPLE)
+    width = 12.0
+    run = SimRun(SimConfig(object_width_mm=width), q0=plan.segments[0].q[0])
+    first_grip = next(i for i, s in enumerate(plan.segments) if s.jaws_mm is not None and s.jaws_mm < width)
+
+    def object_slips(i, n, name):
+        if i == first_grip + 1:
+            run.arm.config = dataclasses.replace(run.arm.config, object_width_mm=0.0)
+
+    run.executor.progress = object_slips
+    res = run.executor.run(plan)
+    assert not res.ok and "gate not reached" in res.reason and "joint A" in res.reason, res.reason
+    assert res.grips == 1 and res.gates[-1].segment == first_grip
+    assert last_packets_are_hold(run)
 
 
 def test_stalled_jaws_abort_when_settling_is_not_allowed():
