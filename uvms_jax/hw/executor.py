@@ -249,7 +249,7 @@ class Executor:
                         self._expected = expected
                         return GateRecord(seg, wp, float(np.max(err[self._arm])), float(err[-1]),
                                           t - move.duration)
-                    if not abs(meas[-1] - still_at) <= self._gate[-1]:
+                    if not abs(meas[-1] - still_at) <= self._gate[-1]:  # jaws moved (or first reading)
                         still_since, still_at = t, meas[-1]
                     gripped = (closing and meas[-1] > goal[-1] and t - still_since >= cfg.grip_settle_s
                                and np.all(err[self._arm] <= self._gate[self._arm]))
