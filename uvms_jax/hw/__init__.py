@@ -10,7 +10,7 @@ the simulator server, the executor loop and the CLI):
 * transports: :class:`UdpTransport`, :class:`SerialTransport` (timeouts; :class:`LinkError`);
 * client: :class:`Bravo7` — modes, position/velocity demands behind a send guard that raises
   on anything outside the limits, requests, heartbeat, hardware status and limits;
-* plans: ``plan.json`` (:mod:`uvms_jax.hw.plan` documents the format), :func:`load_plan`,
+* plans: ``plan.json`` (:mod:`uvms_jax.planfile` documents the format), :func:`load_plan`,
   :func:`check_plan` (the dry run);
 * execution: :func:`synchronised_move`, :class:`Executor` (reached-gate, hold on any fault),
   :class:`RunLog` (CSV + PNG);
@@ -18,6 +18,15 @@ the simulator server, the executor loop and the CLI):
   on a :class:`VirtualClock`, with fault injection (:class:`SimConfig`);
 * entry point: ``uvms-hw`` (:mod:`uvms_jax.hw.cli`).
 """
+
+from uvms_jax.motion import Move
+from uvms_jax.motion import synchronised_move
+from uvms_jax.planfile import Plan
+from uvms_jax.planfile import PlanError
+from uvms_jax.planfile import Segment
+from uvms_jax.planfile import load_plan
+from uvms_jax.planfile import parse_plan
+from uvms_jax.planfile import plan_to_dict
 
 from ._codec import Packet
 from ._codec import PacketReader
@@ -47,22 +56,14 @@ from .executor import AbortRun
 from .executor import Executor
 from .executor import GateRecord
 from .executor import RunResult
-from .plan import Plan
-from .plan import PlanError
-from .plan import PlanSummary
-from .plan import Segment
-from .plan import check_plan
-from .plan import load_plan
-from .plan import parse_plan
-from .plan import plan_to_dict
+from ._check import PlanSummary
+from ._check import check_plan
 from .runlog import RunLog
 from .sim import LoopbackTransport
 from .sim import SimArm
 from .sim import SimLink
 from .sim import SimServer
 from .sim import VirtualClock
-from .trajectory import Move
-from .trajectory import synchronised_move
 from .transport import LinkError
 from .transport import SerialTransport
 from .transport import Transport

@@ -23,11 +23,13 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
+from uvms_jax.planfile import PlanError, load_plan
+
+from ._check import check_plan
 from ._joints import BRAVO7
 from .client import Bravo7
 from .config import HwConfig, SimConfig, config_from_mapping
 from .executor import Executor, RunResult
-from .plan import PlanError, check_plan, load_plan
 from .runlog import RunLog
 from .transport import LinkError, SerialTransport, UdpTransport, parse_host_port
 

@@ -28,9 +28,11 @@ from ._ids import HardwareStatus, Mode
 from ._joints import ARM_JOINTS, JAWS, JointSpec, LimitError
 from .client import Bravo7
 from .config import HwConfig
-from .plan import Plan, PlanSummary, check_plan
+from uvms_jax.planfile import Plan
+
+from ._check import PlanSummary, check_plan
 from .runlog import RunLog
-from .trajectory import Move, synchronised_move
+from uvms_jax.motion import Move, synchronised_move
 from .transport import LinkError
 
 __all__ = ["AbortRun", "Executor", "GateRecord", "RunResult"]

@@ -10,7 +10,7 @@
   :func:`time_parameterize`, :class:`Trajectory`, :func:`check_trajectory`, :func:`seed_ompl`;
 * metrics: :func:`trajectory_metrics`, :class:`EdgeMetrics`;
 * task graph: :func:`task_edges`, :func:`plan_edge`, :func:`metric_matrices`,
-  :func:`cost_matrix`, :func:`plan_json` (the :mod:`uvms_jax.hw.plan` format).
+  :func:`cost_matrix`, :func:`plan_json` (the :mod:`uvms_jax.planfile` format).
 """
 
 from uvms_jax.plan._collision import CollisionChecker

@@ -19,7 +19,7 @@ from ompl import base as ob
 from ompl import geometric as og
 from ompl import util as ou
 
-from uvms_jax.hw.trajectory import synchronised_move
+from uvms_jax.motion import synchronised_move
 from uvms_jax.plan._collision import CollisionChecker, densify
 
 __all__ = ["PLANNERS", "PlanResult", "Trajectory", "plan_motion", "seed_ompl", "time_parameterize"]

@@ -187,7 +187,7 @@ def plan_json(
     checker: CollisionChecker | None = None,
     resolution: float = 0.01,
 ) -> dict:
-    """The ``plan.json`` object (format: :mod:`uvms_jax.hw.plan`, version 1) of a schedule.
+    """The ``plan.json`` object (format: :mod:`uvms_jax.planfile`, version 1) of a schedule.
 
     For every move of ``sequence`` (e.g. ``[0, 2, 5, 4, 8, 0, 1, 6, 3, 7, 9]``) it emits the
     edge's motion, then at an object: ``open``, ``grasp`` (down), ``close``, ``post-grasp``

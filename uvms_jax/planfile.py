@@ -1,4 +1,4 @@
-"""``plan.json``: what the hardware runner executes, and the dry-run check that guards it.
+"""``plan.json``: the joint-space plan that planning writes and the hardware runner executes.
 
 Format (version 1; JSON object)::
 
@@ -22,31 +22,21 @@ the jaws [mm, 0 … 35] and waits for them the same way. A segment's first waypo
 the previous segment's last one (continuity); the plan's first waypoint is where the arm must
 already be. Joint angles are in rad, within SPEC §1.3 limits.
 
-The dry-run check (:func:`check_plan`) refuses a plan, listing every problem, for: wrong joint
-names, malformed rows, non-finite values, times not starting at 0 or not increasing, positions
-or jaws outside limits, discontinuities between segments, and average speeds between waypoints
-above the velocity limit.
+The hardware runner checks a plan against the arm's limits before any motion
+(:func:`uvms_jax.hw.check_plan`).
 """
 
 from __future__ import annotations
 
 import dataclasses
 import json
-import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
-from ._joints import ARM_JOINTS, JAWS, JointSpec
-from .config import HwConfig
-from .trajectory import synchronised_move
-
-__all__ = ["Plan", "PlanError", "PlanSummary", "Segment", "check_plan", "load_plan", "parse_plan", "plan_to_dict"]
+__all__ = ["PLAN_VERSION", "Plan", "PlanError", "Segment", "load_plan", "parse_plan", "plan_to_dict"]
 
 PLAN_VERSION = 1
-_SPEED_TOL = 1e-6  # relative slack on the average-speed check (JSON round-off of times)
 
 
 class PlanError(ValueError):
@@ -80,26 +70,6 @@ class Plan:
     def waypoints(self) -> list[tuple[int, int, tuple[float, ...]]]:
         """All ``(segment index, waypoint index, q)`` in execution order."""
         return [(i, k, q) for i, s in enumerate(self.segments) for k, q in enumerate(s.q)]
-
-
-@dataclasses.dataclass(frozen=True)
-class PlanSummary:
-    """What the dry run found for an accepted plan.
-
-    Attributes:
-      n_segments, n_waypoints, n_gripper_steps: counts.
-      planned_s: sum of the planned times [s].
-      estimated_s: sum of the synchronised move durations the executor will use [s]
-        (gates and gripper moves not included).
-      max_speed_ratio: largest average speed between waypoints over the velocity limit.
-    """
-
-    n_segments: int
-    n_waypoints: int
-    n_gripper_steps: int
-    planned_s: float
-    estimated_s: float
-    max_speed_ratio: float
 
 
 def _floats(x: Any, where: str) -> tuple[float, ...]:
@@ -181,77 +151,3 @@ def plan_to_dict(plan: Plan) -> dict[str, Any]:
             for s in plan.segments
         ],
     }
-
-
-def check_plan(
-    plan: Plan,
-    config: HwConfig = HwConfig(),
-    joints: Sequence[JointSpec] = ARM_JOINTS,
-    jaws: JointSpec = JAWS,
-    max_problems: int = 20,
-) -> PlanSummary:
-    """Dry-run check: refuse a bad plan before any motion.
-
-    Raises:
-      PlanError: listing (up to ``max_problems``) every limit, continuity, timing and speed
-        problem, with segment, waypoint and joint named.
-    """
-    problems: list[str] = []
-    names = tuple(j.name for j in joints)
-    if plan.joint_names != names:
-        raise PlanError(f"plan joint_names {list(plan.joint_names)} must be {list(names)} (in this order)")
-    vmax = np.array([j.max_velocity for j in joints]) * config.speed_scale
-    amax = np.array([j.max_acceleration for j in joints]) * config.speed_scale
-    prev_q: np.ndarray | None = None
-    planned = estimated = 0.0
-    ratio = 0.0
-    n_wp = n_grip = 0
-    for i, seg in enumerate(plan.segments):
-        where = f"segment {i} ({seg.name})"
-        t = np.asarray(seg.t, dtype=float)
-        q = np.asarray(seg.q, dtype=float).reshape(len(seg.q), len(names))
-        n_wp += len(q)
-        if len(t):
-            if not np.all(np.isfinite(t)):
-                problems.append(f"{where}: non-finite time")
-            elif t[0] != 0.0:
-                problems.append(f"{where}: t[0] = {t[0]} s, must be 0")
-            elif np.any(np.diff(t) <= 0):
-                k = int(np.argmax(np.diff(t) <= 0))
-                problems.append(f"{where}: times not increasing at waypoint {k}->{k + 1}")
-        for k, row in enumerate(q):
-            for j, spec in enumerate(joints):
-                if not math.isfinite(row[j]):
-                    problems.append(f"{where} waypoint {k}: joint {spec.name} is {row[j]}")
-                elif not spec.contains(row[j]):
-                    problems.append(f"{where} waypoint {k}: joint {spec.name} = {row[j]:.4f} rad "
-                                    f"outside [{spec.lower}, {spec.upper}]")
-        if len(q) and prev_q is not None and np.all(np.isfinite(q[0])):
-            jump = np.abs(q[0] - prev_q)
-            if np.max(jump) > config.continuity_tol_rad:
-                j = int(np.argmax(jump))
-                problems.append(f"{where}: starts {jump[j]:.4f} rad away from the previous segment's end "
-                                f"on joint {names[j]} (tolerance {config.continuity_tol_rad})")
-        if len(q) > 1 and np.all(np.isfinite(q)) and np.all(np.isfinite(t)) and np.all(np.diff(t) > 0):
-            dt = np.diff(t)
-            speed = np.abs(np.diff(q, axis=0)) / dt[:, None] / vmax
-            ratio = max(ratio, float(np.max(speed)))
-            if np.any(speed > 1 + _SPEED_TOL):
-                k, j = np.unravel_index(int(np.argmax(speed)), speed.shape)
-                problems.append(f"{where} waypoint {k}->{k + 1}: joint {names[j]} needs "
-                                f"{speed[k, j] * vmax[j]:.3f} rad/s > limit {vmax[j]:.3f} rad/s")
-            planned += float(t[-1])
-            for k in range(len(q) - 1):
-                estimated += synchronised_move(q[k], q[k + 1], vmax, amax, float(dt[k])).duration
-        if len(q):
-            prev_q = q[-1]
-        if seg.jaws_mm is not None:
-            n_grip += 1
-            if not (math.isfinite(seg.jaws_mm) and jaws.contains(seg.jaws_mm)):
-                problems.append(f"{where}: jaws {seg.jaws_mm} mm outside [{jaws.lower}, {jaws.upper}]")
-    if n_wp == 0:
-        problems.append("plan has no waypoints: the start position is unknown")
-    if problems:
-        more = f"\n  … and {len(problems) - max_problems} more" if len(problems) > max_problems else ""
-        raise PlanError("plan refused:\n  " + "\n  ".join(problems[:max_problems]) + more)
-    return PlanSummary(len(plan.segments), n_wp, n_grip, planned, estimated, ratio)
