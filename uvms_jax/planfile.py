@@ -20,7 +20,7 @@ at least the planned time; at every waypoint the executor waits until every enco
 the gate threshold (thesis 4.6) before going on. After the motion, ``gripper`` (if given) drives
 the jaws [mm, 0 … 35] and waits for them the same way. A segment's first waypoint must repeat
 the previous segment's last one (continuity); the plan's first waypoint is where the arm must
-already be. Joint angles are in rad, within SPEC §1.3 limits.
+already be. Joint angles are in rad, within the limits of docs/theory.md §1.3.
 
 The hardware runner checks a plan against the arm's limits before any motion
 (:func:`uvms_jax.hw.check_plan`).
