@@ -12,6 +12,7 @@ configs/ga/paper.yaml, so the benchmark runs the same problem as the experiment.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import os
 import platform
@@ -20,17 +21,16 @@ import time
 from pathlib import Path
 
 import jax
-import jax.numpy as jnp
 import numpy as np
 from omegaconf import OmegaConf
 
 from uvms_jax import evo
+from uvms_jax.settings import from_mapping
 
 # Full float32 matrix products on GPUs too (TF32 would break the IK residual check).
 jax.config.update("jax_default_matmul_precision", "highest")
 
 ROOT = Path(__file__).resolve().parents[1]
-FIELDS = ("x", "y", "z", "psi")
 
 
 def _time(fn, repeat):
@@ -62,21 +62,13 @@ def main() -> None:
     args = ap.parse_args()
     skip = set(filter(None, args.skip.split(",")))
 
-    scene = OmegaConf.to_container(OmegaConf.load(ROOT / "configs/docking/scene/paper.yaml"))
-    g = OmegaConf.load(ROOT / "configs/ga/paper.yaml")
-    problem = evo.make_docking_problem(**scene, dtype=jnp.dtype(args.dtype))
-    codec = evo.make_codec(problem.pose_low, problem.pose_high, [g.bits[f] for f in FIELDS], gray=g.gray)
-    ga = evo.BinaryGA(
-        population_size=args.population or g.population_size,
-        n_bits=codec.n_bits,
-        max_generations=args.max_generations or g.max_generations,
-        n_elites=g.n_elites,
-        tournament_size=g.tournament_size,
-        eval_chunk=(None if args.eval_chunk in ("none", "None") else int(args.eval_chunk)) if args.eval_chunk else g.eval_chunk,
-    )
-    params = evo.GAParams(**{k: g[k] for k in (
-        "crossover_rate", "mutation_rate", "crossover_bias", "rate_decay", "improvement_decay",
-        "crossover_rate_min", "mutation_rate_min", "stall_generations", "improvement_tol")})
+    scene = from_mapping(evo.SceneSettings, OmegaConf.to_container(OmegaConf.load(ROOT / "configs/docking/scene/paper.yaml")))
+    g = from_mapping(evo.GASettings, OmegaConf.to_container(OmegaConf.load(ROOT / "configs/ga/paper.yaml")))
+    eval_chunk = (None if args.eval_chunk in ("none", "None") else int(args.eval_chunk)) if args.eval_chunk else g.eval_chunk
+    g = dataclasses.replace(g, population_size=args.population or g.population_size,
+                            max_generations=args.max_generations or g.max_generations, eval_chunk=eval_chunk)
+    problem = evo.docking_problem(scene, args.dtype)
+    codec, ga, params = evo.make_ga(g, problem)
     n_points = int(problem.p_control.shape[0])
     report = {
         "device": str(jax.devices()[0]),

@@ -25,10 +25,12 @@ import threading
 import time
 
 from cobs import cobs
+from crc import Calculator
 
-from uvms_jax.hw import (Bravo7, PacketID, PacketReader, SimArm, SimConfig, SimServer, UdpTransport,
+from uvms_jax.hw import (CRC8_CONFIG, Bravo7, PacketID, PacketReader, SimArm, SimConfig, SimServer, UdpTransport,
                          encode_floats, encode_packet)
-from uvms_jax.hw._codec import _CRC8
+
+_CRC8 = Calculator(CRC8_CONFIG, optimized=True)  # the peer: the crc library, as the codec configures it
 
 
 def _rate(fn, n: int) -> float:

@@ -38,7 +38,7 @@ def main() -> None:
     scene = P.build_scene(yaml.safe_load(SCENARIO.read_text()))
     checker = P.CollisionChecker(scene)
     t0 = time.perf_counter()
-    targets = P.pick_place_targets(scene, checker, jax.random.PRNGKey(args.seed), n_seeds=64)
+    targets = P.pick_place_targets(jax.random.PRNGKey(args.seed), scene, checker, n_seeds=P.IkSettings().n_seeds)
     ik_s = time.perf_counter() - t0
 
     Q = np.random.default_rng(args.seed).uniform(checker.lower, checker.upper, (args.checks, 6))

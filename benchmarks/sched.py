@@ -153,7 +153,7 @@ def numpy_score(problem: sched.PickPlaceProblem, paths: np.ndarray) -> np.ndarra
 
 def scoring(problem, batch: int, repeats: int) -> dict:
     rng = np.random.default_rng(0)
-    b = sched.grasp_batch(problem, jax.random.key(0))
+    b = sched.grasp_batch(jax.random.key(0), problem)
     base = np.where(np.asarray(b.paths) == problem.n_nodes, -1, np.asarray(b.paths))
     paths = base[rng.integers(0, len(base), batch)]
     shuffle = rng.random(batch) < 0.5  # half of them invalid
@@ -176,12 +176,12 @@ def thesis(repeats: int) -> dict:
     p = sched.thesis_problem()
     out = {}
     t0 = time.perf_counter()
-    sched.grasp(p, jax.random.key(0))
+    sched.grasp(jax.random.key(0), p)
     out["grasp_compile_s"] = time.perf_counter() - t0
     keys = iter(jax.random.split(jax.random.key(1), 10 * repeats + 10))
     for name, fn, reps in (
         ("greedy", lambda: sched.greedy(p), 10 * repeats),
-        ("grasp_1000", lambda: sched.grasp(p, next(keys), 1000), repeats),
+        ("grasp_1000", lambda: sched.grasp(next(keys), p, 1000), repeats),
         ("astar", lambda: sched.astar(p), 4 * repeats),
         ("exact", lambda: sched.exact(p), 4 * repeats),
     ):
@@ -189,7 +189,7 @@ def thesis(repeats: int) -> dict:
         out[name] = {**t, "cost": s.cost, "path": s.path_str()}
         if name in THESIS_MS:
             out[name]["thesis_ms"] = THESIS_MS[name]
-    hits = [abs(sched.grasp(p, jax.random.key(100 + i)).cost - out["exact"]["cost"]) < 1e-9 for i in range(20)]
+    hits = [abs(sched.grasp(jax.random.key(100 + i), p).cost - out["exact"]["cost"]) < 1e-9 for i in range(20)]
     out["grasp_1000"]["optimum_found_fraction"] = float(np.mean(hits))
     out["ortools_first_solution"] = ortools_solve(p, None)
     out["ortools_gls_1s"] = ortools_solve(p, 1.0)
@@ -201,8 +201,8 @@ def large(repeats: int) -> dict:
     for label, bpo in (("10x10_1to3_bases", (1, 3)), ("10x10_all_bases", (10, 10))):
         p = sched.random_problem(jax.random.key(7), 10, 10, bases_per_object=bpo)
         t_exact, ex = timed(lambda: sched.exact(p), max(2, repeats // 20))
-        sched.grasp(p, jax.random.key(0))  # compile
-        runs = [sched.grasp(p, k) for k in jax.random.split(jax.random.key(1), max(5, repeats // 5))]
+        sched.grasp(jax.random.key(0), p)  # compile
+        runs = [sched.grasp(k, p) for k in jax.random.split(jax.random.key(1), max(5, repeats // 5))]
         g_ms = [1e3 * r.wall_time_s for r in runs]
         g_cost = [r.cost for r in runs]
         r = {

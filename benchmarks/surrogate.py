@@ -70,8 +70,8 @@ def main() -> None:
     fns.update({name: net.index_fn for name, net in nets.items()})
     results = {}
     for n in batches:
-        q = jnp.tile(base, (-(-n // base.shape[0]), 1))[:n]
-        c = chunk if n > chunk and n % chunk == 0 else None
+        q = surrogate.tile_batch(base, n)
+        c = surrogate.chunk_for(n, chunk)
         row = {}
         for name, fn in fns.items():
             t = surrogate.time_index_fn(fn, q, repeats=args.repeats, chunk=c)

@@ -141,13 +141,12 @@ def load_plan(path: str | Path) -> Plan:
 
 
 def plan_to_dict(plan: Plan) -> dict[str, Any]:
-    """The JSON object of ``plan`` (inverse of :func:`parse_plan`)."""
-    return {
-        "version": PLAN_VERSION,
-        "joint_names": list(plan.joint_names),
-        "segments": [
-            {"name": s.name, "t": list(s.t), "q": [list(r) for r in s.q],
-             "gripper": None if s.jaws_mm is None else {"jaws_mm": s.jaws_mm}}
-            for s in plan.segments
-        ],
-    }
+    """The JSON object of ``plan`` (inverse of :func:`parse_plan`); a gripper-only step has
+    no ``t``/``q``."""
+
+    def segment(s: Segment) -> dict[str, Any]:
+        motion = {"t": list(s.t), "q": [list(r) for r in s.q]} if s.q else {}
+        return {"name": s.name, **motion, "gripper": None if s.jaws_mm is None else {"jaws_mm": s.jaws_mm}}
+
+    return {"version": PLAN_VERSION, "joint_names": list(plan.joint_names),
+            "segments": [segment(s) for s in plan.segments]}

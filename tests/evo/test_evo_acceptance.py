@@ -1,4 +1,4 @@
-"""Issue acceptance on the paper's scene: 7 GA runs vs the grid-search optimum (slow)."""
+"""Acceptance on the paper's scene: 7 GA runs vs the grid-search optimum (slow)."""
 
 from pathlib import Path
 

@@ -40,7 +40,7 @@ class SimRun:
 
 
 def assert_within_limits(packets) -> None:
-    """No POSITION/VELOCITY demand outside the SPEC §1.3 limits (as float32 on the wire)."""
+    """No POSITION/VELOCITY demand outside the Bravo 7 limits (docs/theory.md §1.3) (as float32 on the wire)."""
     spec = {j.device_id: j for j in BRAVO7}
     for p in packets:
         if p.packet_id == PacketID.POSITION:

@@ -10,8 +10,9 @@ import pytest
 import yaml
 
 from _hw_helpers import short_plan
-from uvms_jax.hw import HwConfig, SimConfig, config_from_mapping, plan_to_dict
-from uvms_jax.hw.cli import main
+from uvms_jax.hw import HwConfig, HwSettings, SimConfig, config_from_mapping, plan_to_dict
+from uvms_jax.settings import from_mapping
+from uvms_jax.hw.cli import build_parser, main
 
 ROOT = Path(__file__).parents[2]
 EXAMPLE = ROOT / "examples" / "thesis_plan.json"
@@ -67,14 +68,16 @@ def test_yaml_mirrors_dataclass_defaults(tmp_path, plan_file):
     assert hw == HwConfig() and sim == SimConfig()
     assert set(cfg["executor"]) == {f.name for f in dataclasses.fields(HwConfig)}
     assert set(cfg["sim"]) == {f.name for f in dataclasses.fields(SimConfig)}
-    with pytest.raises(ValueError, match="unknown keys in hw.executor"):
+    assert from_mapping(HwSettings, cfg) == HwSettings(hw, sim)
+    with pytest.raises(ValueError, match=r"hw.executor: unknown keys \['rate'\]"):
         config_from_mapping({"executor": {"rate": 5}})
+    with pytest.raises(ValueError, match=r"hw: unknown keys \['exec'\]"):
+        config_from_mapping({"exec": {}})
     bad = tmp_path / "bad.yaml"
     bad.write_text("executor:\n  rate_hz: -1\n")
     assert main(["run", str(plan_file), "--dry-run", "--config", str(bad)]) == 2
 
 
 def test_hw_fault_flag_parses():
-    from uvms_jax.hw.cli import _parse_fault
-
-    assert _parse_fault("d:0x04@1.5") == {"fault_joint": "D", "fault_bits": 4, "fault_after_s": 1.5}
+    args = build_parser().parse_args(["run", "plan.json", "--sim", "--hw-fault", "d:0x04@1.5"])
+    assert args.hw_fault == {"fault_joint": "D", "fault_bits": 4, "fault_after_s": 1.5}

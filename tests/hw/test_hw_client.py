@@ -7,8 +7,8 @@ import time
 import pytest
 
 from uvms_jax.hw import (BROADCAST, Bravo7, DeviceID, HardwareStatus, LimitError, LinkError, Mode, PacketID,
-                         PacketReader, SerialTransport, SimArm, SimConfig, SimServer, UdpTransport, encode_floats)
-from uvms_jax.hw.transport import parse_host_port
+                         PacketReader, SerialTransport, SimArm, SimConfig, SimServer, UdpTransport, encode_floats,
+                         parse_host_port)
 
 from _hw_helpers import Q0, SimRun
 

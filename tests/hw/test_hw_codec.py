@@ -1,4 +1,4 @@
-"""Protocol codec: SPEC §6 test vectors, an independent SDK-style encoder, fuzzing."""
+"""Protocol codec: docs/theory.md §6 test vectors, an independent SDK-style encoder, fuzzing."""
 
 from __future__ import annotations
 
@@ -9,13 +9,15 @@ import crcmod
 import numpy as np
 import pytest
 from hypothesis import given, settings
+from crc import Calculator
 from hypothesis import strategies as st
 
-from uvms_jax.hw import (DeviceID, Mode, Packet, PacketID, PacketReader, crc8, decode_float, decode_floats,
+from uvms_jax.hw import (CRC8_CONFIG, DeviceID, Mode, Packet, PacketID, PacketReader, crc8, decode_float, decode_floats,
                          decode_frame, encode_floats, encode_packet)
-from uvms_jax.hw._codec import _CRC8
 
-# SPEC §6 test vectors: (device, packet id, data) ↔ bytes on the wire.
+_CRC8 = Calculator(CRC8_CONFIG, optimized=True)  # the crc library itself, as the codec configures it
+
+# docs/theory.md §6 test vectors: (device, packet id, data) ↔ bytes on the wire.
 VECTORS = [
     ((DeviceID.A, PacketID.POSITION, struct.pack("<f", 1.0)), "01 01 07 80 3f 03 01 08 51 00"),
     ((DeviceID.B, PacketID.VELOCITY, struct.pack("<f", -0.5)), "01 01 01 06 bf 02 02 08 09 00"),
@@ -26,7 +28,7 @@ VECTORS = [
 ]
 
 
-# ---- independent reference: the SDK's algorithm written from SPEC §6, not from the codec ----
+# ---- independent reference: the SDK's algorithm written from docs/theory.md §6, not from the codec ----
 def ref_crc8(data: bytes) -> int:
     """crcmod.mkCrcFun(0x14D, initCrc=0xFF, xorOut=0xFF) (reflected), bit by bit.
 

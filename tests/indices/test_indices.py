@@ -90,7 +90,7 @@ def test_gradient_of_w_matches_finite_differences():
 
 
 def test_base_invariance_of_uvms_manipulability():
-    """SPEC §1.2: det(JJᵀ) does not depend on θ1…θ4 (vehicle x, y, z, roll) — true for both
+    """docs/theory.md §1.2: det(JJᵀ) does not depend on θ1…θ4 (vehicle x, y, z, roll) — true for both
     the geometric and the spatial-twist Jacobian — nor on θ12; it does depend on θ5, θ6
     (vehicle pitch and yaw), so the paper's claim holds exactly for θ1…θ4 only."""
     chain = kin.uvms12()
@@ -138,11 +138,9 @@ def test_joint_torques_match_lever_arm_oracle():
 
 def test_area_manipulability_matches_plain_loop():
     arm = kin.docking_arm()
-    from uvms_jax.indices._area import approach_down
-
     points = indices.control_points([0.0, 0.0, 0.0], 0.4, 3)
     assert points.shape == (9, 3)
-    R = np.asarray(approach_down(0.3))
+    R = np.asarray(indices.approach_down(0.3))
     bases = []
     for x, z in [(-0.45, 0.2), (-0.4, 0.1), (-1.5, 0.0)]:
         T = np.eye(4)

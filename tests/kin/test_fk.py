@@ -13,7 +13,7 @@ N_RANDOM = 1000
 ATOL_64 = 1e-9  # float64 vs float64 computations of the same model: only round-off differs
 ATOL_ORACLE = 1e-6  # pytorch-kinematics parses URDF numbers as float32 before casting to float64
 ATOL_32 = 2e-5  # float32 FK of sub-metre chains vs float64 reference
-ATOL_SPEC = 1e-4  # acceptance tolerance of the Bravo 7 check [m, rad]
+ATOL_BRAVO7 = 1e-4  # acceptance tolerance of the Bravo 7 check [m, rad]
 FD_STEP = 1e-6
 FD_ATOL = 1e-7  # central differences in float64: O(h²) truncation + round-off
 
@@ -44,7 +44,7 @@ def test_fk_and_jacobian_match_pytorch_kinematics(name):
 
 
 def test_bravo7_matches_pytorch_kinematics_on_spec_urdf():
-    """Acceptance: the URDF written verbatim from the SPEC §1.3 table, in float64 and float32."""
+    """Acceptance: the URDF written from the Bravo 7 table (docs/theory.md §1.3), in float64 and float32."""
     chain = kin.bravo7()
     oracle = torch_chain(kin.bravo7_urdf())
     q = random_q(chain, N_RANDOM, seed=2)
@@ -56,7 +56,7 @@ def test_bravo7_matches_pytorch_kinematics_on_spec_urdf():
         assert T.dtype == dtype and J.dtype == dtype
         np.testing.assert_allclose(T, T_ref, atol=atol)
         np.testing.assert_allclose(J, J_ref, atol=atol)
-        assert np.abs(T - T_ref).max() < ATOL_SPEC and np.abs(J - J_ref).max() < ATOL_SPEC
+        assert np.abs(T - T_ref).max() < ATOL_BRAVO7 and np.abs(J - J_ref).max() < ATOL_BRAVO7
 
 
 def _rotation_increment(R_plus, R_minus, R, h):
@@ -145,3 +145,35 @@ def test_mjcf_loads_in_mujoco_and_matches_fk():
         mujoco.mj_kinematics(model, data)
         np.testing.assert_allclose(data.site_xpos[site], Ti[:3, 3], atol=1e-9)
         np.testing.assert_allclose(data.site_xmat[site].reshape(3, 3), Ti[:3, :3], atol=1e-9)
+
+
+def test_gradient_in_the_geometry_matches_finite_differences():
+    """The chain's twists and tool pose are traced leaves: d(FK, J)/d(geometry) is exact."""
+    chain = kin.bravo7()
+    q = random_q(chain, 8, seed=6)
+    rng = np.random.default_rng(7)
+    d_twists = rng.normal(size=np.shape(chain.twists))
+    d_tool = np.zeros((4, 4))
+    d_tool[:3, 3] = rng.normal(size=3)
+
+    def f(s):
+        moved = chain.replace(twists=chain.twists + s * d_twists, T_base_tool0=chain.T_base_tool0 + s * d_tool)
+        T, J = kin.fk(moved, q), kin.jacobian(moved, q)
+        return jax.numpy.sum(T[..., :3, :] ** 2) + jax.numpy.sum(jax.numpy.sin(J))
+
+    grad = float(jax.jit(jax.grad(f))(0.0))
+    fd = (f(FD_STEP) - f(-FD_STEP)) / (2 * FD_STEP)
+    np.testing.assert_allclose(grad, fd, rtol=1e-7, atol=FD_ATOL)
+
+
+def test_one_compiled_program_serves_every_geometry():
+    """No cache keyed on the numbers: a sweep over link lengths reuses one compiled FK."""
+    from uvms_jax.kin import _fk
+
+    q = np.zeros((3, 6))
+    kin.fk(kin.docking_arm(), q)
+    size = _fk._fk._cache_size()
+    for l1 in (0.3, 0.35, 0.45, 0.5):
+        T = kin.fk(kin.docking_arm(l1=l1, l2=0.4), q)
+        np.testing.assert_allclose(np.asarray(T)[:, 0, 3], l1 + 0.4, atol=ATOL_64)
+    assert _fk._fk._cache_size() == size

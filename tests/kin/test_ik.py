@@ -72,7 +72,7 @@ def test_elbow_ik_finds_every_solution_numerical_ik_finds():
     q = random_in_limits(arm, 12, seed=3)
     T = np.asarray(kin.fk(arm, q))
     closed = kin.elbow_ik(arm, T)
-    numeric = kin.numeric_ik(arm, T, jax.random.key(0), n_seeds=128, iterations=200, all_seeds=True)
+    numeric = kin.numeric_ik(jax.random.key(0), arm, T, n_seeds=128, iterations=200, all_seeds=True)
     n_found = 0
     for i in range(len(T)):
         branches = {_mod_2pi_key(x) for x in np.asarray(closed.q[i])[np.asarray(closed.valid[i])]}
@@ -89,7 +89,7 @@ def test_numeric_ik_round_trip(model):
     if chain.name == "uvms12":
         q[:, :3] = np.clip(q[:, :3], -1.0, 1.0)
     T = kin.fk(chain, q)
-    sol = kin.numeric_ik(chain, T, jax.random.key(1), n_seeds=32, iterations=150)
+    sol = kin.numeric_ik(jax.random.key(1), chain, T, n_seeds=32, iterations=150)
     assert sol.q.shape == (16, chain.n_joints)
     valid = np.asarray(sol.valid)
     assert valid.mean() >= 0.9
@@ -103,7 +103,7 @@ def test_unreachable_target_is_masked():
     T[:3, 3] = [3.0, 0.0, 0.0]  # far beyond the 0.8 m reach
     sol = kin.elbow_ik(arm, T)
     assert not np.asarray(sol.valid).any() and np.isnan(np.asarray(sol.q)).all()
-    num = kin.numeric_ik(arm, T, jax.random.key(0), n_seeds=8, iterations=50)
+    num = kin.numeric_ik(jax.random.key(0), arm, T, n_seeds=8, iterations=50)
     assert not bool(num.valid) and np.isnan(np.asarray(num.q)).all()
 
 

@@ -1,14 +1,16 @@
 """Fixtures of the pipeline tests."""
 
+import importlib
+
 import pytest
-from _pipeline_helpers import load_experiment
+from _pipeline_helpers import EXPERIMENTS  # noqa: F401  (puts experiments/ on sys.path)
 
 
 @pytest.fixture(scope="module")
 def pipeline():
-    return load_experiment("pipeline")
+    return importlib.import_module("pipeline")
 
 
 @pytest.fixture(scope="module")
 def gather():
-    return load_experiment("gather")
+    return importlib.import_module("gather")

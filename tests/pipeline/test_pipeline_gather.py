@@ -7,7 +7,7 @@ import json
 import subprocess
 import sys
 
-from _pipeline_helpers import ROOT, load_experiment
+from _pipeline_helpers import ROOT
 
 WEIGHTS = ["equal", "speed", "security", "planning_time", "only_max_torque"]
 
@@ -27,9 +27,8 @@ def _fake_sweep(root, n=3, missing=()):
     (root / "multirun.yaml").write_text("hydra: {}\n")
 
 
-def test_flatten():
-    g = load_experiment("gather")
-    assert g.flatten({"a": {"b": 1, "c": [1, 2.5]}, "d": [{"x": 1}], "e": None}) == {"a.b": 1, "a.c": "1;2.5", "e": None}
+def test_flatten(gather):
+    assert gather.flatten({"a": {"b": 1, "c": [1, 2.5]}, "d": [{"x": 1}], "e": None}) == {"a.b": 1, "a.c": "1;2.5", "e": None}
 
 
 def test_gather_fake_sweep(gather, tmp_path):

@@ -1,25 +1,34 @@
-"""Metrics, time parameterisation, interpolation, task graph and cost matrix."""
+"""Metrics, time parameterisation, interpolation, task graph, metric tensor and settings."""
 
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 import yaml
 
-from uvms_jax import kin
+from uvms_jax import kin, sched
 from uvms_jax.plan import (
-    METRIC_NAMES,
+    EdgeMetrics,
+    EdgeResult,
+    IkSettings,
+    PlanJsonSettings,
+    PlanResult,
+    PlanSettings,
     build_scene,
-    cost_matrix,
     densify,
     edge_endpoints,
     goal_node,
+    metric_tensor,
     task_edges,
     time_parameterize,
     trajectory_metrics,
 )
+from uvms_jax.settings import SettingsError, from_mapping
 
-SCENARIO = Path(__file__).parents[2] / "configs" / "scenario" / "thesis_cage.yaml"
+CONFIGS = Path(__file__).parents[2] / "configs"
+SCENARIO = CONFIGS / "scenario" / "thesis_cage.yaml"
 ATOL = 1e-9  # float64 throughout; hand formulas vs code differ only by round-off
 
 
@@ -100,14 +109,52 @@ def test_task_graph_thesis_structure(scene):
         edge_endpoints(scene, {}, 1, 7)
 
 
-def test_cost_matrix_normalisation():
-    n = 3
-    mats = {k: np.full((n, n), np.nan) for k in METRIC_NAMES}
-    for k in METRIC_NAMES:
-        mats[k][0, 1], mats[k][1, 2] = 1.0, 3.0
-    C = cost_matrix(mats)
-    assert np.isnan(C[0, 0]) and np.isnan(C[2, 1])
-    # Four metrics: lower is better (0 at the min, 1 at the max); clearance inverted.
-    assert C[0, 1] == pytest.approx(1 / 5) and C[1, 2] == pytest.approx(4 / 5)
+def _edge(src, dst, values, success=True):
+    path = np.zeros((2, 6))
+    metrics = EdgeMetrics(*values) if success else None
+    return EdgeResult("RRTConnect", src, dst, PlanResult(success, path, values[0], 1, success), None, metrics, {})
+
+
+def test_metric_tensor_feeds_sched(scene):
+    """Rows land at (src, dst) in sched.METRICS order; failed and forbidden moves are NaN, and
+    sched's normalisation inverts security (larger clearance costs less)."""
+    n = goal_node(scene) + 1
+    results = [_edge(0, 1, (1.0, 2.0, 3.0, 0.1, 5.0)), _edge(1, 5, (3.0, 4.0, 5.0, 0.3, 7.0)),
+               _edge(5, 9, (9.0,) * 5, success=False)]
+    m = metric_tensor(scene, results)
+    assert m.shape == (len(sched.METRICS), n, n)
+    np.testing.assert_array_equal(m[:, 0, 1], [1.0, 2.0, 3.0, 0.1, 5.0])
+    assert np.isnan(m[:, 5, 9]).all() and np.isnan(m[:, 2, 2]).all()
+    assert EdgeMetrics._fields == sched.METRICS
+    z = sched.normalise_metrics(m)
+    security = sched.METRICS.index("security")
+    assert z[security, 0, 1] == 1.0 and z[security, 1, 5] == 0.0
+    assert z[0, 0, 1] == 0.0 and z[0, 1, 5] == 1.0
+
+
+def test_settings_mirror_the_config():
+    """configs/plan/default.yaml gives exactly the dataclass defaults; bad values are named."""
+    raw = yaml.safe_load((CONFIGS / "plan" / "default.yaml").read_text())
+    settings = from_mapping(PlanSettings, raw)
+    assert settings == PlanSettings()
+    assert settings.weight_vector() == tuple(raw["weights"][m] for m in sched.METRICS)
+    assert PlanSettings(weights={"security": 1.0}).weight_vector() == (0.0, 0.0, 0.0, 1.0, 0.0)
     with pytest.raises(ValueError, match="unknown metrics"):
-        cost_matrix(mats, {"speed": 1.0})
+        PlanSettings(weights={"speed": 1.0})
+    with pytest.raises(ValueError, match="unknown planners"):
+        PlanSettings(planners=("RRT*",))
+    with pytest.raises(ValueError, match="budget_s"):
+        PlanSettings(budget_s=0.0)
+    with pytest.raises(ValueError, match="n_seeds"):
+        IkSettings(n_seeds=0)
+    with pytest.raises(ValueError, match="sequence"):
+        PlanJsonSettings(sequence=(0,))
+    with pytest.raises(SettingsError, match="ik"):
+        from_mapping(PlanSettings, {"ik": {"seeds": 3}})
+
+
+def test_plan_does_not_import_hw():
+    """Layers: planning reaches the hardware only through the plan.json format."""
+    code = "import sys, uvms_jax.plan; print([m for m in sys.modules if m.startswith('uvms_jax.hw')])"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "[]"

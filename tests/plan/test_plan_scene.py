@@ -1,4 +1,4 @@
-"""Scene and collision checker: geometry from config, contexts, the thin-box case of NOTES.md."""
+"""Scene and collision checker: geometry from config, contexts, a capsule through a thin box."""
 
 import copy
 from pathlib import Path
@@ -7,6 +7,7 @@ import mujoco
 import numpy as np
 import pytest
 import yaml
+from scipy.spatial.transform import Rotation
 
 from uvms_jax import kin
 from uvms_jax.plan import CollisionChecker, Context, SceneSpec, build_scene, densify
@@ -27,13 +28,16 @@ def scene(raw):
     return build_scene(raw)
 
 
+def _rpy(R):
+    """URDF roll-pitch-yaw of ``R = Rz(yaw) Ry(pitch) Rx(roll)``: scipy's extrinsic x-y-z angles."""
+    return Rotation.from_matrix(R).as_euler("xyz")
+
+
 def _with_box(raw, name, T, size):
     """The scenario plus one box obstacle with pose ``T`` (4, 4) and full ``size``."""
-    from uvms_jax.kin._export import matrix_to_rpy
-
     spec = copy.deepcopy(raw)
     spec["tables"].append({"name": name, "pos": T[:3, 3].tolist(), "size": list(size),
-                           "rpy": matrix_to_rpy(T[:3, :3]).tolist()})
+                           "rpy": _rpy(T[:3, :3]).tolist()})
     return build_scene(spec)
 
 
@@ -89,8 +93,8 @@ def test_start_is_valid_and_limits(scene):
 
 
 def test_capsule_through_thin_box_is_a_collision(raw, scene):
-    """NOTES.md: a capsule whose axis runs through a thin box, both ends outside — MuJoCo's
-    primitive capsule–box test misses it; the scene's mesh boxes must not."""
+    """A capsule whose axis runs through a thin box, both ends outside — MuJoCo's primitive
+    capsule–box test misses it; the scene's mesh boxes must not."""
     q = np.asarray(scene.spec.start_q)
     d = mujoco.MjData(scene.model)
     d.qpos[:] = q

@@ -98,7 +98,7 @@ def test_infeasible_cost_matrices_raise():
 def test_problem_is_an_immutable_pytree():
     p = sched.thesis_problem()
     leaves, treedef = jax.tree_util.tree_flatten(p)
-    assert len(leaves) == 6
+    assert len(leaves) == 7
     q = jax.tree_util.tree_unflatten(treedef, leaves)
     assert q.objects == p.objects and q.start == p.start
     with pytest.raises(Exception):

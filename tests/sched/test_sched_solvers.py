@@ -11,7 +11,7 @@ from uvms_jax import sched
 from _sched_bruteforce import brute_force_optimum
 
 COST_ATOL = 1e-9  # float64 sums of the same moves in another order
-GRASP_HIT_RATE = 0.95  # issue 5 acceptance: GRASP(1000) finds the optimum this often
+GRASP_HIT_RATE = 0.95  # GRASP(1000) must find the brute-force optimum this often
 
 
 def _instances():
@@ -69,7 +69,7 @@ def test_optimal_solvers_match_brute_force(solved, solver):
 def test_grasp_finds_the_optimum(solved):
     hits = []
     for i, (p, best, _) in enumerate(solved):
-        s = sched.grasp(p, jax.random.key(i), iterations=1000)
+        s = sched.grasp(jax.random.key(i), p, iterations=1000)
         assert s.cost >= best - COST_ATOL
         assert s.cost == pytest.approx(sched.path_cost(p, s.path))
         hits.append(abs(s.cost - best) <= 1e-6)
@@ -79,7 +79,7 @@ def test_grasp_finds_the_optimum(solved):
 def test_every_solver_returns_a_valid_schedule(solved):
     key = jax.random.key(0)
     for p, _, _ in solved[:8]:
-        sols = [sched.greedy(p), sched.grasp(p, key), sched.astar(p), sched.exact(p)]
+        sols = [sched.greedy(p), sched.grasp(key, p), sched.astar(p), sched.exact(p)]
         ok = [s for s in sols if s.feasible]
         scores = sched.score(p, sched.as_padded_paths([s.path for s in ok], p.max_path_len))
         assert (np.asarray(scores.reason) == sched.Reason.OK).all()
@@ -88,9 +88,9 @@ def test_every_solver_returns_a_valid_schedule(solved):
 
 def test_grasp_is_reproducible_and_uses_the_key():
     p = sched.thesis_problem()
-    a = sched.grasp_batch(p, jax.random.key(1))
-    b = sched.grasp_batch(p, jax.random.key(1))
-    c = sched.grasp_batch(p, jax.random.key(2))
+    a = sched.grasp_batch(jax.random.key(1), p)
+    b = sched.grasp_batch(jax.random.key(1), p)
+    c = sched.grasp_batch(jax.random.key(2), p)
     np.testing.assert_array_equal(a.paths, b.paths)
     assert not np.array_equal(a.construction_costs, c.construction_costs)
     assert (np.asarray(a.costs) <= np.asarray(a.construction_costs) + 1e-6).all()
@@ -150,4 +150,36 @@ def test_exact_refuses_huge_instances(monkeypatch):
 )
 def test_grasp_rejects_bad_settings(kwargs, match):
     with pytest.raises(ValueError, match=match):
-        sched.grasp(sched.thesis_problem(), jax.random.key(0), **kwargs)
+        sched.grasp(jax.random.key(0), sched.thesis_problem(), **kwargs)
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [({"iterations": 0}, "at least one iteration"), ({"alphas": (0.5, 1.5)}, r"α values"),
+     ({"neighbourhood": 0}, "neighbourhood"), ({"rounds": -1}, "rounds")],
+)
+def test_grasp_batch_checks_its_input_like_grasp(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        sched.grasp_batch(jax.random.key(0), sched.thesis_problem(), **kwargs)
+
+
+def test_allowed_next_is_one_rule_for_arrays_and_bits():
+    """The array table (as the jitted code reads it) and its bit view give the same moves,
+    and the moves out of every state of a valid schedule are exactly the ones it may take."""
+    from uvms_jax.sched._rules import allowed_next, bit_nodes
+
+    p = sched.thesis_problem()
+    n1 = p.n_nodes + 1
+    for visited_bits in (0, 0b1_0000_0110, 0b1_1111_1110):
+        visited = np.array([visited_bits >> j & 1 for j in range(n1)], bool)
+        for placed in (0, 2, p.n_objects):
+            for pos in range(n1):
+                arr = allowed_next(p.next_ok, pos, visited, placed, p.n_objects)
+                bits = allowed_next(p.host.next, pos, visited_bits, placed, p.n_objects)
+                jitted = jax.jit(allowed_next, static_argnums=4)(p.next_ok, pos, visited, placed, p.n_objects)
+                assert list(np.flatnonzero(arr)) == list(bit_nodes(bits)) == list(np.flatnonzero(jitted))
+    # start only while objects remain, goal only once all are placed
+    assert not allowed_next(p.next_ok, 5, np.zeros(n1, bool), 0, 4)[p.goal]
+    assert allowed_next(p.next_ok, 5, np.zeros(n1, bool), 0, 4)[p.start]
+    assert allowed_next(p.next_ok, 5, np.zeros(n1, bool), 4, 4)[p.goal]
+    assert not allowed_next(p.next_ok, 5, np.zeros(n1, bool), 4, 4)[p.start]

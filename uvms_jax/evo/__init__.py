@@ -1,15 +1,25 @@
-"""Docking-pose optimisation (SPEC §3; Sotiropoulos, Aspragathos & Andritsos 2011).
+"""Docking-pose optimisation (docs/theory.md §3; Sotiropoulos, Aspragathos & Andritsos 2011).
 
 The docking problem (area manipulability M_a, eq. 1; distance D, eq. 3; fitness eq. 15 over
 the search set Wd, eq. 14), the paper's binary GA (Table 2) as pure ``init/ask/tell``
 functions with whole runs in one jitted loop, a chunked dense grid search and CMA-ES
-(evosax) as baselines, and the ``w_max`` map of eq. 16.
+(evosax) as baselines, and the ``w_max`` map of eq. 16. :func:`run_docking` is the whole
+docking experiment as one stage (settings in, :class:`DockingRun` out) and
+:func:`write_docking` writes its files and figures.
 """
 
 from uvms_jax.evo._binary import BinaryCodec
 from uvms_jax.evo._binary import make_codec
 from uvms_jax.evo._cmaes import CMAESResult
 from uvms_jax.evo._cmaes import run_cmaes
+from uvms_jax.evo._docking import CMAESRuns
+from uvms_jax.evo._docking import DockingRun
+from uvms_jax.evo._docking import GridOptimum
+from uvms_jax.evo._docking import PoseMap
+from uvms_jax.evo._docking import docking_problem
+from uvms_jax.evo._docking import make_ga
+from uvms_jax.evo._docking import pose_checks
+from uvms_jax.evo._docking import run_docking
 from uvms_jax.evo._ga import BinaryGA
 from uvms_jax.evo._ga import GAParams
 from uvms_jax.evo._ga import GAResult
@@ -28,8 +38,18 @@ from uvms_jax.evo._problem import evaluate
 from uvms_jax.evo._problem import evaluate_traced
 from uvms_jax.evo._problem import in_search_set
 from uvms_jax.evo._problem import make_docking_problem
+from uvms_jax.evo._settings import FIELDS
+from uvms_jax.evo._settings import CMAESSettings
+from uvms_jax.evo._settings import DockingSettings
+from uvms_jax.evo._settings import FieldBits
+from uvms_jax.evo._settings import GASettings
+from uvms_jax.evo._settings import GridSettings
+from uvms_jax.evo._settings import SceneSettings
+from uvms_jax.evo._settings import WmaxSettings
 from uvms_jax.evo._shard import ShardedProblem
 from uvms_jax.evo._shard import device_mesh
 from uvms_jax.evo._shard import shard_over_devices
 from uvms_jax.evo._wmax import WmaxMap
 from uvms_jax.evo._wmax import wmax_map
+from uvms_jax.evo._write import docking_summary
+from uvms_jax.evo._write import write_docking

@@ -1,4 +1,4 @@
-"""The docking problem of Sotiropoulos, Aspragathos & Andritsos (2011), SPEC §3.
+"""The docking problem of Sotiropoulos, Aspragathos & Andritsos (2011), docs/theory.md §3.
 
 Frames and units (written once): the global frame G sits at the centre of the block's top
 face (z = 0 on the face), metres and radians. A candidate docking pose is the arm base pose
@@ -18,7 +18,6 @@ from flax import struct
 from jax import Array
 
 from uvms_jax import indices
-from uvms_jax.indices._area import approach_down
 from uvms_jax.kin import Chain, with_dtype
 
 Pose = Array  # (..., 4) [x, y, z, ψ] of the arm base in G [m, rad]
@@ -66,7 +65,7 @@ class DockingProblem:
       p_bp: ``(3,)`` vehicle base point in B [m].
       a, b: weights of eq. 8 (M_a in m³-like units of w, D in m).
       tool_yaw: demanded tool yaw in G [rad] when ``yaw_mode == "fixed"``.
-      yaw_mode: ``"heading"`` (tool z along the candidate's ψ, SPEC default) or ``"fixed"``
+      yaw_mode: ``"heading"`` (tool z along the candidate's ψ, the default of docs/theory.md §3) or ``"fixed"``
         (static).
     """
 
@@ -116,8 +115,9 @@ def make_docking_problem(
     arm_lengths: tuple[float, float, float],
     dtype=None,
 ) -> DockingProblem:
-    """Build the docking problem from plain values (SPEC §3). The paper's scene with the
-    SPEC defaults is ``configs/docking/scene/paper.yaml``: ``make_docking_problem(**scene)``.
+    """Build the docking problem from plain values (docs/theory.md §3). The paper's scene is
+    ``configs/docking/scene/paper.yaml`` (:class:`~uvms_jax.evo.SceneSettings` holds the
+    same defaults): ``make_docking_problem(**scene)``.
 
     Args:
       block_size: block extents along x, y, z [m]; G is the centre of the top face.
@@ -183,7 +183,7 @@ def in_search_set(problem: DockingProblem, pose: Pose) -> Array:
 def tool_rotation(problem: DockingProblem, psi: Array) -> Array:
     """Demanded ``R_G_tool (..., 3, 3)`` at the control points: approach down, yaw per mode."""
     yaw = psi if problem.yaw_mode == "heading" else jnp.broadcast_to(problem.tool_yaw, psi.shape)
-    return approach_down(yaw)
+    return indices.approach_down(yaw)
 
 
 class DockingEval(NamedTuple):
@@ -202,22 +202,14 @@ class DockingEval(NamedTuple):
     feasible: Array
 
 
-def _targets(problem: DockingProblem, pose: Array) -> Array:
-    """Tool targets ``T_B_tool (..., k, 4, 4)`` at the control points for base poses ``(..., 4)``."""
-    R_gb, p_gb = yaw_matrix(pose[..., 3]), pose[..., :3]
-    R_bg = jnp.swapaxes(R_gb, -1, -2)[..., None, :, :]  # (..., 1, 3, 3)
-    R_gt = tool_rotation(problem, pose[..., 3])[..., None, :, :]
-    R_bt = jnp.einsum("...ij,...jk->...ik", R_bg, R_gt)  # (..., 1, 3, 3)
-    p_bt = jnp.einsum("...ij,...j->...i", R_bg, problem.p_control - p_gb[..., None, :])  # (..., k, 3)
-    R_bt = jnp.broadcast_to(R_bt, p_bt.shape + (3,))
-    top = jnp.concatenate([R_bt, p_bt[..., None]], axis=-1)
-    bottom = jnp.broadcast_to(jnp.array([0.0, 0.0, 0.0, 1.0], dtype=pose.dtype), p_bt.shape[:-1] + (1, 4))
-    return jnp.concatenate([top, bottom], axis=-2)
+def _area_inputs(problem: DockingProblem, pose: Array) -> tuple[Array, Array]:
+    """Arguments of :func:`uvms_jax.indices.area_manipulability` for base poses ``(..., 4)``:
+    ``T_G_B (..., 4, 4)`` and the demanded tool orientation ``(..., 1, 3, 3)`` in G."""
+    return base_transform(pose), tool_rotation(problem, pose[..., 3])[..., None, :, :]
 
 
-def _terms(problem: DockingProblem, pose: Array, w_max: Array) -> DockingEval:
-    """Objective terms from the best-branch manipulability ``w_max (..., k)`` at the points."""
-    M_a = jnp.min(w_max, axis=-1)  # eq. 1: min over control points of max over branches
+def _terms(problem: DockingProblem, pose: Array, M_a: Array) -> DockingEval:
+    """Objective terms of base poses ``(..., 4)`` from their area manipulability ``M_a (...)``."""
     D = jnp.linalg.norm(docking_point(pose, problem.p_bp) - problem.p_i, axis=-1)  # eq. 3
     feasible = in_search_set(problem, pose)  # eq. 14
     fitness = jnp.where(feasible, problem.a * M_a - problem.b * D, 0.0)  # eq. 8, 15
@@ -227,33 +219,15 @@ def _terms(problem: DockingProblem, pose: Array, w_max: Array) -> DockingEval:
 def evaluate_traced(problem: DockingProblem, pose: Array) -> DockingEval:
     """:func:`evaluate` for use inside ``jit``/``vmap``/loops (no input checks, no padding).
 
-    One :func:`uvms_jax.indices.max_branch_manipulability` call covers individuals ×
-    control points × IK branches.
+    One :func:`uvms_jax.indices.area_manipulability` call covers individuals × control
+    points × IK branches.
     """
-    return _terms(problem, pose, indices.max_branch_manipulability(problem.chain, _targets(problem, pose)))
+    T_world_base, R_world_tool = _area_inputs(problem, pose)
+    M_a = indices.area_manipulability(problem.chain, T_world_base, problem.p_control, R_world_tool)
+    return _terms(problem, pose, M_a)
 
 
-# Eager calls pad the flat batch of IK targets to a bucket, so that populations, grids and
-# maps of different sizes reuse a few compiled kernels (compiling the IK is the slow part).
-MIN_TARGET_BUCKET = 512
-
-
-def bucket_size(n: int) -> int:
-    """Padded length for ``n`` eager IK targets: the next power of two, at least 512."""
-    return max(MIN_TARGET_BUCKET, 1 << max(0, int(n) - 1).bit_length())
-
-
-def max_branch_w_bucketed(chain: Chain, T_base_tool: Array) -> Array:
-    """Eager :func:`uvms_jax.indices.max_branch_manipulability` of ``(..., 4, 4)`` targets,
-    computed on a padded flat batch (padding repeats the first target)."""
-    flat = T_base_tool.reshape((-1, 4, 4))
-    n = flat.shape[0]
-    pad = bucket_size(n) - n
-    padded = jnp.concatenate([flat, jnp.broadcast_to(flat[:1], (pad, 4, 4))], axis=0)
-    return indices.max_branch_manipulability(chain, padded)[:n].reshape(T_base_tool.shape[:-2])
-
-
-_targets_jit = jax.jit(_targets)
+_area_inputs_jit = jax.jit(_area_inputs)
 _terms_jit = jax.jit(_terms)
 
 
@@ -278,6 +252,7 @@ def evaluate(problem: DockingProblem, pose) -> DockingEval:
     if bool(jnp.isnan(pose).any()):
         raise ValueError("pose contains NaN")
     flat = pose.reshape((-1, 4))
-    w_max = max_branch_w_bucketed(problem.chain, _targets_jit(problem, flat))
-    out = _terms_jit(problem, flat, w_max)
+    T_world_base, R_world_tool = _area_inputs_jit(problem, flat)
+    M_a = indices.area_manipulability(problem.chain, T_world_base, problem.p_control, R_world_tool)
+    out = _terms_jit(problem, flat, M_a)
     return jax.tree_util.tree_map(lambda x: x.reshape(pose.shape[:-1]), out)

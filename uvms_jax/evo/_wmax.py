@@ -7,7 +7,8 @@ from typing import NamedTuple
 import jax.numpy as jnp
 import numpy as np
 
-from uvms_jax.evo._problem import DockingProblem, _targets_jit, max_branch_w_bucketed
+from uvms_jax import indices
+from uvms_jax.evo._problem import DockingProblem, _area_inputs_jit
 
 
 class WmaxMap(NamedTuple):
@@ -42,7 +43,8 @@ def wmax_map(problem: DockingProblem, pose, n_per_side: int = 41) -> WmaxMap:
     y = c[1] + np.linspace(-h, h, n_per_side)
     gx, gy = np.meshgrid(x, y, indexing="ij")
     points = np.stack([gx.ravel(), gy.ravel(), np.full(gx.size, c[2])], axis=-1)
-    grid_problem = problem.replace(p_control=jnp.asarray(points, dtype=pose.dtype))
-    w = np.asarray(max_branch_w_bucketed(problem.chain, _targets_jit(grid_problem, pose)))
+    T_world_base, R_world_tool = _area_inputs_jit(problem, pose)
+    T_base_tool = indices.tool_targets(T_world_base, jnp.asarray(points, dtype=pose.dtype), R_world_tool)
+    w = np.asarray(indices.max_branch_manipulability(problem.chain, T_base_tool))
     w = w.reshape(n_per_side, n_per_side)
     return WmaxMap(x=x, y=y, w_max=w, zero_fraction=float(np.mean(w <= 0.0)))

@@ -1,12 +1,13 @@
-"""Hardware runner for the Reach Bravo 7 (SPEC §6, thesis 4.6).
+"""Hardware runner for the Reach Bravo 7 (docs/theory.md §6, thesis 4.6).
 
 Layers, from the wire up (impurity — sockets, ports, clocks, files — stays in the transports,
-the simulator server, the executor loop and the CLI):
+the simulator server, the executor loop, :func:`write_run` and the CLI):
 
 * protocol: :func:`encode_packet`, :class:`PacketReader` (streaming, never raises),
   :func:`crc8`, float helpers, typed ids :class:`PacketID`, :class:`Mode`,
   :class:`DeviceID`, :class:`HardwareStatus`;
-* joints: :data:`BRAVO7` limits (G…B rad, jaws A mm) and :class:`LimitError`;
+* joints: :data:`BRAVO7` limits (G…B rad, jaws A mm; from :mod:`uvms_jax.bravo7`) and
+  :class:`LimitError`;
 * transports: :class:`UdpTransport`, :class:`SerialTransport` (timeouts; :class:`LinkError`);
 * client: :class:`Bravo7` — modes, position/velocity demands behind a send guard that raises
   on anything outside the limits, requests, heartbeat, hardware status and limits;
@@ -14,8 +15,11 @@ the simulator server, the executor loop and the CLI):
   :func:`check_plan` (the dry run);
 * execution: :func:`synchronised_move`, :class:`Executor` (reached-gate, hold on any fault),
   :class:`RunLog` (CSV + PNG);
-* simulation: :class:`SimArm` (MuJoCo), :class:`SimServer` (UDP), :class:`LoopbackTransport`
-  on a :class:`VirtualClock`, with fault injection (:class:`SimConfig`);
+* simulation: :class:`SimArm` (MuJoCo, :func:`sim_spec`), :class:`SimServer` (UDP),
+  :class:`LoopbackTransport` on a :class:`VirtualClock`, with fault injection
+  (:class:`SimConfig`);
+* the stage: :func:`run_plan` (dry run, then execution on a simulated or real link) →
+  :class:`HwRun`; :func:`write_run` writes ``run.csv``, ``run.png`` and ``result.json``;
 * entry point: ``uvms-hw`` (:mod:`uvms_jax.hw.cli`).
 """
 
@@ -28,6 +32,12 @@ from uvms_jax.planfile import load_plan
 from uvms_jax.planfile import parse_plan
 from uvms_jax.planfile import plan_to_dict
 
+from ._check import PlanSummary
+from ._check import check_plan
+from ._client import Bravo7
+from ._client import JointState
+from ._codec import CRC8_CONFIG
+from ._codec import MAX_PACKET_LEN
 from ._codec import Packet
 from ._codec import PacketReader
 from ._codec import ReaderStats
@@ -37,6 +47,14 @@ from ._codec import decode_floats
 from ._codec import decode_frame
 from ._codec import encode_floats
 from ._codec import encode_packet
+from ._config import HwConfig
+from ._config import HwSettings
+from ._config import SimConfig
+from ._config import config_from_mapping
+from ._executor import AbortRun
+from ._executor import Executor
+from ._executor import GateRecord
+from ._executor import RunResult
 from ._ids import BROADCAST
 from ._ids import DeviceID
 from ._ids import HardwareStatus
@@ -47,34 +65,83 @@ from ._joints import BRAVO7
 from ._joints import JAWS
 from ._joints import JointSpec
 from ._joints import LimitError
-from .client import Bravo7
-from .client import JointState
-from .config import HwConfig
-from .config import SimConfig
-from .config import config_from_mapping
-from .executor import AbortRun
-from .executor import Executor
-from .executor import GateRecord
-from .executor import RunResult
-from ._check import PlanSummary
-from ._check import check_plan
-from .runlog import RunLog
-from .sim import LoopbackTransport
-from .sim import SimArm
-from .sim import SimLink
-from .sim import SimServer
-from .sim import VirtualClock
-from .transport import LinkError
-from .transport import SerialTransport
-from .transport import Transport
-from .transport import UdpTransport
+from ._run import SIM_LINKS
+from ._run import HwRun
+from ._run import SimCounts
+from ._run import run_plan
+from ._run import run_report
+from ._run import write_run
+from ._runlog import RunLog
+from ._sim import LoopbackTransport
+from ._sim import SimArm
+from ._sim import SimLink
+from ._sim import SimServer
+from ._sim import VirtualClock
+from ._sim import sim_spec
+from ._transport import LinkError
+from ._transport import SerialTransport
+from ._transport import Transport
+from ._transport import UdpTransport
+from ._transport import parse_host_port
 
 __all__ = [
-    "ARM_JOINTS", "BRAVO7", "BROADCAST", "JAWS", "AbortRun", "Bravo7", "DeviceID", "Executor",
-    "GateRecord", "HardwareStatus", "HwConfig", "JointSpec", "JointState", "LimitError", "LinkError",
-    "LoopbackTransport", "Mode", "Move", "Packet", "PacketID", "PacketReader", "Plan", "PlanError",
-    "PlanSummary", "ReaderStats", "RunLog", "RunResult", "Segment", "SerialTransport", "SimArm",
-    "SimConfig", "SimLink", "SimServer", "Transport", "UdpTransport", "VirtualClock", "check_plan",
-    "config_from_mapping", "crc8", "decode_float", "decode_floats", "decode_frame", "encode_floats",
-    "encode_packet", "load_plan", "parse_plan", "plan_to_dict", "synchronised_move",
+    "ARM_JOINTS",
+    "BRAVO7",
+    "BROADCAST",
+    "CRC8_CONFIG",
+    "JAWS",
+    "MAX_PACKET_LEN",
+    "SIM_LINKS",
+    "AbortRun",
+    "Bravo7",
+    "DeviceID",
+    "Executor",
+    "GateRecord",
+    "HardwareStatus",
+    "HwConfig",
+    "HwRun",
+    "HwSettings",
+    "JointSpec",
+    "JointState",
+    "LimitError",
+    "LinkError",
+    "LoopbackTransport",
+    "Mode",
+    "Move",
+    "Packet",
+    "PacketID",
+    "PacketReader",
+    "Plan",
+    "PlanError",
+    "PlanSummary",
+    "ReaderStats",
+    "RunLog",
+    "RunResult",
+    "Segment",
+    "SerialTransport",
+    "SimArm",
+    "SimConfig",
+    "SimCounts",
+    "SimLink",
+    "SimServer",
+    "Transport",
+    "UdpTransport",
+    "VirtualClock",
+    "check_plan",
+    "config_from_mapping",
+    "crc8",
+    "decode_float",
+    "decode_floats",
+    "decode_frame",
+    "encode_floats",
+    "encode_packet",
+    "load_plan",
+    "parse_host_port",
+    "parse_plan",
+    "plan_to_dict",
+    "run_plan",
+    "run_report",
+    "sim_spec",
+    "synchronised_move",
+    "write_run",
 ]

@@ -16,7 +16,7 @@ from uvms_jax.motion import synchronised_move
 from uvms_jax.planfile import Plan, PlanError
 
 from ._joints import ARM_JOINTS, JAWS, JointSpec
-from .config import HwConfig
+from ._config import HwConfig
 
 __all__ = ["PlanSummary", "check_plan"]
 

@@ -1,4 +1,4 @@
-"""BPL packet codec: CRC-8, COBS framing, a streaming reader and float helpers (SPEC §6).
+"""BPL packet codec: CRC-8, COBS framing, a streaming reader and float helpers (docs/theory.md §6).
 
 A packet on the wire is ``COBS(data ‖ packet_id ‖ device_id ‖ length ‖ crc8) ‖ 0x00`` with
 ``length = len(data) + 4`` and ``crc8`` computed over everything before it. Floats are
@@ -51,7 +51,7 @@ _MAX_FRAME = MAX_PACKET_LEN + 2  # COBS adds at most one byte per 254, plus the 
 
 
 def crc8(payload: bytes) -> int:
-    """CRC-8 of ``payload`` as used by BPL (SPEC §6); ``crc8(b"123456789") == 0x7B``."""
+    """CRC-8 of ``payload`` as used by BPL (docs/theory.md §6); ``crc8(b"123456789") == 0x7B``."""
     r = 0
     table = _CRC8_TABLE
     for b in payload:

@@ -1,4 +1,4 @@
-"""Typed identifiers of the Reach/Blueprint Lab "BPL" protocol (SPEC §6).
+"""Typed identifiers of the Reach/Blueprint Lab "BPL" protocol (docs/theory.md §6).
 
 Packet ids, device modes, Bravo 7 device ids and hardware-status bits, as integer enums so
 that they print by name and compare equal to the bytes on the wire.
@@ -7,6 +7,8 @@ that they print by name and compare equal to the bytes on the wire.
 from __future__ import annotations
 
 import enum
+
+from uvms_jax import bravo7
 
 __all__ = ["PacketID", "Mode", "DeviceID", "HardwareStatus", "BROADCAST"]
 
@@ -52,17 +54,10 @@ class Mode(enum.IntEnum):
     ZERO_VELOCITY = 0x15
 
 
-class DeviceID(enum.IntEnum):
-    """Bravo 7 device ids: A = jaws (0x01) … G = base rotate (0x07); 0xFF = broadcast."""
-
-    A = 0x01
-    B = 0x02
-    C = 0x03
-    D = 0x04
-    E = 0x05
-    F = 0x06
-    G = 0x07
-    BROADCAST = 0xFF
+# The Bravo 7's device ids come from its one home, uvms_jax.bravo7; 0xFF addresses every device.
+DeviceID = enum.IntEnum("DeviceID", [(j.name, j.device_id) for j in sorted(bravo7.JOINTS, key=lambda j: j.device_id)]
+                        + [("BROADCAST", 0xFF)], module=__name__)
+DeviceID.__doc__ = "Bravo 7 device ids: A = jaws (0x01) … G = base rotate (0x07); 0xFF = broadcast."
 
 
 BROADCAST = DeviceID.BROADCAST

@@ -1,7 +1,8 @@
-"""Bravo 7 joint table for the hardware path (SPEC §1.3) and the send-side limit guard.
+"""Bravo 7 joint table for the hardware path and the send-side limit guard.
 
-Joint order everywhere in ``uvms_jax.hw`` (plans, executor, logs): G, F, E, D, C, B — device
-ids 0x07 … 0x02 — then the jaws A (0x01). Revolute joints in rad and rad/s, the jaws in mm and
+The limits are those of :mod:`uvms_jax.bravo7` (docs/theory.md §1.3), in wire units: joint
+order everywhere in ``uvms_jax.hw`` (plans, executor, logs) is G, F, E, D, C, B — device ids
+0x07 … 0x02 — then the jaws A (0x01). Revolute joints in rad and rad/s, the jaws in mm and
 mm/s, exactly as they travel on the wire.
 """
 
@@ -11,6 +12,8 @@ import dataclasses
 import math
 import struct
 
+from uvms_jax import bravo7
+
 from ._ids import DeviceID
 
 __all__ = [
@@ -19,6 +22,7 @@ __all__ = [
     "JAWS",
     "JointSpec",
     "LimitError",
+    "MM_PER_M",
     "check_position",
     "check_velocity",
     "spec_for_device",
@@ -40,7 +44,7 @@ class JointSpec:
       lower, upper: position limits [rad, or mm for the jaws].
       max_velocity: speed limit [rad/s, or mm/s for the jaws].
       max_acceleration: acceleration limit used by the executor [rad/s², or mm/s²]
-        (**default**: SPEC gives none).
+        (**default**: the URDF gives none).
       unit: "rad" or "mm".
     """
 
@@ -67,21 +71,23 @@ class JointSpec:
         return to_f32(self.lower) <= to_f32(value) <= to_f32(self.upper)
 
 
-_V = 0.5  # URDF velocity limit [rad/s] (SPEC §1.3)
-_A = 1.0  # acceleration limit [rad/s²] (default)
+MM_PER_M = 1e3  # the jaws travel in metres in the URDF, in millimetres on the wire
 
-# SPEC §1.3 table, in plan order G, F, E, D, C, B.
-ARM_JOINTS: tuple[JointSpec, ...] = (
-    JointSpec("G", DeviceID.G, 0.0, 6.3, _V, _A),
-    JointSpec("F", DeviceID.F, 0.0, 3.5, _V, _A),
-    JointSpec("E", DeviceID.E, 0.0, 3.5, _V, _A),
-    JointSpec("D", DeviceID.D, 0.0, 6.3, _V, _A),
-    JointSpec("C", DeviceID.C, 0.0, 3.5, _V, _A),
-    JointSpec("B", DeviceID.B, 0.0, 6.3, _V, _A),
-)
-# URDF jaws travel 0 … 0.035 m = 0 … 35 mm on the wire; speed and acceleration are defaults.
-JAWS = JointSpec("A", DeviceID.A, 0.0, 35.0, 20.0, 40.0, unit="mm")
+# The executor's acceleration limit of the revolute joints [rad/s²]: the URDF gives none (default).
+_ACCELERATION = 1.0
+# The jaws' speed and acceleration on the wire [mm/s, mm/s²]: defaults of the runner, slower
+# than the URDF's speed limit.
+_JAWS_VELOCITY_MM = 20.0
+_JAWS_ACCELERATION_MM = 40.0
+
+# In plan order G, F, E, D, C, B.
+ARM_JOINTS: tuple[JointSpec, ...] = tuple(
+    JointSpec(j.name, DeviceID(j.device_id), j.lower, j.upper, j.velocity, _ACCELERATION)
+    for j in bravo7.ARM_JOINTS)
+JAWS = JointSpec(bravo7.JAWS.name, DeviceID(bravo7.JAWS.device_id), bravo7.JAWS.lower * MM_PER_M,
+                 bravo7.JAWS.upper * MM_PER_M, _JAWS_VELOCITY_MM, _JAWS_ACCELERATION_MM, unit="mm")
 BRAVO7: tuple[JointSpec, ...] = ARM_JOINTS + (JAWS,)
+
 
 def to_f32(value: float) -> float:
     """``value`` rounded to float32, as it travels on the wire (inf past float32 range)."""

@@ -8,8 +8,9 @@
 Exit status: 0 plan completed (or dry run passed); 1 run aborted safely (arm told to hold);
 2 plan refused or bad arguments. Outputs in ``--out`` (default ``outputs/hw/<time>``):
 ``run.csv`` (commanded vs measured), ``run.png`` and ``result.json``.
-Defaults come from :class:`~uvms_jax.hw.config.HwConfig` / ``SimConfig`` (or ``--config``,
-a YAML file shaped like ``configs/hw/default.yaml``); flags override them.
+Defaults come from :class:`~uvms_jax.hw.HwConfig` / ``SimConfig`` (or ``--config``, a YAML
+file shaped like ``configs/hw/default.yaml``); flags override them. ``run`` is
+:func:`~uvms_jax.hw.run_plan` + :func:`~uvms_jax.hw.write_run`, as in the pipeline.
 """
 
 from __future__ import annotations
@@ -17,23 +18,21 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
-import math
 import sys
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from uvms_jax.planfile import PlanError, load_plan
 
 from ._check import check_plan
-from ._joints import BRAVO7
-from .client import Bravo7
-from .config import HwConfig, SimConfig, config_from_mapping
-from .executor import Executor, RunResult
-from .runlog import RunLog
-from .transport import LinkError, SerialTransport, UdpTransport, parse_host_port
+from ._client import Bravo7
+from ._config import HwConfig, SimConfig, config_from_mapping
+from ._run import run_plan, write_run
+from ._sim import SimArm, SimServer
+from ._transport import LinkError, SerialTransport, Transport, UdpTransport, parse_host_port
 
-__all__ = ["main"]
+__all__ = ["build_parser", "main"]
 
 EXIT_OK, EXIT_ABORTED, EXIT_REFUSED = 0, 1, 2
 
@@ -110,20 +109,24 @@ def _configs(args: argparse.Namespace) -> tuple[HwConfig, SimConfig]:
     return hw, dataclasses.replace(sim, **sim_over)
 
 
-def _result_json(result: RunResult, out: Path) -> dict:
-    return {
-        "ok": result.ok,
-        "reason": result.reason,
-        "gates": len(result.gates),
-        "max_gate_error_rad": None if math.isnan(result.max_gate_error_rad) else result.max_gate_error_rad,
-        "max_gate_error_mm": None if math.isnan(result.max_gate_error_mm) else result.max_gate_error_mm,
-        "grips": result.grips,
-        "duration_s": round(result.duration_s, 3),
-        "abort_after_s": None if math.isnan(result.abort_after_s) else round(result.abort_after_s, 3),
-        "ticks": result.ticks,
-        "link_timeouts": result.link_timeouts,
-        "out": str(out),
-    }
+def _progress_bar(n_segments: int) -> tuple[Callable[[int, int, str], None], Callable[[], None]]:
+    """A tqdm bar on stderr (hidden when not a terminal): ``(progress callback, close)``."""
+    from tqdm import tqdm
+
+    bar = tqdm(total=n_segments, unit="seg", file=sys.stderr, leave=False, disable=None)
+
+    def progress(i: int, n: int, name: str) -> None:
+        bar.n = i
+        bar.set_description(name[:30])
+        bar.refresh()
+
+    return progress, bar.close
+
+
+def _real_transport(args: argparse.Namespace) -> Transport:
+    if args.udp:
+        return UdpTransport(*parse_host_port(args.udp))
+    return SerialTransport(args.serial)
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -146,55 +149,28 @@ def _run(args: argparse.Namespace) -> int:
         print("uvms-hw: fault injection flags need --sim", file=sys.stderr)
         return EXIT_REFUSED
     out = args.out or Path("outputs/hw") / time.strftime("%Y-%m-%d_%H-%M-%S")
-    server = None
+    client = None
+    if not args.sim:
+        try:
+            client = Bravo7(_real_transport(args), request_timeout=hw.request_timeout_s)
+        except (LinkError, ValueError) as e:
+            print(f"uvms-hw: {e}", file=sys.stderr)
+            return EXIT_REFUSED
+    progress, close_bar = _progress_bar(len(plan.segments))
     try:
-        if args.sim:
-            from .sim import SimArm, SimServer
-
-            start = next(s.q[0] for s in plan.segments if s.q)
-            server = SimServer(SimArm(sim_cfg, list(start) + [0.0])).start()
-            transport = UdpTransport(*server.address)
-        elif args.udp:
-            transport = UdpTransport(*parse_host_port(args.udp))
-        else:
-            transport = SerialTransport(args.serial)
-    except (LinkError, ValueError) as e:
-        print(f"uvms-hw: {e}", file=sys.stderr)
-        return EXIT_REFUSED
-    log = RunLog(tuple(j.name for j in BRAVO7))
-    try:
-        from tqdm import tqdm
-
-        bar = tqdm(total=len(plan.segments), unit="seg", file=sys.stderr, leave=False, disable=None)
-
-        def progress(i: int, n: int, name: str) -> None:
-            bar.n = i
-            bar.set_description(name[:30])
-            bar.refresh()
-
-        with Bravo7(transport, request_timeout=hw.request_timeout_s) as client:
-            result = Executor(client, hw, log=log, progress=progress).run(plan)
-        bar.close()
+        run = run_plan(plan, link="udp" if client is None else client, config=hw, sim=sim_cfg, progress=progress)
     finally:
-        if server is not None:
-            server.stop()
-    log.write_csv(out / "run.csv")
-    if not args.no_plot and log.rows:
-        log.plot(out / "run.png")
-    report = _result_json(result, out)
-    if server is not None:
-        report["sim"] = {"limit_violations": server.arm.limit_violations, "dropped": server.link.dropped,
-                         "corrupted": server.link.corrupted}
-    (out / "result.json").write_text(json.dumps(report, indent=2))
+        close_bar()
+        if client is not None:
+            client.close()
+    report = write_run(run, out, plot=not args.no_plot, plan_path=args.plan)
     print(json.dumps(report))
-    if not result.ok:
-        print(f"uvms-hw: aborted, arm told to hold: {result.reason}", file=sys.stderr)
-    return EXIT_OK if result.ok else EXIT_ABORTED
+    if not run.ok:
+        print(f"uvms-hw: aborted, arm told to hold: {run.result.reason}", file=sys.stderr)
+    return EXIT_OK if run.ok else EXIT_ABORTED
 
 
 def _serve(args: argparse.Namespace) -> int:
-    from .sim import SimArm, SimServer
-
     _, sim_cfg = _configs(args)
     with SimServer(SimArm(sim_cfg), host=args.host, port=args.port) as server:
         print(f"simulated Bravo 7 on {server.address[0]}:{server.address[1]} (Ctrl-C to stop)", file=sys.stderr)

@@ -1,9 +1,11 @@
-"""Dexterity indices (SPEC §2): manipulability w, KCI, normalised Jacobian, area
+"""Dexterity indices (docs/theory.md §2): manipulability w, KCI, normalised Jacobian, area
 manipulability M_a (docking paper eq. 1) and static joint torques."""
 
+from uvms_jax.indices._area import approach_down
 from uvms_jax.indices._area import area_manipulability
 from uvms_jax.indices._area import control_points
 from uvms_jax.indices._area import max_branch_manipulability
+from uvms_jax.indices._area import tool_targets
 from uvms_jax.indices._indices import joint_torques
 from uvms_jax.indices._indices import kci
 from uvms_jax.indices._indices import kci_of

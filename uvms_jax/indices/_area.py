@@ -1,19 +1,19 @@
-"""Area manipulability measure M_a (docking paper eq. 1, SPEC §2)."""
+"""Area manipulability measure M_a (docking paper eq. 1, docs/theory.md §2).
+
+``M_a = min over control points of (max over valid IK branches of w)``: the arm base must
+reach every point of a task area, and the worst point with its best branch scores it. The
+inner ``max`` alone is the ``w_max`` of the docking paper's eq. 16.
+"""
 
 from __future__ import annotations
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
-from uvms_jax.indices._indices import manipulability_from_rows
-import jax
-
-from uvms_jax.kin import Chain, with_dtype
-from uvms_jax.kin._fk import _kinematics_one
-from uvms_jax.kin._scalar import geometry, jacobian_rows
-from uvms_jax.kin._ik import _check_pose, elbow_branches, reaches
-from uvms_jax.kin._lie import homogeneous, matmul
+from uvms_jax import kin
+from uvms_jax.indices._indices import manipulability_of
 
 
 def control_points(center, size: float, n_per_side: int = 2) -> np.ndarray:
@@ -34,7 +34,8 @@ def control_points(center, size: float, n_per_side: int = 2) -> np.ndarray:
 
 def approach_down(yaw) -> Array:
     """Tool orientation ``R_world_tool (..., 3, 3)`` with the approach axis (tool x) along
-    −z of the world and the tool z axis along the heading ``yaw`` [rad] (SPEC §1.1 default)."""
+    −z of the world and the tool z axis along the heading ``yaw (...)`` [rad]
+    (the docking arm's default, docs/theory.md §1.1)."""
     yaw = jnp.asarray(yaw)
     c, s = jnp.cos(yaw), jnp.sin(yaw)
     zero, one = jnp.zeros_like(yaw), jnp.ones_like(yaw)
@@ -44,56 +45,103 @@ def approach_down(yaw) -> Array:
     return jnp.stack([x, y, z], axis=-1)
 
 
-def _max_branch_w_one(chain: Chain, T: Array) -> Array:
-    branches = elbow_branches(chain, T)  # (8, 6)
-    T_reached = jax.vmap(_kinematics_one, in_axes=(None, 0))(chain, branches.q).T_base_tool
-    valid = branches.valid & reaches(T, T_reached)
-    w = manipulability_from_rows(jacobian_rows(geometry(chain), [branches.q[:, i] for i in range(6)]))
-    return jnp.max(jnp.where(valid, w, 0.0), axis=-1)
-
-
 @jax.jit
-def _max_branch_w(chain: Chain, T: Array) -> Array:
-    chain = with_dtype(chain, T.dtype)
-    flat = T.reshape((-1, 4, 4))
-    return jax.vmap(_max_branch_w_one, in_axes=(None, 0))(chain, flat).reshape(T.shape[:-2])
+def _tool_targets(T_world_base: Array, p_world_points: Array, R_world_tool: Array) -> Array:
+    R_bw = jnp.swapaxes(T_world_base[..., :3, :3], -1, -2)[..., None, :, :]  # (..., 1, 3, 3)
+    p_wb = T_world_base[..., :3, 3]
+    hi = jax.lax.Precision.HIGHEST  # full float32 products on GPUs too (TF32 breaks the IK check)
+    R_bt = jnp.einsum("...ij,...jk->...ik", R_bw, R_world_tool, precision=hi)  # (..., 1 or k, 3, 3)
+    p_bt = jnp.einsum("...ij,...j->...i", R_bw, p_world_points - p_wb[..., None, :], precision=hi)  # (..., k, 3)
+    R_bt = jnp.broadcast_to(R_bt, p_bt.shape + (3,))
+    top = jnp.concatenate([R_bt, p_bt[..., None]], axis=-1)
+    bottom = jnp.broadcast_to(jnp.array([0.0, 0.0, 0.0, 1.0], dtype=p_bt.dtype), p_bt.shape[:-1] + (1, 4))
+    return jnp.concatenate([top, bottom], axis=-2)
 
 
-def max_branch_manipulability(chain: Chain, T_base_tool) -> Array:
-    """``max`` of w over the valid closed-form IK branches of each target, 0 where none is valid.
-
-    Args:
-      chain: 6R elbow arm (see :func:`uvms_jax.kin.elbow_ik`).
-      T_base_tool: ``(..., 4, 4)`` target tool poses in the arm base frame.
-
-    Returns:
-      ``(...)`` best manipulability (of the 6×6 geometric Jacobian).
-    """
-    return _max_branch_w(chain, _check_pose(T_base_tool))
-
-
-def area_manipulability(chain: Chain, T_world_base, p_world_points, R_world_tool) -> Array:
-    """``M_a = min over control points of (max over IK branches of w)`` (docking paper eq. 1).
+def tool_targets(T_world_base, p_world_points, R_world_tool) -> Array:
+    """Tool targets ``T_base_tool (..., k, 4, 4)`` at the control points, in the arm base frame.
 
     Args:
-      chain: 6R elbow arm.
-      T_world_base: ``(..., 4, 4)`` arm base poses (e.g. a GA population).
-      p_world_points: ``(k, 3)`` control points [m].
-      R_world_tool: demanded tool orientation, ``(3, 3)``, ``(k, 3, 3)`` per point, or
-        ``(..., k, 3, 3)`` per base pose and point (e.g. a yaw that follows each candidate).
-
-    Returns:
-      ``(...)`` M_a; 0 for a base pose from which some control point has no valid branch.
+      T_world_base: ``(..., 4, 4)`` arm base poses in the world [m].
+      p_world_points: ``(k, 3)`` control points in the world [m].
+      R_world_tool: demanded tool orientation in the world: ``(3, 3)`` for all, ``(k, 3, 3)``
+        per point, or ``(..., 1, 3, 3)`` / ``(..., k, 3, 3)`` per base pose (and point).
     """
     T_world_base = jnp.asarray(T_world_base)
+    if T_world_base.ndim < 2 or T_world_base.shape[-2:] != (4, 4):
+        raise ValueError(f"T_world_base must have shape (..., 4, 4), got {T_world_base.shape}")
     points = jnp.asarray(p_world_points, dtype=T_world_base.dtype)
     if points.ndim != 2 or points.shape[-1] != 3:
         raise ValueError(f"p_world_points must have shape (k, 3), got {points.shape}")
     R = jnp.asarray(R_world_tool, dtype=T_world_base.dtype)
-    R = jnp.broadcast_to(R, jnp.broadcast_shapes(R.shape, points.shape[:1] + (3, 3)))
-    T_world_tool = homogeneous(R, jnp.broadcast_to(points, R.shape[:-1]))  # (..., k, 4, 4)
-    R_wb, p_wb = T_world_base[..., :3, :3], T_world_base[..., :3, 3]
-    R_bw = jnp.swapaxes(R_wb, -1, -2)
-    T_base_world = homogeneous(R_bw, -jnp.sum(R_bw * p_wb[..., None, :], axis=-1))
-    T_base_tool = matmul(T_base_world[..., None, :, :], T_world_tool)  # (..., k, 4, 4)
-    return jnp.min(max_branch_manipulability(chain, T_base_tool), axis=-1)
+    if R.ndim < 2 or R.shape[-2:] != (3, 3) or (R.ndim > 2 and R.shape[-3] not in (1, points.shape[0])):
+        raise ValueError(f"R_world_tool must have shape (3, 3), (k, 3, 3) or (..., k, 3, 3), got {R.shape}")
+    return _tool_targets(T_world_base, points, R)
+
+
+def _max_branch_w_one(chain: kin.Chain, T: Array) -> Array:
+    # The raw branches (finite everywhere) feed the Jacobian, so w does not wait for the FK
+    # check and its gradient stays finite; the check only masks the result.
+    branches = kin.elbow_branches(chain, T)  # (8, 6)
+    T_reached = kin.fk_of(chain, branches.q)
+    valid = branches.valid & kin.reaches(T, T_reached)
+    return jnp.max(jnp.where(valid, manipulability_of(chain, branches.q), 0.0), axis=-1)
+
+
+@jax.jit
+def _max_branch_w(chain: kin.Chain, T: Array) -> Array:
+    chain = kin.with_dtype(chain, T.dtype)
+    flat = T.reshape((-1, 4, 4))
+    return jax.vmap(_max_branch_w_one, in_axes=(None, 0))(chain, flat).reshape(T.shape[:-2])
+
+
+# Eager calls pad the flat batch of targets to a bucket, so that populations, grids and maps
+# of different sizes reuse a few compiled kernels (compiling the IK is the slow part).
+MIN_TARGET_BUCKET = 512
+
+
+def bucket_size(n: int) -> int:
+    """Padded length for ``n`` eager IK targets: the next power of two, at least 512."""
+    return max(MIN_TARGET_BUCKET, 1 << max(0, int(n) - 1).bit_length())
+
+
+def max_branch_manipulability(chain: kin.Chain, T_base_tool) -> Array:
+    """``max`` of w over the valid closed-form IK branches of each target, 0 where none is
+    valid (``w_max`` of the docking paper's eq. 16).
+
+    Args:
+      chain: 6R elbow arm (see :func:`uvms_jax.kin.elbow_ik`).
+      T_base_tool: ``(..., 4, 4)`` target tool poses in the arm base frame [m].
+
+    Returns:
+      ``(...)`` best manipulability (of the 6×6 geometric Jacobian).
+    """
+    T = jnp.asarray(T_base_tool)
+    if T.ndim < 2 or T.shape[-2:] != (4, 4):
+        raise ValueError(f"target pose must have shape (..., 4, 4), got {T.shape}")
+    if not jnp.issubdtype(T.dtype, jnp.floating):
+        T = T.astype(jnp.float32)
+    if isinstance(T, jax.core.Tracer):
+        return _max_branch_w(chain, T)
+    if bool(jnp.isnan(T).any()):
+        raise ValueError("target pose contains NaN")
+    flat = T.reshape((-1, 4, 4))
+    n = flat.shape[0]
+    padded = jnp.concatenate([flat, jnp.broadcast_to(flat[:1], (bucket_size(n) - n, 4, 4))], axis=0)
+    return _max_branch_w(chain, padded)[:n].reshape(T.shape[:-2])
+
+
+def area_manipulability(chain: kin.Chain, T_world_base, p_world_points, R_world_tool) -> Array:
+    """``M_a = min over control points of (max over IK branches of w)`` (docking paper eq. 1).
+
+    Args:
+      chain: 6R elbow arm.
+      T_world_base: ``(..., 4, 4)`` arm base poses in the world (e.g. a GA population) [m].
+      p_world_points: ``(k, 3)`` control points in the world [m].
+      R_world_tool: demanded tool orientation, see :func:`tool_targets`.
+
+    Returns:
+      ``(...)`` M_a; 0 for a base pose from which some control point has no valid branch.
+    """
+    w_max = max_branch_manipulability(chain, tool_targets(T_world_base, p_world_points, R_world_tool))
+    return jnp.min(w_max, axis=-1)

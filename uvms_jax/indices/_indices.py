@@ -1,4 +1,4 @@
-"""Dexterity indices of a Jacobian (SPEC §2): manipulability, KCI, normalised Jacobian, torques.
+"""Dexterity indices of a Jacobian (docs/theory.md §2): manipulability, KCI, normalised Jacobian, torques.
 
 All functions take ``J: (..., m, n)`` with ``m ≤ n`` and broadcast over leading axes.
 """
@@ -11,9 +11,7 @@ import jax
 import jax.numpy as jnp
 from jax import Array
 
-from uvms_jax.kin import Chain
-from uvms_jax.kin._chain import check_joint_array
-from uvms_jax.kin._scalar import compiled_for, jacobian_rows
+from uvms_jax.kin import Chain, check_joint_array, jacobian_rows
 
 
 
@@ -36,7 +34,7 @@ def _safe_sqrt(x: Array) -> Array:
 
 
 def _gram_rows(rows) -> list:
-    """``J Jᵀ`` of a Jacobian given as m rows of n scalars (see ``kin._scalar``)."""
+    """``J Jᵀ`` of a Jacobian given as m rows of n scalars (see :func:`uvms_jax.kin.jacobian_rows`)."""
     m, n = len(rows), len(rows[0])
     return [[sum(rows[a][k] * rows[b][k] for k in range(n)) for b in range(m)] for a in range(m)]
 
@@ -82,26 +80,26 @@ def manipulability(J) -> Array:
     return _manipulability(_check_jacobian(J))
 
 
-def _w_kernel(geom, q):
-    return manipulability_from_rows(jacobian_rows(geom, [q[..., i] for i in range(q.shape[-1])]))
+@jax.jit
+def _manipulability_of(chain: Chain, q: Array) -> Array:
+    return manipulability_from_rows(jacobian_rows(chain, q))
 
 
-def _kci_kernel(geom, q):
-    return kci_from_rows(jacobian_rows(geom, [q[..., i] for i in range(q.shape[-1])]))
+@jax.jit
+def _kci_of(chain: Chain, q: Array) -> Array:
+    return kci_from_rows(jacobian_rows(chain, q))
 
 
 def manipulability_of(chain: Chain, q) -> Array:
     """w of ``chain`` at ``q: (..., n)`` — equal to ``manipulability(jacobian(chain, q))``,
-    computed in one fused kernel specialised to the chain (the fast path for populations,
-    grids and datasets)."""
-    q = check_joint_array(chain, q)
-    return compiled_for(chain, _w_kernel)(q)
+    computed in one fused kernel that never stores J (the fast path for populations, grids
+    and datasets)."""
+    return _manipulability_of(chain, check_joint_array(chain, q))
 
 
 def kci_of(chain: Chain, q) -> Array:
     """KCI of ``chain`` at ``q: (..., n)``, equal to ``kci(jacobian(chain, q))``, fused."""
-    q = check_joint_array(chain, q)
-    return compiled_for(chain, _kci_kernel)(q)
+    return _kci_of(chain, check_joint_array(chain, q))
 
 
 JACOBI_SWEEPS = 8  # cyclic sweeps; quadratic convergence reaches float64 round-off on 6×6 by ~6
@@ -168,7 +166,7 @@ def singular_values(J) -> Array:
 
 
 def normalized_jacobian(J, joint_speed_max, task_speed_max) -> Array:
-    """``J_n = U J G⁻¹`` with ``G = diag(1/θ̇_max)`` and ``U = diag(1/ṙ_max)`` (SPEC §2).
+    """``J_n = U J G⁻¹`` with ``G = diag(1/θ̇_max)`` and ``U = diag(1/ṙ_max)`` (docs/theory.md §2).
 
     Args:
       J: ``(..., m, n)``.

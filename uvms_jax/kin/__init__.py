@@ -17,6 +17,7 @@ Conventions (written once, used everywhere):
 from uvms_jax.kin._chain import Chain
 from uvms_jax.kin._chain import UrdfJoint
 from uvms_jax.kin._chain import chain_from_urdf_joints
+from uvms_jax.kin._chain import check_joint_array
 from uvms_jax.kin._chain import make_chain
 from uvms_jax.kin._chain import prismatic_twist
 from uvms_jax.kin._chain import revolute_twist
@@ -27,12 +28,16 @@ from uvms_jax.kin._export import bravo7_urdf
 from uvms_jax.kin._export import to_urdf
 from uvms_jax.kin._fk import Kinematics
 from uvms_jax.kin._fk import fk
+from uvms_jax.kin._fk import fk_of
 from uvms_jax.kin._fk import jacobian
+from uvms_jax.kin._fk import jacobian_rows
 from uvms_jax.kin._fk import kinematics
 from uvms_jax.kin._fk import spatial_jacobian
 from uvms_jax.kin._ik import IKSolutions
+from uvms_jax.kin._ik import elbow_branches
 from uvms_jax.kin._ik import elbow_ik
 from uvms_jax.kin._ik import numeric_ik
+from uvms_jax.kin._ik import reaches
 from uvms_jax.kin._ik import wrap_into_limits
 from uvms_jax.kin._models import BRAVO7_JOINTS
 from uvms_jax.kin._models import bravo7

@@ -6,6 +6,7 @@ from typing import Sequence
 
 import numpy as np
 
+from uvms_jax import bravo7 as _b7
 from uvms_jax.kin._chain import REVOLUTE, Chain, UrdfJoint
 from uvms_jax.kin._lie import rpy_matrix
 from uvms_jax.kin._models import BRAVO7_JAWS, BRAVO7_JOINTS, BRAVO7_TOOL_XYZ
@@ -74,7 +75,7 @@ def to_urdf(chain: Chain) -> str:
 
 
 def bravo7_urdf() -> str:
-    """URDF of the Reach Bravo 7 written from its joint table (SPEC §1.3), jaws included.
+    """URDF of the Reach Bravo 7 written from :mod:`uvms_jax.bravo7` (docs/theory.md §1.3), jaws included.
 
     The tool link ``tool`` is the jaws base frame; the jaws joint ``A`` hangs from it.
     """
@@ -82,10 +83,11 @@ def bravo7_urdf() -> str:
         '  <link name="jaws"/>\n'
         f'  <joint name="{BRAVO7_JAWS.name}" type="prismatic">\n    <parent link="tool"/>\n    <child link="jaws"/>\n'
         f'    <origin xyz="{_fmt(BRAVO7_JAWS.xyz)}" rpy="0 0 0"/>\n    <axis xyz="{_fmt(BRAVO7_JAWS.axis)}"/>\n'
-        f'    <limit lower="{BRAVO7_JAWS.lower}" upper="{BRAVO7_JAWS.upper}" velocity="0.1" effort="10"/>\n'
+        f'    <limit lower="{BRAVO7_JAWS.lower}" upper="{BRAVO7_JAWS.upper}" '
+        f'velocity="{BRAVO7_JAWS.velocity:.10g}" effort="{BRAVO7_JAWS.effort:.10g}"/>\n'
         "  </joint>"
     )
-    return _urdf_text("bravo7", BRAVO7_JOINTS, BRAVO7_TOOL_XYZ, (0.0, 0.0, 0.0), extra=jaws)
+    return _urdf_text(_b7.NAME, BRAVO7_JOINTS, BRAVO7_TOOL_XYZ, _b7.TOOL_RPY, extra=jaws)
 
 
 def _quat_wxyz(R: np.ndarray) -> np.ndarray:
@@ -109,7 +111,7 @@ def _quat_wxyz(R: np.ndarray) -> np.ndarray:
 
 
 def bravo7_mjcf_body(
-    pos=(0.0, 0.0, 0.0), quat=(1.0, 0.0, 0.0, 0.0), link_radius: float = 0.04, jaws_open: float = 0.03
+    pos=(0.0, 0.0, 0.0), quat=(1.0, 0.0, 0.0, 0.0), link_radius: float = _b7.LINK_RADIUS, jaws_open: float = 0.03
 ) -> str:
     """MJCF ``<body>`` tree of the Bravo 7 (joints G…B, hinge, radians) with primitive shapes.
 
@@ -119,7 +121,7 @@ def bravo7_mjcf_body(
 
     Args:
       pos, quat: mounting pose of the base link in the parent frame [m], (w, x, y, z).
-      link_radius: capsule radius [m] (SPEC: links ≈ 0.09 m in diameter).
+      link_radius: capsule radius [m] (default: the Bravo 7's, links ≈ 0.09 m in diameter).
       jaws_open: gap between the jaw fingers [m].
     """
     r = link_radius
@@ -151,7 +153,7 @@ def bravo7_mjcf_body(
     return "\n".join(lines)
 
 
-def bravo7_mjcf(link_radius: float = 0.04, jaws_open: float = 0.03) -> str:
+def bravo7_mjcf(link_radius: float = _b7.LINK_RADIUS, jaws_open: float = 0.03) -> str:
     """A complete MJCF model of the Bravo 7 alone, base link at the world origin."""
     body = bravo7_mjcf_body(link_radius=link_radius, jaws_open=jaws_open)
     return (

@@ -1,4 +1,10 @@
-"""Forward kinematics and Jacobians of a POE chain (Murray, Li & Sastry, ch. 3)."""
+"""Forward kinematics and Jacobians of a POE chain (Murray, Li & Sastry, ch. 3).
+
+Every function here is the one kernel of ``_scalar`` (:func:`~uvms_jax.kin._scalar.forward`)
+under ``jax.jit`` with the chain as a traced argument: one compiled program per topology,
+batch shape and dtype serves every geometry (a sweep over link lengths does not recompile),
+and gradients flow to the geometry as well as to ``q``.
+"""
 
 from __future__ import annotations
 
@@ -8,9 +14,9 @@ import jax
 import jax.numpy as jnp
 from jax import Array
 
-from uvms_jax.kin._chain import Chain, check_joint_array, with_dtype
-from uvms_jax.kin._scalar import Geometry, compiled_for, jacobian_rows, stack_rows
-from uvms_jax.kin._lie import adjoint_twist, exp_twist, homogeneous, matmul, matvec
+from uvms_jax.kin import _scalar
+from uvms_jax.kin._chain import Chain, check_joint_array
+from uvms_jax.kin._lie import cross3, stack_scalars
 
 
 class Kinematics(NamedTuple):
@@ -27,55 +33,64 @@ class Kinematics(NamedTuple):
     twists: Array
 
 
-def _kinematics_one(chain: Chain, q: Array) -> Kinematics:
-    """Single-configuration kernel, ``q: (n,)``; the joint loop is unrolled (n is static)."""
-    R = jnp.eye(3, dtype=q.dtype)
-    p = jnp.zeros(3, dtype=q.dtype)
-    frames, twists = [], []
-    for i in range(chain.n_joints):
-        twists.append(adjoint_twist(R, p, chain.twists[i]))
-        Ri, pi = exp_twist(chain.twists[i], q[i])
-        R, p = matmul(R, Ri), matvec(R, pi) + p
-        frames.append(matmul(homogeneous(R, p), chain.T_base_joint0[i]))
+def _last(R: list, p: list) -> tuple[list, list]:
+    return [[x[-1] for x in row] for row in R], [x[-1] for x in p]
+
+
+def _per_joint(T0: Array, batch_ndim: int) -> tuple[list, list]:
+    """``(n, 4, 4)`` → rotation rows and translation of ``(n, 1, …, 1)`` scalars."""
+    T0 = T0.reshape(T0.shape[:1] + (1,) * batch_ndim + T0.shape[1:])
+    return [[T0[..., i, j] for j in range(3)] for i in range(3)], [T0[..., i, 3] for i in range(3)]
+
+
+def kinematics_of(chain: Chain, q: Array) -> Kinematics:
+    """:func:`kinematics` without input checks or ``jit``, for use inside other kernels."""
+    batch, dtype = q.shape[:-1], q.dtype
+    kpass = _scalar.forward_scanned(chain, q)
+    (R, p), (v, w) = kpass.products[0], kpass.columns[0]  # scalars (n, *batch)
+    T_tool = _scalar.pose_array(*_scalar.compose_pose(*_last(R, p), chain.T_base_tool0), batch, dtype)
+    T0 = jnp.asarray(chain.T_base_joint0, dtype)
+    frames = _scalar.pose_array(*_scalar.compose(R, p, *_per_joint(T0, len(batch))), (chain.n_joints,) + batch, dtype)
+    twists = stack_scalars([v + w], (chain.n_joints,) + batch, dtype)[..., 0, :]
     return Kinematics(
-        T_base_tool=matmul(homogeneous(R, p), chain.T_base_tool0),
-        T_base_joint=jnp.stack(frames),
-        twists=jnp.stack(twists),
+        T_base_tool=T_tool, T_base_joint=jnp.moveaxis(frames, 0, -3), twists=jnp.moveaxis(twists, 0, -2)
     )
 
 
-def _batched(kernel):
-    """Apply a one-configuration kernel to ``q`` of any leading shape, in the dtype of ``q``."""
-
-    def run(chain: Chain, q: Array):
-        chain = with_dtype(chain, q.dtype)
-        flat = q.reshape((-1, q.shape[-1]))
-        out = jax.vmap(kernel, in_axes=(None, 0))(chain, flat)
-        return jax.tree_util.tree_map(lambda x: x.reshape(q.shape[:-1] + x.shape[1:]), out)
-
-    return jax.jit(run)
+def fk_of(chain: Chain, q: Array) -> Array:
+    """:func:`fk` without input checks or ``jit``, for use inside other kernels."""
+    R, p = _scalar.forward_scanned(chain, q).products[0]
+    return _scalar.pose_array(*_scalar.compose_pose(*_last(R, p), chain.T_base_tool0), q.shape[:-1], q.dtype)
 
 
-def _jacobian_kernel(geom: Geometry, q: Array) -> Array:
-    rows = jacobian_rows(geom, [q[..., i] for i in range(q.shape[-1])])
-    return stack_rows(rows, q.shape[:-1], q.dtype)
+def pose_and_jacobian_of(chain: Chain, q: Array) -> tuple[Array, Array]:
+    """``(T_base_tool (..., 4, 4), J (..., 6, n))`` from one pass; no checks, no ``jit``."""
+    batch, dtype = q.shape[:-1], q.dtype
+    kpass = _scalar.forward_scanned(chain, q)
+    (R, p), (v, w) = kpass.products[0], kpass.columns[0]
+    R_tool, p_tool = _scalar.compose_pose(*_last(R, p), chain.T_base_tool0)
+    linear = [a + b for a, b in zip(v, cross3(w, p_tool))]  # (n, *batch) each
+    J = jnp.moveaxis(jnp.stack(linear + w), (0, 1), (-2, -1))
+    return _scalar.pose_array(R_tool, p_tool, batch, dtype), J
 
 
-_kinematics = _batched(_kinematics_one)
+_kinematics = jax.jit(kinematics_of)
+_fk = jax.jit(fk_of)
+_jacobian = jax.jit(lambda chain, q: pose_and_jacobian_of(chain, q)[1])
 
 
 def kinematics(chain: Chain, q) -> Kinematics:
     """Tool pose, joint-frame poses and spatial joint twists for ``q: (..., n)``.
 
-    Works for any leading batch shape, under ``jit``/``vmap``, in float32 or float64
-    (the dtype of ``q``).
+    Works for any leading batch shape, under ``jit``/``vmap``/``grad`` (in ``q`` and in the
+    chain's geometry), in float32 or float64 (the dtype of ``q``).
     """
     return _kinematics(chain, check_joint_array(chain, q))
 
 
 def fk(chain: Chain, q) -> Array:
     """Tool pose ``T_base_tool: (..., 4, 4)`` [m] for joint values ``q: (..., n)`` [rad | m]."""
-    return kinematics(chain, q).T_base_tool
+    return _fk(chain, check_joint_array(chain, q))
 
 
 def jacobian(chain: Chain, q) -> Array:
@@ -84,8 +99,7 @@ def jacobian(chain: Chain, q) -> Array:
     Rows 0–2: linear velocity of the tool point [m/s per unit joint rate]; rows 3–5: angular
     velocity [rad/s per unit joint rate]; both expressed in the base frame.
     """
-    q = check_joint_array(chain, q)
-    return compiled_for(chain, _jacobian_kernel)(q)
+    return _jacobian(chain, check_joint_array(chain, q))
 
 
 def spatial_jacobian(chain: Chain, q) -> Array:
@@ -94,3 +108,13 @@ def spatial_jacobian(chain: Chain, q) -> Array:
     The linear rows are the velocity of the body point momentarily at the base origin.
     """
     return jnp.swapaxes(kinematics(chain, q).twists, -1, -2)
+
+
+def jacobian_rows(chain: Chain, q: Array) -> list:
+    """Geometric Jacobian at ``q: (..., n)`` as 6 rows × n arrays of shape ``(...)``.
+
+    For kernels that consume J entry by entry (e.g. the dexterity indices): call it inside
+    your own ``jax.jit`` with the chain as an argument; the entries fuse with whatever uses
+    them, and J is never stored. No input checks (see :func:`check_joint_array`).
+    """
+    return _scalar.jacobian_rows(chain, q)

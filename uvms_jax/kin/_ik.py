@@ -9,8 +9,7 @@ import jax.numpy as jnp
 from jax import Array
 
 from uvms_jax.kin._chain import Chain, with_dtype
-from uvms_jax.kin._fk import _kinematics_one
-from uvms_jax.kin._scalar import geometry, jacobian_rows, stack_rows
+from uvms_jax.kin._fk import fk_of, pose_and_jacobian_of
 from uvms_jax.kin._lie import exp_twist, matmul, matvec, pose_error
 from uvms_jax.kin import _paden_kahan as pk
 
@@ -119,7 +118,7 @@ def elbow_branches(chain: Chain, T: Array) -> IKSolutions:
 
 def _elbow_ik_one(chain: Chain, T: Array) -> IKSolutions:
     branches = elbow_branches(chain, T)
-    T_reached = jax.vmap(lambda qi: _kinematics_one(chain, qi).T_base_tool)(branches.q)
+    T_reached = fk_of(chain, branches.q)
     valid = branches.valid & reaches(T, T_reached)
     return IKSolutions(q=jnp.where(valid[:, None], branches.q, jnp.nan), valid=valid)
 
@@ -157,8 +156,8 @@ def _dls_one(chain: Chain, T: Array, q0: Array, iterations: int, damping: float)
     eye = jnp.eye(6, dtype=q0.dtype)
 
     def step(_, q):
-        J = stack_rows(jacobian_rows(geometry(chain), list(q)), (), q.dtype)
-        e = pose_error(T, _kinematics_one(chain, q).T_base_tool)
+        T_q, J = pose_and_jacobian_of(chain, q)
+        e = pose_error(T, T_q)
         # Error-scaled damping: robust far from the target and near singularities, and
         # Gauss–Newton-fast as the error vanishes (Levenberg–Marquardt flavour of DLS).
         lam2 = damping**2 * (jnp.sum(e * e) + 1e-6)
@@ -168,10 +167,10 @@ def _dls_one(chain: Chain, T: Array, q0: Array, iterations: int, damping: float)
         return jnp.clip(q + dq, chain.lower, chain.upper)
 
     q = jax.lax.fori_loop(0, iterations, step, q0)
-    return q, pose_error(T, _kinematics_one(chain, q).T_base_tool)
+    return q, pose_error(T, fk_of(chain, q))
 
 
-def _numeric_ik_one(chain, T, key, n_seeds, iterations, damping):
+def _numeric_ik_one(key, chain, T, n_seeds, iterations, damping):
     u = jax.random.uniform(key, (n_seeds, chain.n_joints), dtype=T.dtype)
     seeds = chain.lower + u * (chain.upper - chain.lower)
     q, err = jax.vmap(_dls_one, in_axes=(None, None, 0, None, None))(chain, T, seeds, iterations, damping)
@@ -182,20 +181,20 @@ def _numeric_ik_one(chain, T, key, n_seeds, iterations, damping):
 
 
 @jax.jit(static_argnames=("n_seeds", "iterations"))
-def _numeric_ik(chain, T, key, n_seeds, iterations, damping):
+def _numeric_ik(key, chain, T, n_seeds, iterations, damping):
     chain = with_dtype(chain, T.dtype)
     flat = T.reshape((-1, 4, 4))
     keys = jax.random.split(key, flat.shape[0])
-    out = jax.vmap(_numeric_ik_one, in_axes=(None, 0, 0, None, None, None))(
-        chain, flat, keys, n_seeds, iterations, damping
+    out = jax.vmap(_numeric_ik_one, in_axes=(0, None, 0, None, None, None))(
+        keys, chain, flat, n_seeds, iterations, damping
     )
     return jax.tree_util.tree_map(lambda x: x.reshape(T.shape[:-2] + x.shape[1:]), out)
 
 
 def numeric_ik(
+    key: Array,
     chain: Chain,
     T_base_tool,
-    key: Array,
     n_seeds: int = 32,
     iterations: int = 100,
     damping: float = 1.0,
@@ -204,9 +203,9 @@ def numeric_ik(
     """Numerical IK of any chain: damped least squares from many random seeds in parallel.
 
     Args:
+      key: PRNG key for the seeds (uniform inside the joint limits).
       chain: the robot.
       T_base_tool: ``(..., 4, 4)`` target tool poses [m].
-      key: PRNG key for the seeds (uniform inside the joint limits).
       n_seeds: seeds per target, all run in parallel.
       iterations: DLS iterations per seed.
       damping: DLS damping factor; λ² = damping² (‖e‖² + 10⁻⁶).
@@ -219,7 +218,7 @@ def numeric_ik(
       not valid.
     """
     T = _check_pose(T_base_tool)
-    best_q, best_ok, q, ok = _numeric_ik(chain, T, key, n_seeds, iterations, damping)
+    best_q, best_ok, q, ok = _numeric_ik(key, chain, T, n_seeds, iterations, damping)
     if all_seeds:
         return IKSolutions(q=jnp.where(ok[..., None], q, jnp.nan), valid=ok)
     return IKSolutions(q=jnp.where(best_ok[..., None], best_q, jnp.nan), valid=best_ok)

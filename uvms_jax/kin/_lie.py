@@ -40,8 +40,50 @@ def skew(w: Array) -> Array:
     )
 
 
+def cross3(a, b) -> list:
+    """``a × b`` of two 3-sequences of scalars (floats or arrays of one batch shape)."""
+    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+
+
+def exp_scalars(twist, theta) -> tuple[list, list]:
+    """``exp(ξ̂ θ)`` on scalars: the one exponential of the package (Murray eq. 2.14, 2.36).
+
+    With ``W = ω̂`` and ``W² = ωωᵀ − |ω|² I``:
+    ``R = I + sin θ W + (1 − cos θ) W²``,
+    ``p = θ v + (1 − cos θ)(ω × v) + (θ − sin θ)(ω(ω·v) − |ω|² v)``.
+    One formula covers both joint kinds: with ω = 0 it reduces to ``R = I, p = v θ``.
+
+    Args:
+      twist: 6 scalars ``[v, ω]`` (Python floats or arrays), ``|ω| = 1`` (revolute) or
+        ``ω = 0, |v| = 1`` (prismatic).
+      theta: joint value [rad or m], an array of the batch shape.
+
+    Returns:
+      ``R`` as 3 rows of 3 scalars and ``p`` as 3 scalars, each broadcast over ``theta``.
+    """
+    v, w = twist[:3], twist[3:]
+    s, c = jnp.sin(theta), jnp.cos(theta)
+    C = 1.0 - c
+    ww = w[0] * w[0] + w[1] * w[1] + w[2] * w[2]
+    W = [[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]]
+    R = [[(1.0 - C * ww if i == j else 0.0) + s * W[i][j] + C * w[i] * w[j] for j in range(3)] for i in range(3)]
+    wv = w[0] * v[0] + w[1] * v[1] + w[2] * v[2]
+    wxv = cross3(w, v)
+    p = [theta * v[i] + C * wxv[i] + (theta - s) * (w[i] * wv - ww * v[i]) for i in range(3)]
+    return R, p
+
+
+def stack_scalars(rows, batch_shape: tuple, dtype) -> Array:
+    """Nested lists of scalars (``rows[a][b]``) → array ``(*batch_shape, len(rows), len(rows[0]))``."""
+    full = lambda x: jnp.broadcast_to(jnp.asarray(x, dtype), batch_shape)  # noqa: E731
+    # Stack along new leading axes (contiguous copies of whole batch arrays), then move
+    # them last: far cheaper to compile and run than interleaving scalars along a minor axis.
+    stacked = jnp.stack([jnp.stack([full(x) for x in row]) for row in rows])
+    return jnp.moveaxis(stacked, (0, 1), (-2, -1))
+
+
 def exp_twist(twist: Array, theta: Array) -> tuple[Array, Array]:
-    """Exponential ``exp(ξ̂ θ)`` of a unit twist, as rotation and translation.
+    """Exponential ``exp(ξ̂ θ)`` of a unit twist, as rotation and translation arrays.
 
     Args:
       twist: ``(..., 6)`` ``[v, ω]`` with ``|ω| = 1`` (revolute) or ``ω = 0, |v| = 1``
@@ -49,18 +91,13 @@ def exp_twist(twist: Array, theta: Array) -> tuple[Array, Array]:
       theta: ``(...)`` joint value [rad or m].
 
     Returns:
-      ``R (..., 3, 3)``, ``p (..., 3)``. One formula covers both joint kinds: with ω = 0
-      it reduces to ``R = I, p = v θ`` (Murray et al. eq. 2.36).
+      ``R (..., 3, 3)``, ``p (..., 3)`` (see :func:`exp_scalars`).
     """
-    v, w = twist[..., :3], twist[..., 3:]
-    s, c = jnp.sin(theta)[..., None, None], jnp.cos(theta)[..., None, None]
-    W = skew(w)
-    W2 = matmul(W, W)
-    eye = jnp.eye(3, dtype=W.dtype)
-    R = eye + s * W + (1.0 - c) * W2
-    th = theta[..., None, None]
-    V = eye * th + (1.0 - c) * W + (th - s) * W2
-    return R, matvec(V, v)
+    twist, theta = jnp.asarray(twist), jnp.asarray(theta)
+    dtype = jnp.result_type(twist, theta)
+    shape = jnp.broadcast_shapes(twist.shape[:-1], theta.shape)
+    R, p = exp_scalars([twist[..., k] for k in range(6)], theta)
+    return stack_scalars(R, shape, dtype), stack_scalars([p], shape, dtype)[..., 0, :]
 
 
 def adjoint_twist(R: Array, p: Array, twist: Array) -> Array:
@@ -90,28 +127,41 @@ def rpy_matrix(rpy) -> Array:
     return matmul(matmul(axis_rot(2, rpy[..., 2]), axis_rot(1, rpy[..., 1])), axis_rot(0, rpy[..., 0]))
 
 
+# Below this |vee|² = (2 sin θ)², rotation_log uses the series of θ / (2 sin θ); the remainder
+# θ⁴ is far below the round-off of either float type there.
+_SMALL_VEE_SQ = 4e-12  # sin θ < 1e-6
+
+
 def rotation_log(R: Array) -> Array:
-    """Axis-angle vector ``(..., 3)`` of a rotation ``(..., 3, 3)``; safe at θ = 0 and near π."""
+    """Axis-angle vector ``(..., 3)`` of a rotation ``(..., 3, 3)``; safe at θ = 0 and near π.
+
+    Value and gradient are finite everywhere: every branch that a ``where`` discards is fed a
+    harmless input (double ``where``), so its derivative cannot turn into NaN.
+    """
     cos = jnp.clip((jnp.trace(R, axis1=-2, axis2=-1) - 1.0) / 2.0, -1.0, 1.0)
     vee = jnp.stack(
         [R[..., 2, 1] - R[..., 1, 2], R[..., 0, 2] - R[..., 2, 0], R[..., 1, 0] - R[..., 0, 1]], axis=-1
     )
-    sin = 0.5 * jnp.linalg.norm(vee, axis=-1)
+    # vee = 2 sin θ · axis. Near θ = 0, θ / (2 sin θ) = 1/2 + θ²/12 + O(θ⁴) with θ² ≈ |vee|²/4;
+    # the norm's derivative is infinite at 0, so it only ever sees a nonzero input.
+    vee_sq = jnp.sum(vee * vee, axis=-1)
+    nonzero = vee_sq > 0.0
+    sin = jnp.where(nonzero, 0.5 * jnp.sqrt(jnp.where(nonzero, vee_sq, 1.0)), 0.0)
     theta = jnp.arctan2(sin, cos)
-    # Near θ = 0 the factor θ / (2 sin θ) → 1/2; the double where keeps gradients finite.
-    small = sin < 1e-6
-    safe_sin = jnp.where(small, 1.0, sin)
-    scale = jnp.where(small, 0.5, theta / (2.0 * safe_sin))
+    small = vee_sq < _SMALL_VEE_SQ
+    scale = jnp.where(small, 0.5 + vee_sq / 48.0, theta / (2.0 * jnp.where(small, 1.0, sin)))
     axis_angle = scale[..., None] * vee
     # Near θ = π the antisymmetric part vanishes; recover the axis from the symmetric part.
     # There (R + Rᵀ)/2 − cos·I = (1 − cos) k kᵀ: take its largest column as the axis k.
-    B = (R + jnp.swapaxes(R, -1, -2)) / 2.0 - cos[..., None, None] * jnp.eye(3, dtype=R.dtype)
+    near_pi = cos < -0.99
+    eye = jnp.eye(3, dtype=R.dtype)
+    B = (R + jnp.swapaxes(R, -1, -2)) / 2.0 - cos[..., None, None] * eye
+    B = jnp.where(near_pi[..., None, None], B, eye)  # elsewhere B may be 0: keep its norm's gradient finite
     pick = jax.nn.one_hot(jnp.argmax(jnp.diagonal(B, axis1=-2, axis2=-1), axis=-1), 3, dtype=R.dtype)
     col = matvec(B, pick)
-    axis_pi = col / jnp.maximum(jnp.linalg.norm(col, axis=-1, keepdims=True), 1e-12)
+    axis_pi = col / jnp.linalg.norm(col, axis=-1, keepdims=True)  # |col| ≥ (1 − cos)/3 > 0.6 here
     # Sign of the axis: agree with the (small) antisymmetric part where it still carries one.
     axis_pi = axis_pi * jnp.where(jnp.sum(axis_pi * vee, axis=-1, keepdims=True) < 0, -1.0, 1.0)
-    near_pi = cos < -0.99
     return jnp.where(near_pi[..., None], theta[..., None] * axis_pi, axis_angle)
 
 

@@ -1,9 +1,10 @@
-"""The three robots of the project (SPEC §1): docking arm, 12-DOF UVMS, Reach Bravo 7."""
+"""The three robots of the project (docs/theory.md §1): docking arm, 12-DOF UVMS, Reach Bravo 7."""
 
 from __future__ import annotations
 
 import numpy as np
 
+from uvms_jax import bravo7 as _b7
 from uvms_jax.kin._chain import (
     PRISMATIC,
     REVOLUTE,
@@ -15,7 +16,7 @@ from uvms_jax.kin._chain import (
     revolute_twist,
 )
 
-# Docking arm (docking paper, SPEC §1.1).
+# Docking arm (docking paper, docs/theory.md §1.1).
 DOCKING_ARM_LIMITS = (
     (-2.8, -2.35, -2.35, -4.6, -4.6, -2.6),
     (2.8, 2.35, 2.35, 4.6, 4.6, 2.6),
@@ -47,7 +48,7 @@ def docking_arm(l0: float = 0.1, l1: float = 0.4, l2: float = 0.4) -> Chain:
 
 
 def uvms12(y_mb: float = 0.75, l1: float = 0.1, l2: float = 0.4, l3: float = 0.4) -> Chain:
-    """12-DOF UVMS of the dexterity paper (SPEC §1.2): vehicle x, y, z, θx, θy, θz + 6R arm.
+    """12-DOF UVMS of the dexterity paper (docs/theory.md §1.2): vehicle x, y, z, θx, θy, θz + 6R arm.
 
     Prismatic x, y, z and XYZ-Euler rotations through the vehicle CoG (the base frame), then
     the arm with base MB ``y_mb`` ahead of the CoG, stretched along +y. Tool at ``q4``.
@@ -77,20 +78,16 @@ def uvms12(y_mb: float = 0.75, l1: float = 0.1, l2: float = 0.4, l3: float = 0.4
     )
 
 
-# Reach Bravo 7 joints G, F, E, D, C, B as in the public Blueprint Lab URDF (SPEC §1.3).
-_PI = 3.14159
-BRAVO7_JOINTS = (
-    UrdfJoint("G", (0.0665, 0.0, 0.078), (0.0, 0.0, 0.0), (0.0, 0.0, -1.0), 0.0, 6.3, velocity=0.5, effort=9.0),
-    UrdfJoint("F", (-0.046, 0.0, 0.0674), (0.0, 0.0, 0.0), (0.0, 1.0, 0.0), 0.0, 3.5, velocity=0.5, effort=9.0),
-    UrdfJoint("E", (-0.0052, 0.0, -0.29055), (0.0, 0.0, 0.0), (0.0, 1.0, 0.0), 0.0, 3.5, velocity=0.5, effort=9.0),
-    UrdfJoint("D", (0.0408, 0.0, 0.09695), (0.0, 0.0, _PI), (0.0, 0.0, -1.0), 0.0, 6.3, velocity=0.5, effort=9.0),
-    UrdfJoint("C", (-0.0408, 0.0, 0.063), (0.0, 0.0, 0.0), (0.0, 1.0, 0.0), 0.0, 3.5, velocity=0.5, effort=9.0),
-    UrdfJoint("B", (-0.0408, 0.0, -0.08863), (0.0, _PI, 0.0), (0.0, 0.0, -1.0), 0.0, 6.3, velocity=0.5, effort=9.0),
-)
-BRAVO7_TOOL_XYZ = (0.0, 0.0, 0.124)  # jaws base frame in link B's frame
-BRAVO7_JAWS = UrdfJoint("A", (0.0, 0.0, 0.009), (0.0, 0.0, 0.0), (0.0, 0.0, 1.0), 0.0, 0.035, kind=PRISMATIC)
+# The Reach Bravo 7 in kin's URDF form, from its one home uvms_jax.bravo7 (docs/theory.md §1.3).
+def _urdf_joint(j: _b7.Joint) -> UrdfJoint:
+    return UrdfJoint(j.name, j.xyz, j.rpy, j.axis, j.lower, j.upper, kind=j.kind, velocity=j.velocity, effort=j.effort)
+
+
+BRAVO7_JOINTS = tuple(_urdf_joint(j) for j in _b7.ARM_JOINTS)  # G, F, E, D, C, B
+BRAVO7_TOOL_XYZ = _b7.TOOL_XYZ  # jaws base frame in link B's frame
+BRAVO7_JAWS = _urdf_joint(_b7.JAWS)
 
 
 def bravo7() -> Chain:
     """Reach Bravo 7 arm, joints G, F, E, D, C, B (URDF angle convention); tool = jaws base frame."""
-    return chain_from_urdf_joints(BRAVO7_JOINTS, BRAVO7_TOOL_XYZ, name="bravo7")
+    return chain_from_urdf_joints(BRAVO7_JOINTS, _b7.TOOL_XYZ, _b7.TOOL_RPY, name=_b7.NAME)

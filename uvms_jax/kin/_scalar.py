@@ -1,113 +1,151 @@
-"""The POE Jacobian written on scalars, for throughput over huge batches.
+"""The kinematics kernel: one pass over the joints of a chain, written on scalars.
 
-Every quantity is a nested list of "scalars": Python floats for the chain geometry (so the
-compiler folds the zeros and ones of the axes) and arrays of the batch shape for anything
-that depends on ``q``. Every batched operation is then elementwise and fuses into one kernel
-on CPU and GPU — no tiny batched matrix products, no strided gathers. Measured on a 2-core
-CPU for the 12-DOF UVMS, this is ~20× faster than the same maths on ``(..., 3, 3)`` arrays.
+Every quantity is a nested list of "scalars": 0-d arrays for the chain geometry (traced
+pytree leaves, so the kernel is differentiable and vmappable in the design parameters) and
+arrays of the batch shape for anything that depends on ``q``. Every batched operation is
+then elementwise and fuses into one kernel on CPU and GPU — no tiny batched matrix products,
+no strided gathers. Measured on a 2-core CPU for the 12-DOF UVMS, this is ~20× faster than
+the same maths on ``(..., 3, 3)`` arrays.
+
+The functions here are meant to run inside ``jit`` (the public wrappers in ``_fk`` jit them
+with the chain as an argument, so one compiled program serves every geometry of a topology).
 """
 
 from __future__ import annotations
 
-import functools
-from typing import Callable, NamedTuple
+from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
-import numpy as np
+from jax import Array
 
 from uvms_jax.kin._chain import Chain
+from uvms_jax.kin._lie import cross3, exp_scalars, stack_scalars
 
-Rows = list  # nested list of scalars (floats or batch-shaped arrays)
+Rows = list  # nested list of scalars (arrays of one batch shape, or Python floats)
 
-
-class Geometry(NamedTuple):
-    """Chain geometry as nested lists: ``twists[i][k]`` and ``tool[i][j]`` (4×4)."""
-
-    twists: Rows
-    tool: Rows
+_IDENTITY = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
 
 
-def _cross(a, b):
-    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-
-
-def _rotate(R, x):
+def _rotate(R, x) -> list:
     return [R[i][0] * x[0] + R[i][1] * x[1] + R[i][2] * x[2] for i in range(3)]
 
 
-def _exp(twist, theta):
-    """``exp(ξ̂θ)`` with ``W² = ωωᵀ − |ω|²I`` (Murray eq. 2.14, 2.36); prismatic when ω = 0:
-    ``R = I + sW + (1 − c)W²``, ``p = θv + (1 − c)(ω × v) + (θ − s)(ω(ω·v) − |ω|²v)``."""
-    v, w = twist[:3], twist[3:]
-    s, c = jnp.sin(theta), jnp.cos(theta)
-    C = 1.0 - c
-    ww = w[0] * w[0] + w[1] * w[1] + w[2] * w[2]
-    W = [[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]]
-    R = [[(1.0 - C * ww if i == j else 0.0) + s * W[i][j] + C * w[i] * w[j] for j in range(3)] for i in range(3)]
-    wv = w[0] * v[0] + w[1] * v[1] + w[2] * v[2]
-    wxv = _cross(w, v)
-    p = [theta * v[i] + C * wxv[i] + (theta - s) * (w[i] * wv - ww * v[i]) for i in range(3)]
-    return R, p
-
-
-def jacobian_rows(geometry: Geometry, q_cols: list) -> Rows:
-    """Geometric Jacobian as 6 rows × n scalars, from joint values ``q_cols[i]`` (batch arrays).
-
-    Columns: spatial twist ``ξ'_i = Ad(g_{i−1}) ξ_i``; the linear rows then move the
-    reference point to the tool point, ``v_p = v' + ω' × p_tool``.
-    """
-    R = [[1.0 if i == j else 0.0 for j in range(3)] for i in range(3)]
-    p = [0.0, 0.0, 0.0]
-    columns = []
-    for twist, theta in zip(geometry.twists, q_cols):
-        w_s = _rotate(R, twist[3:])
-        v_s = [a + b for a, b in zip(_rotate(R, twist[:3]), _cross(p, w_s))]
-        columns.append((v_s, w_s))
-        Ri, pi = _exp(twist, theta)
-        Rp = _rotate(R, pi)
-        R = [[R[i][0] * Ri[0][j] + R[i][1] * Ri[1][j] + R[i][2] * Ri[2][j] for j in range(3)] for i in range(3)]
-        p = [Rp[i] + p[i] for i in range(3)]
-    tool = geometry.tool
-    p_tool = [_rotate(R, [tool[0][3], tool[1][3], tool[2][3]])[i] + p[i] for i in range(3)]
-    linear = [[a + b for a, b in zip(v, _cross(w, p_tool))] for v, w in columns]
-    return [[col[r] for col in linear] for r in range(3)] + [[w[r] for _, w in columns] for r in range(3)]
-
-
-def stack_rows(rows: Rows, batch_shape: tuple, dtype) -> jax.Array:
-    """Nested scalar lists → array ``(*batch_shape, len(rows), len(rows[0]))``."""
-    full = lambda x: jnp.broadcast_to(jnp.asarray(x, dtype), batch_shape)
-    # Stack along new leading axes (contiguous copies of whole batch arrays), then move
-    # them last: far cheaper to compile and run than interleaving scalars along a minor axis.
-    stacked = jnp.stack([jnp.stack([full(x) for x in row]) for row in rows])
-    return jnp.moveaxis(stacked, (0, 1), (-2, -1))
-
-
-def _is_concrete(chain: Chain) -> bool:
-    return not any(isinstance(x, jax.core.Tracer) for x in jax.tree_util.tree_leaves(chain))
-
-
-def geometry(chain: Chain) -> Geometry:
-    """Geometry of a chain as Python floats when concrete (folded by the compiler), else as
-    traced scalars (so kernels stay differentiable/vmappable in the design parameters)."""
-    if _is_concrete(chain):
-        tw, tool = np.asarray(chain.twists, np.float64), np.asarray(chain.T_base_tool0, np.float64)
-        return Geometry([[float(x) for x in row] for row in tw], [[float(x) for x in row] for row in tool])
-    return Geometry(
-        [[chain.twists[i, k] for k in range(6)] for i in range(chain.n_joints)],
-        [[chain.T_base_tool0[i, j] for j in range(4)] for i in range(4)],
+def compose(R, p, Ri, pi) -> tuple[list, list]:
+    """``(R, p) ∘ (Ri, pi) = (R Ri, R pi + p)``."""
+    Rp = _rotate(R, pi)
+    return (
+        [[R[i][0] * Ri[0][j] + R[i][1] * Ri[1][j] + R[i][2] * Ri[2][j] for j in range(3)] for i in range(3)],
+        [Rp[i] + p[i] for i in range(3)],
     )
 
 
-_COMPILED: dict = {}
+def compose_pose(R, p, T) -> tuple[list, list]:
+    """``(R, p) ∘ T`` for a constant pose ``T (4, 4)``, cast to the dtype of ``p``."""
+    T = jnp.asarray(T, jnp.result_type(*p))
+    return compose(R, p, [[T[i, j] for j in range(3)] for i in range(3)], [T[i, 3] for i in range(3)])
 
 
-def compiled_for(chain: Chain, kernel: Callable) -> Callable:
-    """``kernel(geometry, q)`` specialised to a concrete chain and jitted, cached per chain
-    geometry; for a traced chain, the kernel itself (it is already inside a trace)."""
-    if not _is_concrete(chain):
-        return functools.partial(kernel, geometry(chain))
-    key = (kernel, chain.kinds, chain.name) + tuple(np.asarray(x).tobytes() for x in jax.tree_util.tree_leaves(chain))
-    if key not in _COMPILED:
-        _COMPILED[key] = jax.jit(functools.partial(kernel, geometry(chain)))
-    return _COMPILED[key]
+class Pass(NamedTuple):
+    """One pass over the joints at ``q``; every scalar has the batch shape of ``q[..., 0]``.
+
+    Attributes:
+      columns: per joint, the spatial twist ``ξ'_i = Ad(e^{ξ1θ1}⋯e^{ξ(i−1)θ(i−1)}) ξ_i`` as
+        ``(v', ω')`` (3 scalars each, base frame).
+      products: per joint, ``(R, p)`` of ``e^{ξ1θ1}⋯e^{ξiθi}`` (base frame).
+    """
+
+    columns: list
+    products: list
+
+
+def columns_of(q) -> list:
+    """``q: (..., n)`` array, or already a list of n arrays of one batch shape → that list."""
+    if isinstance(q, (list, tuple)):
+        return list(jnp.broadcast_arrays(*q))
+    return [q[..., i] for i in range(q.shape[-1])]
+
+
+def _joint_step(carry, joint):
+    """The kernel: one joint of the pass, on scalars.
+
+    ``carry = (R, p)`` is ``e^{ξ1θ1}⋯e^{ξ(i−1)θ(i−1)}``, ``joint = (ξ_i, θ_i)``; returns the
+    product through joint i and the spatial twist ``ξ'_i = Ad(carry) ξ_i`` as ``(v', ω')``.
+    """
+    (R, p), (twist, theta) = carry, joint
+    w_s = _rotate(R, twist[3:])
+    v_s = [a + b for a, b in zip(_rotate(R, twist[:3]), cross3(p, w_s))]
+    return compose(R, p, *exp_scalars(twist, theta)), (v_s, w_s)
+
+
+def forward(chain: Chain, q_cols: list) -> Pass:
+    """The pass unrolled over the joints (``n`` is static): for kernels that reduce what it
+    yields to a few numbers (the dexterity indices), everything fuses into one loop.
+
+    Args:
+      chain: the robot; its geometry is cast to the dtype of the joint values.
+      q_cols: n arrays of one batch shape, joint i's values [rad or m].
+    """
+    twists = jnp.asarray(chain.twists, q_cols[0].dtype)
+    carry = (_IDENTITY, [0.0, 0.0, 0.0])
+    columns, products = [], []
+    for i in range(chain.n_joints):
+        carry, column = _joint_step(carry, ([twists[i, k] for k in range(6)], q_cols[i]))
+        columns.append(column)
+        products.append(carry)
+    return Pass(columns, products)
+
+
+def forward_scanned(chain: Chain, q: Array) -> Pass:
+    """The same pass as a ``lax.scan`` over the joints, for kernels that write whole poses
+    and Jacobians: every joint's product is stored, so the compiled program stays small
+    (unrolled, XLA copies the expression of every earlier joint into each of the many
+    outputs: minutes of compile for a 12-joint chain).
+
+    Returns a :class:`Pass` whose scalars have shape ``(n, *batch)`` (joint axis first);
+    ``products`` and ``columns`` hold one entry: the stacked values.
+    """
+    twists = jnp.asarray(chain.twists, q.dtype)
+    q_joint_first = jnp.moveaxis(q, -1, 0)
+    zero, one = jnp.zeros(q.shape[:-1], q.dtype), jnp.ones(q.shape[:-1], q.dtype)
+    identity = ([[one, zero, zero], [zero, one, zero], [zero, zero, one]], [zero, zero, zero])
+
+    def step(carry, x):
+        twist, theta = x
+        carry, column = _joint_step(carry, ([twist[k] for k in range(6)], theta))
+        return carry, (carry, column)
+
+    _, (products, columns) = jax.lax.scan(step, identity, (twists, q_joint_first))
+    return Pass([columns], [products])
+
+
+def tool_pose(chain: Chain, kpass: Pass) -> tuple[list, list]:
+    """``(R, p)`` of ``T_base_tool = e^{ξ1θ1}⋯e^{ξnθn} T_base_tool0`` as scalars (unrolled pass)."""
+    return compose_pose(*kpass.products[-1], chain.T_base_tool0)
+
+
+def geometric_rows(kpass: Pass, p_tool: list) -> Rows:
+    """Geometric Jacobian as 6 rows × n scalars: the spatial columns with their reference
+    point moved to the tool point, ``v_p = v' + ω' × p_tool`` (rows ``[v; ω]``)."""
+    linear = [[a + b for a, b in zip(v, cross3(w, p_tool))] for v, w in kpass.columns]
+    angular = [w for _, w in kpass.columns]
+    return [[col[r] for col in linear] for r in range(3)] + [[col[r] for col in angular] for r in range(3)]
+
+
+def jacobian_rows(chain: Chain, q) -> Rows:
+    """Geometric Jacobian of ``chain`` at ``q`` as 6 rows × n scalars of the batch shape.
+
+    ``q`` is an array ``(..., n)`` or a list of n arrays (its columns). For kernels that
+    consume J entry by entry (indices): they fuse with the kinematics and never store J.
+    """
+    q_cols = columns_of(q)
+    kpass = forward(chain, q_cols)
+    _, p_tool = tool_pose(chain, kpass)
+    return geometric_rows(kpass, p_tool)
+
+
+def pose_array(R: list, p: list, batch_shape: tuple, dtype) -> Array:
+    """Rotation rows and translation of scalars → ``(*batch_shape, 4, 4)`` homogeneous pose."""
+    rows = [R[i] + [p[i]] for i in range(3)] + [[0.0, 0.0, 0.0, 1.0]]
+    return stack_scalars(rows, batch_shape, dtype)
+

@@ -1,5 +1,10 @@
-"""Motion planning for the Reach Bravo 7 in the thesis's test cage (issue 6; thesis ch. 4–5).
+"""Motion planning for the Reach Bravo 7 in the thesis's test cage (thesis ch. 4–5).
 
+* stage: :class:`PlanSettings` (with :class:`IkSettings`, :class:`PlanJsonSettings`),
+  :func:`plan_task_graph` → :class:`TaskGraphPlan` (targets, every edge by every planner,
+  metric tensors, cost matrices, :class:`PlannerSummary`), :func:`plan_for_schedule` → a
+  :class:`uvms_jax.planfile.Plan`; files: :func:`write_task_graph`, :func:`write_plan`;
+  figures: :func:`plot_ee_paths`, :func:`plot_plan_joints`, :func:`render_frames`;
 * scene: :class:`SceneSpec` (from ``configs/scenario/*.yaml``), :func:`build_scene` →
   :class:`Scene` (MuJoCo model, object and base poses, grasp), :class:`Context`;
 * collision: :class:`CollisionChecker` — ``is_valid``, ``clearance``, their batched versions,
@@ -8,14 +13,16 @@
   :class:`NodeTarget`, :data:`STEPS`;
 * planning: :func:`plan_motion` (OMPL RRTConnect / BKPIECE1 / PRM + simplification + re-check),
   :func:`time_parameterize`, :class:`Trajectory`, :func:`check_trajectory`, :func:`seed_ompl`;
-* metrics: :func:`trajectory_metrics`, :class:`EdgeMetrics`;
-* task graph: :func:`task_edges`, :func:`plan_edge`, :func:`metric_matrices`,
-  :func:`cost_matrix`, :func:`plan_json` (the :mod:`uvms_jax.planfile` format).
+* metrics: :func:`trajectory_metrics`, :class:`EdgeMetrics` (fields: ``uvms_jax.sched.METRICS``);
+* task graph: :func:`task_edges`, :func:`plan_edge`, :func:`metric_tensor` (the input of
+  ``uvms_jax.sched.normalise_metrics``), :func:`plan_from_edges`.
+
+The package never imports ``uvms_jax.hw``: plans meet the hardware only through
+:mod:`uvms_jax.planfile`.
 """
 
 from uvms_jax.plan._collision import CollisionChecker
 from uvms_jax.plan._collision import densify
-from uvms_jax.plan._metrics import METRIC_NAMES
 from uvms_jax.plan._metrics import EdgeMetrics
 from uvms_jax.plan._metrics import trajectory_metrics
 from uvms_jax.plan._planning import PLANNERS
@@ -25,21 +32,32 @@ from uvms_jax.plan._planning import check_trajectory
 from uvms_jax.plan._planning import plan_motion
 from uvms_jax.plan._planning import seed_ompl
 from uvms_jax.plan._planning import time_parameterize
+from uvms_jax.plan._plots import plot_ee_paths
+from uvms_jax.plan._plots import plot_plan_joints
+from uvms_jax.plan._plots import render_frames
 from uvms_jax.plan._scene import Box
 from uvms_jax.plan._scene import Context
 from uvms_jax.plan._scene import Item
 from uvms_jax.plan._scene import Scene
 from uvms_jax.plan._scene import SceneSpec
 from uvms_jax.plan._scene import build_scene
+from uvms_jax.plan._settings import IkSettings
+from uvms_jax.plan._settings import PlanJsonSettings
+from uvms_jax.plan._settings import PlanSettings
 from uvms_jax.plan._targets import STEPS
 from uvms_jax.plan._targets import NodeTarget
 from uvms_jax.plan._targets import node_contexts
 from uvms_jax.plan._targets import pick_place_targets
+from uvms_jax.plan._taskgraph import PlannerSummary
+from uvms_jax.plan._taskgraph import TaskGraphPlan
+from uvms_jax.plan._taskgraph import plan_for_schedule
+from uvms_jax.plan._taskgraph import plan_task_graph
 from uvms_jax.plan._tasks import EdgeResult
-from uvms_jax.plan._tasks import cost_matrix
 from uvms_jax.plan._tasks import edge_endpoints
 from uvms_jax.plan._tasks import goal_node
-from uvms_jax.plan._tasks import metric_matrices
+from uvms_jax.plan._tasks import metric_tensor
 from uvms_jax.plan._tasks import plan_edge
-from uvms_jax.plan._tasks import plan_json
+from uvms_jax.plan._tasks import plan_from_edges
 from uvms_jax.plan._tasks import task_edges
+from uvms_jax.plan._write import write_plan
+from uvms_jax.plan._write import write_task_graph

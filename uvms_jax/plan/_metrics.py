@@ -8,29 +8,18 @@ from typing import NamedTuple
 import jax.numpy as jnp
 import numpy as np
 
-from uvms_jax import indices, kin
+from uvms_jax import indices, kin, sched
 
-__all__ = ["EdgeMetrics", "METRIC_NAMES", "trajectory_metrics"]
+__all__ = ["EdgeMetrics", "trajectory_metrics"]
 
-METRIC_NAMES = ("planning_time_s", "joint_movement", "ee_distance", "min_clearance", "max_torque")
-
-
-class EdgeMetrics(NamedTuple):
-    """The five metrics of one edge (thesis definitions 1–5).
-
-    Attributes:
-      planning_time_s: planner wall time [s].
-      joint_movement: Σ over consecutive points and joints of |Δq| [rad].
-      ee_distance: Σ over consecutive points of |Δp| of the tool point [m].
-      min_clearance: smallest arm–scene distance along the trajectory [m].
-      max_torque: max over points and joints of |τ|, τ = Jᵀ w, w the held object's wrench [N·m].
-    """
-
-    planning_time_s: float
-    joint_movement: float
-    ee_distance: float
-    min_clearance: float
-    max_torque: float
+#: The five metrics of one edge (thesis definitions 1–5), fields named and ordered as
+#: ``uvms_jax.sched.METRICS``: ``planning_time`` (planner wall time [s]), ``joint_movement``
+#: (Σ over consecutive points and joints of |Δq| [rad]), ``ee_distance`` (Σ over consecutive
+#: points of |Δp| of the tool point [m]), ``security`` (smallest arm–scene clearance along the
+#: trajectory [m]) and ``max_torque`` (max over points and joints of |τ|, τ = Jᵀ w, w the held
+#: object's wrench [N·m]). ``tuple(m)`` is the metric row in ``sched.METRICS`` order.
+EdgeMetrics = NamedTuple("EdgeMetrics", [(name, float) for name in sched.METRICS])
+EdgeMetrics.__doc__ = "The five metrics of one edge, fields in ``uvms_jax.sched.METRICS`` order (see above)."
 
 
 def _pad(q: np.ndarray) -> np.ndarray:

@@ -5,13 +5,14 @@ then a check of the simplified path at ``resolution`` [rad] with the true geomet
 — the planner itself works with the checker's safety margin, so the re-check passes unless
 the planner's own motion checks skipped a thin obstacle. A path that fails the re-check is
 re-planned while budget is left. Time parameterisation follows the arm's controller (thesis
-4.6, :func:`uvms_jax.hw.synchronised_move`): rest to rest between consecutive waypoints, all
+4.6, :func:`uvms_jax.motion.synchronised_move`): rest to rest between consecutive waypoints, all
 joints arriving together, within the velocity and acceleration limits.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import logging
 import time
 
 import numpy as np
@@ -25,18 +26,28 @@ from uvms_jax.plan._collision import CollisionChecker, densify
 __all__ = ["PLANNERS", "PlanResult", "Trajectory", "plan_motion", "seed_ompl", "time_parameterize"]
 
 PLANNERS = ("RRTConnect", "BKPIECE1", "PRM")
-_ou_quiet = False
+log = logging.getLogger(__name__)
+_ompl_seed: int | None = None  # the seed OMPL's process-wide RNG took, None before seed_ompl
 
 
 def seed_ompl(seed: int) -> None:
-    """Seed OMPL's RNG with ``seed + 1`` (OMPL refuses 0) and silence its logging. Call once
-    per process, before any planner exists (OMPL ignores later seeds; NOTES.md)."""
-    global _ou_quiet
+    """Seed OMPL's process-wide RNG with ``seed + 1`` (OMPL refuses 0) and silence its logging.
+
+    OMPL takes a seed only before any planner or sampler exists in the process; later seeds
+    are refused. So the first call seeds, a repeated call with the same seed does nothing, and
+    a call with another seed logs a warning and leaves OMPL on the first seed's stream (one
+    seed per process reproduces a run; Hydra's basic launcher runs a multirun in one process).
+    """
+    global _ompl_seed
     if seed < 0:
         raise ValueError(f"seed must be >= 0, got {seed}")
     ou.setLogLevel(ou.LogLevel.LOG_WARN)
-    ou.RNG.setSeed(int(seed) + 1)
-    _ou_quiet = True
+    if _ompl_seed is None:
+        ou.RNG.setSeed(int(seed) + 1)
+        _ompl_seed = int(seed)
+    elif seed != _ompl_seed:
+        log.warning("OMPL was seeded with %d in this process; seed %d is not applied (one seed per process)",
+                    _ompl_seed, seed)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -141,8 +152,7 @@ def plan_motion(
     Raises:
       ValueError: unknown planner, or an invalid start or goal (the contacts are named).
     """
-    if not _ou_quiet:
-        ou.setLogLevel(ou.LogLevel.LOG_WARN)
+    ou.setLogLevel(ou.LogLevel.LOG_WARN)
     q_start, q_goal = np.asarray(q_start, dtype=float), np.asarray(q_goal, dtype=float)
     for label, q in (("start", q_start), ("goal", q_goal)):
         if not checker.is_valid(q):

@@ -4,7 +4,7 @@ World frame: origin at the centre of the cage floor, z up; metres and radians. T
 from the top of the cage (its base frame's z points down). Every box of the scene — tables,
 cage profiles, ceiling, base plates, cubes, and the arm's jaw fingers — is a convex *mesh*
 of 8 vertices, because MuJoCo's primitive capsule–box test misses a capsule whose axis runs
-right through a thin box (NOTES.md); cylinders and hexagonal prisms are convex meshes too.
+right through a thin box (it reports a positive distance and no contact); cylinders and hexagonal prisms are convex meshes too.
 
 Collision groups (``contype``/``conaffinity`` bits): scene geoms ``2/2``, moving arm geoms
 ``1/7``, links G and F ``1/3``, the fixed base link ``4/0`` — it is bolted to the mount, so it
@@ -27,7 +27,7 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from uvms_jax import kin
+from uvms_jax import bravo7, kin
 
 __all__ = [
     "Base",
@@ -218,7 +218,7 @@ class SceneSpec:
             mount_pos=t(m["arm"]["mount_pos"]),
             mount_rpy=t(m["arm"]["mount_rpy"]),
             mount_size=t(m["arm"]["mount_size"]),
-            link_radius=float(m["arm"]["link_radius"]),
+            link_radius=float(m["arm"].get("link_radius", bravo7.LINK_RADIUS)),
             jaws_open=float(m["arm"]["jaws_open"]),
             tables=tuple(Box(str(b["name"]), t(b["pos"]), t(b["size"]), t(b.get("rpy", (0, 0, 0)))) for b in m["tables"]),
             objects=tuple(objects),
@@ -433,7 +433,7 @@ class Scene:
                 bits = BASE_BITS if name == "geom_base" else SHOULDER_BITS if name in ("geom_G", "geom_F") else ARM_BITS
                 g.set("contype", str(bits[0]))
                 g.set("conaffinity", str(bits[1]))
-                if g.get("type") == "box":  # jaw fingers → convex meshes (NOTES.md)
+                if g.get("type") == "box":  # jaw fingers → convex meshes (see the module docstring)
                     size = np.array([float(v) for v in g.get("size").split()]) * 2
                     pos = np.array([float(v) for v in g.get("pos").split()])
                     finger_length = max(finger_length, pos[2] + size[2] / 2 - tool_pos[2])

@@ -125,9 +125,9 @@ def _segment_valid(checker: CollisionChecker, ctx: Context, a, b, resolution: fl
 
 
 def pick_place_targets(
+    key: jax.Array,
     scene: Scene,
     checker: CollisionChecker,
-    key: jax.Array,
     n_seeds: int = 32,
     iterations: int = 150,
     n_yaw_continuous: int = 8,
@@ -137,8 +137,8 @@ def pick_place_targets(
     """Solve the targets of every object and base node by batched numerical IK.
 
     Args:
-      scene, checker: the scene and its collision checker (its context is changed).
       key: PRNG key for the IK seeds.
+      scene, checker: the scene and its collision checker (left in the default context).
       n_seeds, iterations: numerical IK seeds per pose and DLS iterations.
       n_yaw_continuous: yaws tried for a rotationally symmetric object (cylinder).
       max_branch_jump: largest joint change [rad] allowed between ``q_pre`` and ``q_at``.
@@ -155,7 +155,7 @@ def pick_place_targets(
     per_node = [tool_poses(scene, n, n_yaw_continuous) for n in nodes]
     T_world = np.concatenate([np.stack([at, pre], axis=1) for _, at, pre in per_node])  # (K, 2, 4, 4)
     T_base = scene.T_base_world @ T_world
-    sol = kin.numeric_ik(chain, jnp.asarray(T_base), key, n_seeds=n_seeds, iterations=iterations, all_seeds=True)
+    sol = kin.numeric_ik(key, chain, jnp.asarray(T_base), n_seeds=n_seeds, iterations=iterations, all_seeds=True)
     q_all = np.asarray(sol.q)  # (K, 2, S, 6)
     ok_all = np.asarray(sol.valid)
     w_all = np.asarray(indices.manipulability(kin.jacobian(chain, jnp.nan_to_num(jnp.asarray(q_all)))))

@@ -1,13 +1,14 @@
-"""The pick-and-place task graph (thesis Table 5.1, eq. 4.1): its edges, planning every edge,
-the cost matrix for ``uvms_jax.sched``, and ``plan.json`` for ``uvms_jax.hw``.
+"""The pick-and-place task graph (thesis Table 5.1, eq. 4.1): its edges, planning one edge,
+the metric tensor for ``uvms_jax.sched``, and the :class:`uvms_jax.planfile.Plan` of a schedule.
 
 Nodes: 0 start, the objects, the bases, and the goal (= the start configuration, numbered
-one past the last base; 9 in the thesis). Allowed moves: start → any object; object → a base
-it fits; base → any object, the start or the goal. An edge's motion runs from where the arm
-leaves the source (start, or the post-grasp / post-final configuration) to where it arrives at
-the destination (pre-grasp / pre-final, or the start); the arm holds the object on edges out
-of an object. The descent to the grasp/final pose and back is the same whatever the
-schedule, so it belongs to the node, not to the edges (and to ``plan.json``).
+one past the last base; 9 in the thesis). Allowed moves (the rules of ``uvms_jax.sched``):
+start → any object; object → a base it fits; base → any object, the start or the goal. An
+edge's motion runs from where the arm leaves the source (start, or the post-grasp / post-final
+configuration) to where it arrives at the destination (pre-grasp / pre-final, or the start);
+the arm holds the object on edges out of an object. The descent to the grasp/final pose and
+back is the same whatever the schedule, so it belongs to the node, not to the edges (and to
+``plan.json``).
 
 The scene is static (thesis 5.2: "only static collision objects"): objects stay at their
 start positions as obstacles, except the one held or being grasped.
@@ -20,21 +21,20 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from uvms_jax import kin, sched
+from uvms_jax import bravo7, kin, planfile, sched
 from uvms_jax.plan._collision import CollisionChecker, densify
-from uvms_jax.plan._metrics import METRIC_NAMES, EdgeMetrics, trajectory_metrics
+from uvms_jax.plan._metrics import EdgeMetrics, trajectory_metrics
 from uvms_jax.plan._planning import PlanResult, Trajectory, check_trajectory, plan_motion, time_parameterize
 from uvms_jax.plan._scene import Context, Scene
 from uvms_jax.plan._targets import NodeTarget, node_contexts
 
 __all__ = [
     "EdgeResult",
-    "cost_matrix",
     "edge_endpoints",
     "goal_node",
-    "metric_matrices",
+    "metric_tensor",
     "plan_edge",
-    "plan_json",
+    "plan_from_edges",
     "task_edges",
 ]
 
@@ -47,12 +47,21 @@ def goal_node(scene: Scene) -> int:
 
 
 def task_edges(scene: Scene) -> list[tuple[int, int]]:
-    """All allowed moves ``(src, dst)`` of the task graph, in row-major order."""
-    objs, bases, goal = sorted(scene.objects), sorted(scene.bases), goal_node(scene)
-    edges = [(START, o) for o in objs]
-    edges += [(o, b) for o in objs for b in bases if o in scene.bases[b].fits]
-    edges += [(b, d) for b in bases for d in (START, *objs, goal)]
-    return sorted(edges)
+    """All allowed moves ``(src, dst)`` of the task graph, in row-major order: the static move
+    rules of ``uvms_jax.sched`` (``PickPlaceProblem.rule``) on the scene's nodes.
+
+    Raises:
+      ValueError: the scene's nodes do not form a pick-and-place problem (e.g. an object that
+        fits no base, or node numbers with gaps).
+    """
+    goal = goal_node(scene)
+    n = goal + 1
+    compat = {o: tuple(b for b in sorted(scene.bases) if o in scene.bases[b].fits) for o in sorted(scene.objects)}
+    problem = sched.PickPlaceProblem.from_matrix(np.zeros((n, n)), compat, START, goal)
+    if problem.bases != tuple(sorted(scene.bases)):
+        raise ValueError(f"scene nodes must be start {START}, objects, bases, goal {goal} without gaps; "
+                         f"got objects {sorted(scene.objects)}, bases {sorted(scene.bases)}")
+    return [(int(i), int(j)) for i, j in np.argwhere(np.asarray(problem.rule)[:n, :n])]
 
 
 def _q_at_node(scene: Scene, targets: Mapping[int, NodeTarget], node: int) -> np.ndarray:
@@ -93,13 +102,6 @@ class EdgeResult:
         c = self.check
         return bool(c) and c["collision_free"] and c["in_limits"] and c["within_velocity"]
 
-    def row(self) -> dict:
-        """A flat record (the columns of ``edges.csv``)."""
-        m = self.metrics._asdict() if self.metrics else {k: np.nan for k in METRIC_NAMES}
-        m["planning_time_s"] = self.plan.planning_time_s
-        return {"planner": self.planner, "src": self.src, "dst": self.dst, "success": self.success, **m,
-                "revalidated": self.revalidated}
-
 
 def plan_edge(
     scene: Scene,
@@ -138,43 +140,33 @@ def plan_edge(
     dense = densify(res.path, recheck_resolution)
     jm, ee, tau = trajectory_metrics(chain, dense, force)
     clearance = float(np.min(checker.clearance_batch(densify(res.path, clearance_resolution))))
-    return EdgeResult(planner, src, dst, res, traj, EdgeMetrics(res.planning_time_s, jm, ee, clearance, tau), check)
+    metrics = EdgeMetrics(planning_time=res.planning_time_s, joint_movement=jm, ee_distance=ee, security=clearance,
+                          max_torque=tau)
+    return EdgeResult(planner, src, dst, res, traj, metrics, check)
 
 
-def metric_matrices(scene: Scene, results: Sequence[EdgeResult]) -> dict[str, np.ndarray]:
-    """``name → (N, N)`` matrix of each metric (NaN where the move is forbidden or failed)."""
+def metric_tensor(scene: Scene, results: Sequence[EdgeResult]) -> np.ndarray:
+    """``(5, N, N)`` raw metrics of the planned edges in ``uvms_jax.sched.METRICS`` order
+    (N = goal node + 1), NaN where the move is forbidden or its planning failed: the input of
+    ``sched.normalise_metrics``."""
     n = goal_node(scene) + 1
-    out = {k: np.full((n, n), np.nan) for k in METRIC_NAMES}
+    out = np.full((len(sched.METRICS), n, n), np.nan)
     for r in results:
         if r.success and r.metrics is not None:
-            for k in METRIC_NAMES:
-                out[k][r.src, r.dst] = getattr(r.metrics, k)
+            out[:, r.src, r.dst] = tuple(r.metrics)
     return out
 
 
-def cost_matrix(matrices: Mapping[str, np.ndarray], weights: Mapping[str, float] | None = None) -> np.ndarray:
-    """Thesis eq. 4.15–4.17: ``C = Σ_k K_k N_k`` with every metric min-max normalised over the
-    edges; security is inverted (larger clearance → lower cost). NaN stays NaN.
-
-    Args:
-      matrices: from :func:`metric_matrices`.
-      weights: metric name → K (default 1/5 each).
-    """
-    weights = dict(weights or {k: 1.0 / len(METRIC_NAMES) for k in METRIC_NAMES})
-    unknown = set(weights) - set(METRIC_NAMES)
-    if unknown:
-        raise ValueError(f"unknown metrics {sorted(unknown)} (known: {METRIC_NAMES})")
-    # METRIC_NAMES follows sched.METRICS (security = min_clearance); sched owns the formula.
-    stacked = np.stack([np.asarray(matrices[k], dtype=np.float64) for k in METRIC_NAMES])
-    return sched.cost_matrix(sched.normalise_metrics(stacked), [weights.get(k, 0.0) for k in METRIC_NAMES])
+def _motion(name: str, traj: Trajectory, jaws_mm: float | None = None) -> planfile.Segment:
+    return planfile.Segment(name, tuple(float(x) for x in traj.t),
+                            tuple(tuple(float(v) for v in row) for row in traj.q), jaws_mm)
 
 
-def _segment(name: str, traj: Trajectory, gripper_mm: float | None = None) -> dict:
-    return {"name": name, "t": [float(x) for x in traj.t], "q": [[float(v) for v in row] for row in traj.q],
-            "gripper": None if gripper_mm is None else {"jaws_mm": float(gripper_mm)}}
+def _gripper(name: str, jaws_mm: float) -> planfile.Segment:
+    return planfile.Segment(name, (), (), float(jaws_mm))
 
 
-def plan_json(
+def plan_from_edges(
     scene: Scene,
     targets: Mapping[int, NodeTarget],
     edges: Mapping[tuple[int, int], EdgeResult],
@@ -186,13 +178,21 @@ def plan_json(
     max_acceleration=1.0,
     checker: CollisionChecker | None = None,
     resolution: float = 0.01,
-) -> dict:
-    """The ``plan.json`` object (format: :mod:`uvms_jax.planfile`, version 1) of a schedule.
+) -> planfile.Plan:
+    """The :class:`uvms_jax.planfile.Plan` of a schedule, from planned edges.
 
     For every move of ``sequence`` (e.g. ``[0, 2, 5, 4, 8, 0, 1, 6, 3, 7, 9]``) it emits the
     edge's motion, then at an object: ``open``, ``grasp`` (down), ``close``, ``post-grasp``
     (up); at a base: ``final`` (down), ``release`` (open), ``post-final`` (up). Pre-grasp and
     pre-final are the ends of the edge motions.
+
+    Args:
+      scene, targets: the scene and its node targets.
+      edges: ``(src, dst)`` → planned edge.
+      sequence: node sequence of the schedule.
+      jaws_open_mm, jaws_closed_mm: jaw openings of the open/release and close steps [mm].
+      max_velocity, max_acceleration: limits of the down/up motions [rad/s, rad/s²].
+      checker: when given, the down/up motions are checked at ``resolution`` [rad].
 
     Raises:
       ValueError: a move of the sequence has no successful edge in ``edges``, or (with a
@@ -200,12 +200,12 @@ def plan_json(
     """
     names = {o.node: o.name for o in scene.spec.objects} | {b.node: b.name for b in scene.spec.bases}
     names |= {START: "start", goal_node(scene): "goal"}
-    segments = []
+    segments: list[planfile.Segment] = []
     for src, dst in zip(sequence[:-1], sequence[1:]):
         e = edges.get((src, dst))
         if e is None or not e.success or e.trajectory is None:
             raise ValueError(f"no successful plan for the move {src} -> {dst}")
-        segments.append(_segment(f"{src}->{dst} to {names[dst]}", e.trajectory))
+        segments.append(_motion(f"{src}->{dst} to {names[dst]}", e.trajectory))
         if dst not in targets:
             continue
         tg = targets[dst]
@@ -218,12 +218,12 @@ def plan_json(
                 if not checker.path_is_valid(tr.q, resolution):
                     raise ValueError(f"node {dst}: the {key} motion collides")
         if dst in scene.objects:
-            segments += [{"name": f"open at {names[dst]}", "gripper": {"jaws_mm": jaws_open_mm}},
-                         _segment(f"grasp {names[dst]}", down),
-                         {"name": f"close on {names[dst]}", "gripper": {"jaws_mm": jaws_closed_mm}},
-                         _segment(f"post-grasp {names[dst]}", up)]
+            segments += [_gripper(f"open at {names[dst]}", jaws_open_mm),
+                         _motion(f"grasp {names[dst]}", down),
+                         _gripper(f"close on {names[dst]}", jaws_closed_mm),
+                         _motion(f"post-grasp {names[dst]}", up)]
         else:
-            segments += [_segment(f"final on {names[dst]}", down),
-                         {"name": f"release on {names[dst]}", "gripper": {"jaws_mm": jaws_open_mm}},
-                         _segment(f"post-final {names[dst]}", up)]
-    return {"version": 1, "joint_names": [j.name for j in kin.BRAVO7_JOINTS], "segments": segments}
+            segments += [_motion(f"final on {names[dst]}", down),
+                         _gripper(f"release on {names[dst]}", jaws_open_mm),
+                         _motion(f"post-final {names[dst]}", up)]
+    return planfile.Plan(tuple(j.name for j in bravo7.ARM_JOINTS), tuple(segments))

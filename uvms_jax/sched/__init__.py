@@ -1,4 +1,4 @@
-"""Pick-and-place scheduling (thesis ch. 4–5, SPEC §5).
+"""Pick-and-place scheduling (thesis ch. 4–5, docs/theory.md §5).
 
 Build a ``PickPlaceProblem`` (from a ready cost matrix, or from per-edge metrics through
 ``normalise_metrics`` and ``cost_matrix``), then solve it with ``greedy`` (the thesis's
@@ -11,9 +11,13 @@ batch of schedules in one jitted call. Example::
     sched.greedy(problem).path_str()          # '0-2-5-4-8-0-1-6-3-7-9'
     best = sched.exact(problem)
     sched.schedule_edges(problem, best.path)  # moves to plan and execute
+
+The move rules live in one place (``_rules.allowed_next``). The stage as a whole:
+``run_schedule(key, SchedSettings(...))`` → ``ScheduleRun`` → ``write_schedule(run, out)``.
 """
 
 from uvms_jax.sched._astar import astar
+from uvms_jax.sched._costs import EDGE_CSV_COLUMNS
 from uvms_jax.sched._costs import HIGHER_IS_BETTER
 from uvms_jax.sched._costs import METRICS
 from uvms_jax.sched._costs import cost_matrix
@@ -38,6 +42,22 @@ from uvms_jax.sched._problem import path_cost
 from uvms_jax.sched._random import random_metrics
 from uvms_jax.sched._random import random_problem
 from uvms_jax.sched._schedule import Schedule
+from uvms_jax.sched._source import Source
+from uvms_jax.sched._source import SourceSettings
+from uvms_jax.sched._source import WeightSettings
+from uvms_jax.sched._source import load_source
+from uvms_jax.sched._source import problem_from_metrics
+from uvms_jax.sched._source import read_edges_csv
+from uvms_jax.sched._stage import SOLVERS
+from uvms_jax.sched._stage import GraspSettings
+from uvms_jax.sched._stage import SchedSettings
+from uvms_jax.sched._stage import ScheduleRun
+from uvms_jax.sched._stage import SweepPoint
+from uvms_jax.sched._stage import grasp_sweep
+from uvms_jax.sched._stage import run_schedule
+from uvms_jax.sched._stage import solve
+from uvms_jax.sched._stage import solve_all
+from uvms_jax.sched._stage import table_rows
 from uvms_jax.sched._score import Reason
 from uvms_jax.sched._score import Scores
 from uvms_jax.sched._score import score
@@ -46,10 +66,11 @@ from uvms_jax.sched._thesis import THESIS_EQ41
 from uvms_jax.sched._thesis import THESIS_EQ41_GREEDY_PATH
 from uvms_jax.sched._thesis import THESIS_NODE_NAMES
 from uvms_jax.sched._thesis import thesis_problem
-
-SOLVERS = ("greedy", "grasp", "astar", "exact")
+from uvms_jax.sched._write import schedule_results
+from uvms_jax.sched._write import write_schedule
 
 __all__ = [
+    "EDGE_CSV_COLUMNS",
     "GRASP_ROUNDS",
     "HIGHER_IS_BETTER",
     "METRICS",
@@ -62,26 +83,43 @@ __all__ = [
     "THESIS_NEIGHBOURHOOD",
     "THESIS_NODE_NAMES",
     "GraspBatch",
+    "GraspSettings",
     "PickPlaceProblem",
     "Reason",
+    "SchedSettings",
     "Schedule",
     "ScheduleEdge",
+    "ScheduleRun",
     "Scores",
+    "Source",
+    "SourceSettings",
+    "SweepPoint",
+    "WeightSettings",
     "as_padded_paths",
     "astar",
     "cost_matrix",
     "exact",
-    "greedy",
     "grasp",
     "grasp_batch",
+    "grasp_sweep",
+    "greedy",
+    "load_source",
     "metric_tensor",
     "mirror_goal",
     "normalise_metrics",
     "path_cost",
     "path_metric_sums",
+    "problem_from_metrics",
     "random_metrics",
     "random_problem",
+    "read_edges_csv",
+    "run_schedule",
     "schedule_edges",
+    "schedule_results",
     "score",
+    "solve",
+    "solve_all",
+    "table_rows",
     "thesis_problem",
+    "write_schedule",
 ]

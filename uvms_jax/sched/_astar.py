@@ -5,7 +5,8 @@ from __future__ import annotations
 import heapq
 import time
 
-from uvms_jax.sched._problem import BASE, GOAL, OBJECT, START, PickPlaceProblem, path_cost
+from uvms_jax.sched._problem import PickPlaceProblem, path_cost
+from uvms_jax.sched._rules import BASE, GOAL, OBJECT, allowed_next, bit_nodes
 from uvms_jax.sched._schedule import Schedule
 
 
@@ -25,13 +26,14 @@ def astar(problem: PickPlaceProblem) -> Schedule:
       ``Schedule`` with ``info["expanded"]`` (states taken from the open list).
     """
     t0 = time.perf_counter()
-    adj = problem.adjacency
+    h = problem.host
+    n = problem.n_nodes
     n_obj = problem.n_objects
-    c_low = min((c for row in adj for _, c, _ in row), default=0.0)
-    sh = max(8, problem.n_nodes.bit_length())
+    c_low = min((c for row in h.cost[:n] for c in row[:n] if c != float("inf")), default=0.0)
+    sh = max(8, n.bit_length())
     low = (1 << sh) - 1
     start, goal = problem.start, problem.goal
-    # state key = mask << sh | pos; mask holds one bit per visited object/base node
+    # state key = visited << sh | pos; visited holds one bit per picked object / used base
     root = start
     g_best = {root: 0.0}
     parent = {root: -1}
@@ -48,29 +50,18 @@ def astar(problem: PickPlaceProblem) -> Schedule:
             found = key
             break
         expanded += 1
-        mask = key >> sh
-        for v, c, k in adj[pos]:
-            if k == OBJECT or k == BASE:
-                if mask >> v & 1:
-                    continue
-                nmask = mask | 1 << v
-            elif k == START:
-                if placed == n_obj:
-                    continue
-                nmask = mask
-            elif k == GOAL:
-                if placed != n_obj:
-                    continue
-                nmask = mask
-            else:
-                continue
-            nkey = nmask << sh | v
-            ng = g + c
+        visited = key >> sh
+        row = h.cost[pos]
+        for v in bit_nodes(allowed_next(h.next, pos, visited, placed, n_obj)):
+            bit = 1 << v
+            nkey = (visited | (bit & h.consumed)) << sh | v
+            ng = g + row[v]
             old = g_best.get(nkey)
             if old is not None and old <= ng:
                 continue
             g_best[nkey] = ng
             parent[nkey] = key
+            k = h.kind[v]
             nplaced = placed + (k == BASE)
             left = n_obj - nplaced
             steps = 2 * left if k == OBJECT else (0 if k == GOAL else 2 * left + 1)

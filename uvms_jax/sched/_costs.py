@@ -10,6 +10,9 @@ import numpy as np
 #: planning time [s], joint movement Σ|Δq| [rad], end-effector distance Σ|Δp| [m],
 #: security = minimum clearance to obstacles [m] (more is better), max joint torque [N·m].
 METRICS = ("planning_time", "joint_movement", "ee_distance", "security", "max_torque")
+#: The column of each metric in a planner's ``edges.csv`` (one row per move: planner, src,
+#: dst, success, then these), in ``METRICS`` order: security is the minimum clearance.
+EDGE_CSV_COLUMNS = ("planning_time_s", "joint_movement", "ee_distance", "min_clearance", "max_torque")
 #: Metrics where a larger raw value is better, scored so that it costs less.
 HIGHER_IS_BETTER = ("security",)
 

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 from typing import NamedTuple, Sequence
 
-from uvms_jax.sched._problem import BASE, GOAL, OBJECT, START, PickPlaceProblem, as_padded_paths
+from uvms_jax.sched._problem import PickPlaceProblem, as_padded_paths
+from uvms_jax.sched._rules import BASE, GOAL, OBJECT, START
 from uvms_jax.sched._score import Reason, score
 
 _ACTION = {OBJECT: "pick", BASE: "place", START: "return", GOAL: "finish"}

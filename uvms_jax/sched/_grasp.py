@@ -20,7 +20,8 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
-from uvms_jax.sched._problem import BASE, GOAL, OBJECT, PAD_NODE, START, PickPlaceProblem, path_cost
+from uvms_jax.sched._problem import PAD_NODE, PickPlaceProblem, path_cost
+from uvms_jax.sched._rules import BASE, OBJECT, allowed_next, consumed
 from uvms_jax.sched._schedule import Schedule
 
 #: Thesis eq. 4.6: the values α is drawn from (uniformly, once per iteration).
@@ -77,12 +78,13 @@ def construct(problem: PickPlaceProblem, alpha: Array, u: Array) -> Construction
     """
     W = jnp.asarray(problem.move_cost, jnp.float32)
     kind = jnp.asarray(problem.kind)
+    table = jnp.asarray(problem.next_ok)
+    takes = consumed(kind)
     n1 = W.shape[0]
     n_obj = problem.n_objects
     # each row's moves sorted by cost once (stable: ties by node index); a step then only
-    # masks the sorted row by occupancy and counts, O(n) instead of ranking, O(n²)
+    # masks the sorted row by the allowed moves and counts, O(n) instead of ranking, O(n²)
     order = jnp.argsort(W, axis=1, stable=True).astype(jnp.int32)
-    finite_sorted = jnp.isfinite(jnp.take_along_axis(W, order, axis=1))
     # cumulative count as a float matmul: faster on the CPU than cumsum or an int matmul
     counts_before = jnp.tril(jnp.ones((n1, n1), jnp.float32))
 
@@ -90,12 +92,8 @@ def construct(problem: PickPlaceProblem, alpha: Array, u: Array) -> Construction
 
     def step(carry, u_t):
         pos, visited, placed, objs, bases = carry
-        all_placed = placed == n_obj
-        avail = jnp.where(
-            kind == START, ~all_placed, jnp.where(kind == GOAL, all_placed, ~visited)
-        )
         row_order = order[pos]
-        cand = finite_sorted[pos] & avail[row_order]  # CL, cheapest first
+        cand = allowed_next(table, pos, visited, placed, n_obj)[row_order]  # CL, cheapest first
         cum = (counts_before @ cand.astype(jnp.float32)).astype(jnp.int32)  # CL among first i+1
         n_cand = cum[-1]
         r = jnp.maximum(1, jnp.floor(alpha * n_cand + _RCL_EPS).astype(jnp.int32))
@@ -103,7 +101,7 @@ def construct(problem: PickPlaceProblem, alpha: Array, u: Array) -> Construction
         nxt = row_order[jnp.argmax(cum > pick)]
         nxt = jnp.where(n_cand > 0, nxt, n1 - 1).astype(jnp.int32)  # stuck: pad → cost inf
         k = kind[nxt]
-        visited = visited | ((jnp.arange(n1) == nxt) & ((k == OBJECT) | (k == BASE)))
+        visited = visited | ((jnp.arange(n1) == nxt) & takes)
         # the deliveries, recorded as they are made (no compaction of the path later)
         objs = jnp.where((slot == placed) & (k == OBJECT), nxt, objs)
         bases = jnp.where((slot == placed) & (k == BASE), nxt, bases)
@@ -291,11 +289,11 @@ def _uniforms(seed: Array, n: int) -> Array:
     return (x >> 8).astype(jnp.float32) * jnp.float32(2.0**-24)
 
 
-@partial(jax.jit, static_argnames=("iterations", "alphas", "neighbourhood", "rounds"))
 def grasp_batch(
-    problem: PickPlaceProblem,
     key: Array,
+    problem: PickPlaceProblem,
     iterations: int = 1000,
+    *,
     alphas: Sequence[float] = THESIS_ALPHAS,
     neighbourhood: int = THESIS_NEIGHBOURHOOD,
     rounds: int = DEFAULT_ROUNDS,
@@ -303,23 +301,32 @@ def grasp_batch(
     """Runs ``iterations`` independent GRASP iterations in parallel (``vmap``), jitted.
 
     Args:
-      problem: the instance.
       key: PRNG key; each iteration draws its α (uniform over ``alphas``) and a seed for
         its per-step uniforms (``_uniforms``).
-      iterations: ``I`` (static).
-      alphas: α values (static tuple), thesis eq. 4.6 by default.
-      neighbourhood, rounds: local-search settings (static), see ``local_search``.
+      problem: the instance.
+      iterations: ``I``.
+      alphas: α values, thesis eq. 4.6 by default.
+      neighbourhood, rounds: local-search settings, see ``local_search``.
 
     Returns:
       ``GraspBatch`` of ``I`` schedules.
+
+    Raises:
+      ValueError: bad settings (see ``grasp``).
     """
-    built, objs, bases, cost = _iterations(problem, key, iterations, alphas, neighbourhood, rounds)
+    settings = _checked(iterations, alphas, neighbourhood, rounds)
+    return _grasp_batch(key, problem, *settings)
+
+
+@partial(jax.jit, static_argnames=("iterations", "alphas", "neighbourhood", "rounds"))
+def _grasp_batch(key, problem, iterations, alphas, neighbourhood, rounds):
+    built, objs, bases, cost = _iterations(key, problem, iterations, alphas, neighbourhood, rounds)
     paths = jax.vmap(to_path, in_axes=(None, 0, 0))(problem, objs, bases)
     paths = jnp.where(jnp.isfinite(cost)[:, None], paths, built.path)  # stuck: as constructed
     return GraspBatch(paths, cost, built.cost)
 
 
-def _iterations(problem, key, iterations, alphas, neighbourhood, rounds):
+def _iterations(key, problem, iterations, alphas, neighbourhood, rounds):
     """Construction and local search of every iteration: deliveries and costs."""
     L = problem.max_path_len
     k_alpha, k_seed = jax.random.split(key)
@@ -333,15 +340,28 @@ def _iterations(problem, key, iterations, alphas, neighbourhood, rounds):
 
 
 @partial(jax.jit, static_argnames=("iterations", "alphas", "neighbourhood", "rounds"))
-def _grasp_best(problem, key, iterations, alphas, neighbourhood, rounds):
-    _, objs, bases, cost = _iterations(problem, key, iterations, alphas, neighbourhood, rounds)
+def _grasp_best(key, problem, iterations, alphas, neighbourhood, rounds):
+    _, objs, bases, cost = _iterations(key, problem, iterations, alphas, neighbourhood, rounds)
     i = jnp.argmin(cost)
     return to_path(problem, objs[i], bases[i]), cost[i]
 
 
+def _checked(iterations, alphas, neighbourhood, rounds) -> tuple[int, tuple[float, ...], int, int]:
+    """The GRASP settings as the static arguments of the jitted cores, or ValueError."""
+    if isinstance(iterations, bool) or not isinstance(iterations, (int, np.integer)) or iterations < 1:
+        raise ValueError(f"GRASP needs at least one iteration; got {iterations!r}")
+    if not alphas or any(not 0.0 < a <= 1.0 for a in alphas):
+        raise ValueError(f"GRASP α values must lie in (0, 1]; got {alphas}")
+    if isinstance(neighbourhood, bool) or not isinstance(neighbourhood, (int, np.integer)) or neighbourhood < 1:
+        raise ValueError(f"GRASP local-search neighbourhood must be an integer >= 1; got {neighbourhood!r}")
+    if isinstance(rounds, bool) or not isinstance(rounds, (int, np.integer)) or rounds < 0:
+        raise ValueError(f"GRASP local-search rounds must be an integer >= 0; got {rounds!r}")
+    return int(iterations), tuple(float(a) for a in alphas), int(neighbourhood), int(rounds)
+
+
 def grasp(
-    problem: PickPlaceProblem,
     key: Array,
+    problem: PickPlaceProblem,
     iterations: int = 1000,
     *,
     alphas: Sequence[float] = THESIS_ALPHAS,
@@ -350,13 +370,13 @@ def grasp(
 ) -> Schedule:
     """Best schedule of ``iterations`` GRASP iterations (thesis Algorithm 2).
 
-    All iterations run in parallel in one jitted call (``grasp_batch``), compiled once per
-    (node layout, iterations, settings) and reused. The returned cost is recomputed in
+    All iterations run in parallel in one jitted call (as in ``grasp_batch``), compiled once
+    per (node layout, iterations, settings) and reused. The returned cost is recomputed in
     float64 from the path.
 
     Args:
-      problem: the instance.
       key: PRNG key.
+      problem: the instance.
       iterations: number of GRASP iterations (thesis: 1000).
       alphas, neighbourhood, rounds: see ``grasp_batch``.
 
@@ -364,24 +384,18 @@ def grasp(
       ``Schedule`` (cost ``inf`` if every iteration got stuck).
 
     Raises:
-      ValueError: ``iterations < 1``, an α outside (0, 1], or ``neighbourhood < 1``.
+      ValueError: ``iterations < 1``, an α outside (0, 1], ``neighbourhood < 1`` or
+        ``rounds < 0``.
     """
-    if iterations < 1:
-        raise ValueError(f"GRASP needs at least one iteration; got {iterations}")
-    if not alphas or any(not 0.0 < a <= 1.0 for a in alphas):
-        raise ValueError(f"GRASP α values must lie in (0, 1]; got {alphas}")
-    if neighbourhood < 1:
-        raise ValueError(f"GRASP local-search neighbourhood must be >= 1; got {neighbourhood}")
+    settings = _checked(iterations, alphas, neighbourhood, rounds)
     t0 = time.perf_counter()
-    path, cost = _grasp_best(
-        problem, key, iterations, tuple(float(a) for a in alphas), neighbourhood, rounds
-    )
+    path, cost = _grasp_best(key, problem, *settings)
     path = np.asarray(path)
     wall = time.perf_counter() - t0
     if not np.isfinite(float(cost)):
-        return Schedule((), float("inf"), wall, "grasp", {"iterations": iterations})
+        return Schedule((), float("inf"), wall, "grasp", {"iterations": settings[0]})
     nodes = unpad(path, problem.n_nodes)
-    return Schedule(nodes, path_cost(problem, nodes), wall, "grasp", {"iterations": iterations})
+    return Schedule(nodes, path_cost(problem, nodes), wall, "grasp", {"iterations": settings[0]})
 
 
 def unpad(path: np.ndarray, n_nodes: int) -> tuple[int, ...]:

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import time
 
-from uvms_jax.sched._problem import BASE, OBJECT, START, PickPlaceProblem, path_cost
+from uvms_jax.sched._problem import PickPlaceProblem, path_cost
+from uvms_jax.sched._rules import allowed_next, bit_nodes
 from uvms_jax.sched._schedule import Schedule
 
 
@@ -20,29 +21,22 @@ def greedy(problem: PickPlaceProblem) -> Schedule:
       ``Schedule`` with ``info["stuck"]`` (bool).
     """
     t0 = time.perf_counter()
-    adj = problem.adjacency
+    h = problem.host
     n_obj = problem.n_objects
-    visited = bytearray(problem.n_nodes)
-    pos, placed = problem.start, 0
+    pos, visited, placed = problem.start, 0, 0
     path = [pos]
     stuck = False
     while pos != problem.goal:
-        best, best_c, best_k = -1, float("inf"), -1
-        for v, c, k in adj[pos]:
-            if k == OBJECT or k == BASE:
-                ok = not visited[v]
-            elif k == START:
-                ok = placed < n_obj
-            else:  # goal
-                ok = placed == n_obj
-            if ok and c < best_c:
-                best, best_c, best_k = v, c, k
+        row = h.cost[pos]
+        best, best_c = -1, float("inf")
+        for v in bit_nodes(allowed_next(h.next, pos, visited, placed, n_obj)):
+            if row[v] < best_c:
+                best, best_c = v, row[v]
         if best < 0:
             stuck = True
             break
-        pos = best
-        visited[pos] = 1
-        placed += best_k == BASE
+        bit = 1 << best
+        pos, visited, placed = best, visited | (bit & h.consumed), placed + ((bit & h.bases) > 0)
         path.append(pos)
     cost = float("inf") if stuck else path_cost(problem, path)
     return Schedule(tuple(path), cost, time.perf_counter() - t0, "greedy", {"stuck": stuck})

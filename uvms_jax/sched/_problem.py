@@ -1,35 +1,49 @@
-"""The immutable pick-and-place scheduling problem (thesis ch. 4.7, SPEC §5).
+"""The immutable pick-and-place scheduling problem (thesis ch. 4.7, docs/theory.md §5).
 
 Node roles. A problem has ``n`` nodes: one start, one goal, ``N`` objects and ``M`` bases.
 The thesis numbering (Table 5.1) is 0 start, 1–4 objects, 5–8 bases, 9 goal; in general any
 node that is neither start, goal nor an object (a key of ``compat``) is a base.
 
-Move rules (thesis 4.7 and Fig. 4.12), with gripper capacity one and one object per base:
-
-* start → an object not yet placed;
-* object → one of its allowed bases that is still free (the delivery);
-* base (after a delivery) → an unplaced object, or the start while objects remain;
-* base → goal only once every object is placed — and then only the goal;
-* goal ends the schedule.
-
-A schedule is therefore ``start, o1, b1, [start], o2, b2, …, oN, bN, goal``: ``2N + 2``
-nodes plus at most ``N − 1`` optional returns to the start, so at most ``3N + 1`` nodes.
-``cost[i, j]`` is the cost of the move ``i → j``; NaN marks a move that is not allowed (for
-example no trajectory was found). Costs are non-negative (min-max normalised metrics are).
+The move rules are written once, in ``_rules.py``. A schedule is
+``start, o1, b1, [start], o2, b2, …, oN, bN, goal``: ``2N + 2`` nodes plus at most ``N − 1``
+optional returns to the start, so at most ``3N + 1`` nodes. ``cost[i, j]`` is the cost of
+the move ``i → j``; NaN marks a move that is not allowed (for example no trajectory was
+found). Costs are non-negative (min-max normalised metrics are).
 """
 
 from __future__ import annotations
 
 import functools
 from dataclasses import dataclass
-from typing import Mapping, Sequence
+from typing import Mapping, NamedTuple, Sequence
 
 import jax
 import numpy as np
 
-# Node kinds; PAD is the extra node index ``n`` used to pad schedules to a fixed length.
-START, OBJECT, BASE, GOAL, PAD = 0, 1, 2, 3, 4
+from uvms_jax.sched._rules import BASE, GOAL, OBJECT, PAD, START, allowed_next, as_bits, bit_nodes
+from uvms_jax.sched._rules import consumed, next_table
+from uvms_jax.sched._rules import static_rules
+
 PAD_NODE = -1  # how padding is written in user-facing paths
+
+
+class HostView(NamedTuple):
+    """A problem as plain Python values (``PickPlaceProblem.host``).
+
+    Attributes:
+      next: the bit view of ``next_ok`` (``next[phase][node]``, bit ``j`` = node ``j``), for
+        ``allowed_next``.
+      consumed: bit mask of the object and base nodes (entered at most once).
+      bases: bit mask of the base nodes (entering one places an object).
+      cost: ``move_cost`` rows as floats.
+      kind: node kinds as ints.
+    """
+
+    next: tuple
+    consumed: int
+    bases: int
+    cost: tuple
+    kind: tuple
 
 
 @dataclass(frozen=True, eq=False)
@@ -48,6 +62,9 @@ class PickPlaceProblem:
         the padding node: ``goal → pad`` and ``pad → pad`` cost 0, so a schedule padded after
         its goal sums to its cost.
       rule: ``(n + 1, n + 1)`` bool, the static move rules (ignoring NaN costs).
+      next_ok: ``(2, n + 1, n + 1)`` bool, ``_rules.next_table``: the moves allowed with
+        objects left (0) and with all placed (1), occupancy aside; ask it through
+        ``_rules.allowed_next``.
       kind: ``(n + 1,)`` int8 node kinds (START, OBJECT, BASE, GOAL, PAD).
       object_nodes: ``(N,)`` object nodes, ascending.
       base_nodes: ``(M,)`` base nodes, ascending.
@@ -57,6 +74,7 @@ class PickPlaceProblem:
     cost: np.ndarray
     move_cost: np.ndarray
     rule: np.ndarray
+    next_ok: np.ndarray
     kind: np.ndarray
     object_nodes: np.ndarray
     base_nodes: np.ndarray
@@ -102,22 +120,16 @@ class PickPlaceProblem:
         return dict(zip(self.objects, self.allowed_bases))
 
     @functools.cached_property
-    def adjacency(self) -> tuple[tuple[tuple[int, float, int], ...], ...]:
-        """Per node, the ``(next node, cost, next kind)`` moves allowed by the static rules.
-
-        Ascending in the next node's index.
-
-        Plain Python, for the pure-Python solvers (greedy, A*); computed once per instance.
-        """
-        n = self.n_nodes
-        mc = np.asarray(self.move_cost)
-        return tuple(
-            tuple(
-                (int(j), float(mc[i, j]), int(self.kind[j]))
-                for j in range(n)
-                if np.isfinite(mc[i, j])
-            )
-            for i in range(n)
+    def host(self) -> "HostView":
+        """The problem as plain Python values, for the pure-Python solvers (outside ``jit``);
+        computed once per instance."""
+        kind = np.asarray(self.kind)
+        return HostView(
+            next=as_bits(self.next_ok),
+            consumed=as_bits(consumed(kind)),
+            bases=as_bits(kind == BASE),
+            cost=tuple(tuple(float(c) for c in row) for row in np.asarray(self.move_cost)),
+            kind=tuple(int(k) for k in kind),
         )
 
     @classmethod
@@ -191,12 +203,13 @@ class PickPlaceProblem:
         kind = np.full(n + 1, BASE, dtype=np.int8)
         kind[start], kind[goal], kind[n] = START, GOAL, PAD
         kind[objects] = OBJECT
-        rule = _static_rules(n, start, goal, objects, bases, allowed)
+        rule = static_rules(n, start, goal, objects, bases, allowed)
         padded = np.full((n + 1, n + 1), np.nan)
         padded[:n, :n] = cost
         padded[goal, n] = padded[n, n] = 0.0
         move_cost = np.where(rule & np.isfinite(padded), padded, np.inf)
-        for a in (cost, move_cost, rule, kind):
+        next_ok = next_table(move_cost, kind)
+        for a in (cost, move_cost, rule, next_ok, kind):
             a.setflags(write=False)
         object_nodes = np.array(objects, dtype=np.int32)
         base_nodes = np.array(bases, dtype=np.int32)
@@ -206,6 +219,7 @@ class PickPlaceProblem:
             cost=cost,
             move_cost=move_cost,
             rule=rule,
+            next_ok=next_ok,
             kind=kind,
             object_nodes=object_nodes,
             base_nodes=base_nodes,
@@ -218,7 +232,7 @@ class PickPlaceProblem:
 
 jax.tree_util.register_dataclass(
     PickPlaceProblem,
-    data_fields=["cost", "move_cost", "rule", "kind", "object_nodes", "base_nodes"],
+    data_fields=["cost", "move_cost", "rule", "next_ok", "kind", "object_nodes", "base_nodes"],
     meta_fields=["start", "goal"],
 )
 
@@ -231,25 +245,11 @@ def _node(x, n: int, what: str) -> int:
     return int(x)
 
 
-def _static_rules(n, start, goal, objects, bases, allowed) -> np.ndarray:
-    """``(n + 1, n + 1)`` bool: moves allowed by the rules, before costs and occupancy."""
-    rule = np.zeros((n + 1, n + 1), dtype=bool)
-    rule[start, objects] = True
-    for o, bs in zip(objects, allowed):
-        rule[o, list(bs)] = True
-    for b in bases:
-        rule[b, objects] = True
-        rule[b, start] = True
-        rule[b, goal] = True
-    rule[goal, n] = rule[n, n] = True
-    return rule
-
-
 def _check_feasible(problem: PickPlaceProblem) -> None:
     """Raises ValueError when no schedule reaches the goal; cheap checks first, then a DFS.
 
-    The DFS runs over (placed objects, used bases, current base) with memoised dead ends, so
-    it visits each such state at most once and stops at the first complete schedule.
+    The DFS follows ``allowed_next`` over (position, visited objects and bases) with memoised
+    dead ends, so it visits each such state at most once and stops at the goal.
     """
     mc = problem.move_cost
     objs, s, g = problem.objects, problem.start, problem.goal
@@ -260,32 +260,23 @@ def _check_feasible(problem: PickPlaceProblem) -> None:
             raise ValueError(f"no feasible schedule: object {o} has a NaN cost to every allowed base {bs}")
     if not np.isfinite(mc[list(problem.bases), g]).any():
         raise ValueError(f"no feasible schedule: every move into the goal node {g} is NaN")
-    ok = np.isfinite(mc)
-    to_obj = {}  # position -> objects reachable directly or through the start
-    for p in (s, *problem.bases):
-        direct = ok[p, list(objs)]
-        via = ok[p, s] & ok[s, list(objs)] if p != s else np.zeros(len(objs), bool)
-        to_obj[p] = [k for k in range(len(objs)) if direct[k] or via[k]]
-    deliver = [[b for b in bs if ok[o, b]] for o, bs in zip(objs, problem.allowed_bases)]
-    full = (1 << len(objs)) - 1
+    h = problem.host
+    n_obj = problem.n_objects
     dead: set = set()
 
-    def dfs(placed: int, used: frozenset, pos: int) -> bool:
-        if placed == full:
-            return bool(ok[pos, g])
-        key = (placed, used, pos)
-        if key in dead:
+    def dfs(pos: int, visited: int, placed: int) -> bool:
+        if pos == g:
+            return True
+        if (pos, visited) in dead:
             return False
-        for k in to_obj[pos]:
-            if placed >> k & 1:
-                continue
-            for b in deliver[k]:
-                if b not in used and dfs(placed | 1 << k, used | {b}, b):
-                    return True
-        dead.add(key)
+        for v in bit_nodes(allowed_next(h.next, pos, visited, placed, n_obj)):
+            bit = 1 << v
+            if dfs(v, visited | (bit & h.consumed), placed + ((bit & h.bases) > 0)):
+                return True
+        dead.add((pos, visited))
         return False
 
-    if not dfs(0, frozenset(), s):
+    if not dfs(s, 0, 0):
         raise ValueError(
             "no feasible schedule: the NaN entries of the cost matrix (with the compatibility "
             "map and one object per base) leave no way to place every object and reach the goal"

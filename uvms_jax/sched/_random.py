@@ -8,6 +8,7 @@ import jax
 import numpy as np
 
 from uvms_jax.sched._problem import PickPlaceProblem
+from uvms_jax.sched._rules import static_rules
 
 
 def _rng(key: jax.Array) -> np.random.Generator:
@@ -58,16 +59,11 @@ def random_problem(
             k = int(rng.integers(bases_per_object[0], bases_per_object[1] + 1))
             extra = [x for x in rng.permutation(bases) if x != b][: max(k - 1, 0)]
             compat[o] = tuple(sorted([int(b), *map(int, extra)]))
+    objs = sorted(compat)
+    mask = static_rules(n, 0, n - 1, objs, bases, [compat[o] for o in objs])[:n, :n]
     last = None
     for _ in range(max_tries):
         c = rng.random((n, n))
-        mask = np.zeros((n, n), bool)
-        mask[0, objects] = True
-        for o, bs in compat.items():
-            mask[o, list(bs)] = True
-        for b in bases:
-            mask[b, objects] = True
-            mask[b, 0] = mask[b, n - 1] = True
         c[:, n - 1] = c[:, 0]
         drop = rng.random((n, n)) < nan_fraction
         drop[:, n - 1] = drop[:, 0]

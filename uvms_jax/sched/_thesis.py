@@ -1,6 +1,6 @@
 """The thesis's worked example (eq. 4.1) and node layout (Table 5.1), as published.
 
-These are facts from the paper (``papers/pick-place-scheduling-thesis-2022.txt``), kept in one
+These are facts from the thesis (docs/theory.md §5), kept in one
 place: tests, the experiment's default input and the benchmark all read them from here.
 In the extracted text rows 3 and 4 of eq. 4.1 lost their NaN columns; each keeps its single
 finite entry, which belongs to the object's only base (cylinder → 7, hexagon → 8).
@@ -28,7 +28,7 @@ THESIS_NODE_NAMES = (
     "goal",
 )
 
-#: SPEC §5: objects go to a base with the same number of vertices.
+#: docs/theory.md §5: objects go to a base with the same number of vertices.
 THESIS_COMPAT = {1: (5, 6), 2: (5, 6), 3: (7,), 4: (8,)}
 
 #: Thesis eq. 4.1 cost matrix (rows: from, columns: to), NaN = move not allowed.

@@ -1,4 +1,4 @@
-"""Neural-network surrogates of the dexterity indices w and KCI (dexterity paper; SPEC §4).
+"""Neural-network surrogates of the dexterity indices w and KCI (dexterity paper; docs/theory.md §4).
 
 Datasets D1 (θ1…θ11 → KCI) and D2 (θ5…θ11 → w) of the 12-DOF UVMS, sampled as in the paper's
 Fig. 7; a feed-forward network (FFBN: tanh hidden layer, linear output) trained by
@@ -6,11 +6,16 @@ Levenberg–Marquardt or Adam; a Gaussian RBF network (RBFN) grown greedily; the
 loops; save/load. Every network has ``index_fn(q)`` with ``q: (..., 12)`` so it can replace the
 analytic index (``analytic_index_fn``) wherever a batch of configurations is scored.
 
+The whole design run is one stage: ``run_surrogates(key, chain, settings) -> SurrogateRun``
+(settings: :class:`SurrogateSettings`, mirroring ``configs/surrogate.yaml``), and
+``write_surrogates(run, out)`` writes its report, figures, datasets and networks.
+
 Error metric throughout: the maximum relative test error ``max |(T − S)/T|`` (paper eq. 21).
 """
 
 from uvms_jax.surrogate._adam import fit_adam
 from uvms_jax.surrogate._dataset import INDEX_INPUTS
+from uvms_jax.surrogate._dataset import INDEX_NAMES
 from uvms_jax.surrogate._dataset import Dataset
 from uvms_jax.surrogate._dataset import Sampling
 from uvms_jax.surrogate._dataset import analytic_index
@@ -42,11 +47,33 @@ from uvms_jax.surrogate._lm import LMHyperParams
 from uvms_jax.surrogate._lm import LMState
 from uvms_jax.surrogate._lm import fit_lm
 from uvms_jax.surrogate._lm import levenberg_marquardt
+from uvms_jax.surrogate._plots import plot_ffbn_design
+from uvms_jax.surrogate._plots import plot_rbfn_design
+from uvms_jax.surrogate._plots import plot_training
 from uvms_jax.surrogate._rbfn import RBFN
 from uvms_jax.surrogate._rbfn import RBFNFit
 from uvms_jax.surrogate._rbfn import fit_rbfn
 from uvms_jax.surrogate._rbfn import fit_rbfn_arrays
+from uvms_jax.surrogate._run import PAPER
+from uvms_jax.surrogate._run import SurrogateRun
+from uvms_jax.surrogate._run import acceptance_figures
+from uvms_jax.surrogate._run import run_surrogates
 from uvms_jax.surrogate._scaler import Scaler
 from uvms_jax.surrogate._scaler import fit_scaler
+from uvms_jax.surrogate._settings import NETWORK_NAMES
+from uvms_jax.surrogate._settings import AcceptanceSettings
+from uvms_jax.surrogate._settings import AdamSettings
+from uvms_jax.surrogate._settings import DataSettings
+from uvms_jax.surrogate._settings import FFBNSettings
+from uvms_jax.surrogate._settings import IndexFloats
+from uvms_jax.surrogate._settings import IndexInts
+from uvms_jax.surrogate._settings import RBFNSettings
+from uvms_jax.surrogate._settings import SamplingSettings
+from uvms_jax.surrogate._settings import SurrogateSettings
+from uvms_jax.surrogate._settings import TimingSettings
+from uvms_jax.surrogate._settings import split_network_name
+from uvms_jax.surrogate._timing import chunk_for
+from uvms_jax.surrogate._timing import tile_batch
 from uvms_jax.surrogate._timing import time_index_fn
 from uvms_jax.surrogate._timing import xla_flops_per_sample
+from uvms_jax.surrogate._write import write_surrogates

@@ -1,4 +1,4 @@
-"""Side-by-side timing of index functions (used by the surrogate experiment and benchmark)."""
+"""Side-by-side timing of index functions (used by the surrogate run and the benchmark)."""
 
 from __future__ import annotations
 
@@ -6,8 +6,25 @@ import time
 from typing import Callable
 
 import jax
+import jax.numpy as jnp
 import numpy as np
 from jax import Array
+
+
+def tile_batch(q: Array, n: int) -> Array:
+    """``(n, n_joints)`` float32 timing batch: the configurations ``q: (m, n_joints)`` repeated."""
+    q = jnp.asarray(q, jnp.float32)
+    if q.ndim != 2 or q.shape[0] == 0:
+        raise ValueError(f"q must have shape (m, n_joints) with m > 0, got {q.shape}")
+    if n < 1:
+        raise ValueError(f"n must be positive, got {n}")
+    return jnp.tile(q, (-(-n // q.shape[0]), 1))[:n]
+
+
+def chunk_for(n: int, chunk: int) -> int | None:
+    """The chunk size :func:`time_index_fn` uses for a batch of ``n``: ``chunk`` where ``n`` is a
+    larger multiple of it, else None (one call)."""
+    return chunk if n > chunk and n % chunk == 0 else None
 
 
 def time_index_fn(fn: Callable[[Array], Array], q: Array, *, repeats: int = 5, chunk: int | None = None) -> dict:

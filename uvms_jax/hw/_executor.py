@@ -24,16 +24,16 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from ._ids import HardwareStatus, Mode
-from ._joints import ARM_JOINTS, JAWS, JointSpec, LimitError
-from .client import Bravo7
-from .config import HwConfig
+from uvms_jax.motion import Move, synchronised_move
 from uvms_jax.planfile import Plan
 
 from ._check import PlanSummary, check_plan
-from .runlog import RunLog
-from uvms_jax.motion import Move, synchronised_move
-from .transport import LinkError
+from ._client import Bravo7
+from ._config import HwConfig
+from ._ids import HardwareStatus, Mode
+from ._joints import ARM_JOINTS, JAWS, JointSpec, LimitError
+from ._runlog import RunLog
+from ._transport import LinkError
 
 __all__ = ["AbortRun", "Executor", "GateRecord", "RunResult"]
 
@@ -109,7 +109,7 @@ class Executor:
       config: rates, thresholds and timeouts.
       sleep: how to wait [s] (``time.sleep``, or a virtual clock's ``sleep``).
       log: where commanded/measured states go (a fresh :class:`RunLog` by default).
-      arm_joints, jaws: joint specs (SPEC §1.3 Bravo 7 by default).
+      arm_joints, jaws: joint specs (the Bravo 7 by default, docs/theory.md §1.3).
       progress: optional callback ``(segment index, n_segments, name)`` for progress display.
     """
 

@@ -18,7 +18,7 @@ class LinkError(RuntimeError):
 
 
 class Transport(Protocol):
-    """What the client needs from a link."""
+    """What the client needs from a link (the transports here also have a ``name`` for logs)."""
 
     def send(self, data: bytes) -> None:
         """Send raw bytes (one datagram for UDP)."""
@@ -46,6 +46,7 @@ class UdpTransport:
 
     def __init__(self, host: str, port: int, *, bind: tuple[str, int] = ("", 0)) -> None:
         self.address = (socket.gethostbyname(host), int(port))
+        self.name = f"udp {self.address[0]}:{self.address[1]}"
         self._sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         self._sock.bind(bind)
 
@@ -87,6 +88,8 @@ class SerialTransport:
 
     def __init__(self, port: str, baudrate: int = 115200) -> None:
         import serial  # pyserial; imported here so UDP-only users do not need a port layer
+
+        self.name = f"serial {port}"
 
         try:
             self._serial = serial.serial_for_url(

@@ -15,7 +15,7 @@ from collections.abc import Callable, Iterable, Sequence
 from ._codec import PacketReader, decode_float, decode_floats, encode_floats, encode_packet
 from ._ids import BROADCAST, HardwareStatus, Mode, PacketID
 from ._joints import BRAVO7, JointSpec, LimitError, check_position, check_velocity, spec_for_device
-from .transport import LinkError, Transport
+from ._transport import LinkError, Transport
 
 __all__ = ["Bravo7", "JointState", "SENDABLE"]
 
@@ -69,7 +69,7 @@ class Bravo7:
 
     Args:
       transport: byte link (UDP, serial, or the in-process simulator link).
-      joints: joint limits the guard enforces (default: SPEC §1.3 Bravo 7).
+      joints: joint limits the guard enforces (default: the Bravo 7, docs/theory.md §1.3).
       request_timeout: default wait for the answers to one REQUEST [s].
       clock: monotonic clock [s] (injectable for simulated time).
     """

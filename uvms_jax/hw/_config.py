@@ -1,9 +1,10 @@
-"""Defaults of the hardware runner, in one place.
+"""Settings of the hardware runner, in one place.
 
 :class:`HwConfig` (executor and link) and :class:`SimConfig` (simulated arm and its faults)
-are the single source of the defaults; ``configs/hw/default.yaml`` mirrors them for Hydra
-(a test keeps the two equal) and :func:`config_from_mapping` builds them from a plain dict or
-a Hydra ``DictConfig`` section.
+are the single source of the defaults; :class:`HwSettings` holds both, shaped like
+``configs/hw/default.yaml`` (a test keeps the two equal), so that
+``uvms_jax.settings.from_mapping(HwSettings, d)`` or :func:`config_from_mapping` builds them
+from a plain dict.
 """
 
 from __future__ import annotations
@@ -12,7 +13,9 @@ import dataclasses
 from collections.abc import Mapping
 from typing import Any
 
-__all__ = ["HwConfig", "SimConfig", "config_from_mapping"]
+from uvms_jax.settings import from_mapping
+
+__all__ = ["HwConfig", "HwSettings", "SimConfig", "config_from_mapping"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -122,21 +125,26 @@ class SimConfig:
             raise ValueError("SimConfig.fault_bits must fit in one byte")
 
 
-def config_from_mapping(cfg: Mapping[str, Any]) -> tuple[HwConfig, SimConfig]:
-    """Build both configs from a mapping with optional ``executor`` and ``sim`` sections.
+@dataclasses.dataclass(frozen=True)
+class HwSettings:
+    """Both settings of a hardware run, as the ``hw`` config group writes them.
 
-    Unknown keys raise ValueError naming them (a typo must not silently fall back to a default).
+    Attributes:
+      executor: executor, safety and link settings.
+      sim: simulated arm and its faults (used only on a simulated link).
     """
-    cfg = dict(cfg)
-    unknown = set(cfg) - {"executor", "sim"}
-    if unknown:
-        raise ValueError(f"unknown hw config sections: {sorted(unknown)}")
-    out = []
-    for section, cls in (("executor", HwConfig), ("sim", SimConfig)):
-        values = dict(cfg.get(section) or {})
-        names = {f.name for f in dataclasses.fields(cls)}
-        bad = set(values) - names
-        if bad:
-            raise ValueError(f"unknown keys in hw.{section}: {sorted(bad)}")
-        out.append(cls(**values))
-    return out[0], out[1]
+
+    executor: HwConfig = HwConfig()
+    sim: SimConfig = SimConfig()
+
+
+def config_from_mapping(cfg: Mapping[str, Any] | None) -> tuple[HwConfig, SimConfig]:
+    """``(executor, sim)`` settings from a mapping with optional ``executor`` and ``sim`` sections.
+
+    Raises:
+      uvms_jax.settings.SettingsError: (a ValueError) an unknown section or key, or a value of
+        the wrong type, named by its path (a typo must not silently fall back to a default).
+      ValueError: a value out of range (see :class:`HwConfig`, :class:`SimConfig`).
+    """
+    settings = from_mapping(HwSettings, cfg, "hw")
+    return settings.executor, settings.sim

@@ -1,19 +1,19 @@
 """Simulated Bravo 7 speaking BPL, backed by MuJoCo joint-space physics, with fault injection.
 
 The physics model is deliberately small and private to ``hw`` (it does not depend on
-``uvms_jax.kin``): the six revolute joints of SPEC §1.3 (origins, axes and limits of the public
-URDF) with capsule links, gravity compensated (an underwater arm is near neutral buoyancy),
-and the jaws as one slide joint. Each joint is driven by a MuJoCo velocity actuator; the device
-firmware is modelled as a servo that turns the demand into a joint speed every physics step:
-POSITION mode ``v = clip(gain·(q* - q), ±v_max)``, VELOCITY mode ``v = clip(v*, ±v_max)``,
-other modes ``v = 0``.
+``uvms_jax.kin``): the six revolute joints of :mod:`uvms_jax.bravo7` (origins, axes and limits
+of the public URDF, docs/theory.md §1.3) with capsule links, gravity compensated (an underwater
+arm is near neutral buoyancy), and the jaws as one slide joint. Each joint is driven by a
+MuJoCo velocity actuator; the device firmware is modelled as a servo that turns the demand into
+a joint speed every physics step: POSITION mode ``v = clip(gain·(q* - q), ±v_max)``, VELOCITY
+mode ``v = clip(v*, ±v_max)``, other modes ``v = 0``.
 
 Layers:
   * :class:`SimArm` — the device: physics, modes, demands, BPL request answers, heartbeats.
     Demands outside the limits are ignored and counted (``limit_violations``), never obeyed.
   * :class:`SimLink` — the arm plus faults (drop, corruption, latency), shared by
   * :class:`SimServer` — a UDP server thread on 127.0.0.1 (ephemeral port by default), and
-  * :class:`LoopbackTransport` — an in-process :class:`~uvms_jax.hw.transport.Transport` on a
+  * :class:`LoopbackTransport` — an in-process :class:`~uvms_jax.hw.Transport` on a
     :class:`VirtualClock`, so tests run a whole plan in simulated time without sockets.
 """
 
@@ -26,70 +26,91 @@ import socket
 import threading
 import time
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 
+from uvms_jax import bravo7
+
 from ._codec import Packet, PacketReader, decode_float, encode_floats, encode_packet
+from ._config import SimConfig
 from ._ids import BROADCAST, HardwareStatus, Mode, PacketID
-from ._joints import BRAVO7, JointSpec
-from .config import SimConfig
+from ._joints import BRAVO7, MM_PER_M, JointSpec
 
-__all__ = ["LoopbackTransport", "SimArm", "SimLink", "SimServer", "VirtualClock", "sim_mjcf"]
+if TYPE_CHECKING:
+    import mujoco
 
-_MM = 1e-3  # jaws: mm on the wire, m in MuJoCo
+__all__ = ["LoopbackTransport", "SimArm", "SimLink", "SimServer", "VirtualClock", "sim_spec"]
 
-# SPEC §1.3: (joint, parent→child origin xyz [m], rpy [rad], axis)
-_CHAIN = (
-    ("G", (0.0665, 0, 0.078), (0, 0, 0), (0, 0, -1)),
-    ("F", (-0.046, 0, 0.0674), (0, 0, 0), (0, 1, 0)),
-    ("E", (-0.0052, 0, -0.29055), (0, 0, 0), (0, 1, 0)),
-    ("D", (0.0408, 0, 0.09695), (0, 0, 3.14159), (0, 0, -1)),
-    ("C", (-0.0408, 0, 0.063), (0, 0, 0), (0, 1, 0)),
-    ("B", (-0.0408, 0, -0.08863), (0, 3.14159, 0), (0, 0, -1)),
-)
-_LINK_RADIUS = 0.045  # SPEC: roughly 0.09 m diameter links
+_MM = 1.0 / MM_PER_M  # jaws: mm on the wire, m in MuJoCo
+
+# Physics of the simulated device (not Bravo 7 data): rotor inertia and damping per joint
+# [kg·m², N·m·s/rad; jaws kg, N·s/m], the jaws' box [m, kg] and the velocity servo gain.
+_HINGE_ARMATURE, _HINGE_DAMPING = 0.05, 0.1
+_JAWS_ARMATURE, _JAWS_DAMPING = 0.5, 1.0
+_JAWS_HALF_SIZE, _JAWS_MASS = (0.01, 0.02, 0.02), 0.2
+_KV = 30.0
 
 
-def _vec(v: Sequence[float]) -> str:
-    return " ".join(f"{x:g}" for x in v)
+def sim_spec(joints: Sequence[JointSpec] = BRAVO7, kv: float = _KV,
+             physics_dt: float = SimConfig.physics_dt) -> mujoco.MjSpec:
+    """MuJoCo model of the simulated arm: six hinges G…B, jaws slide A, one velocity actuator each.
 
+    Geometry from :mod:`uvms_jax.bravo7` (URDF joint origins and axes, tool frame, link
+    radius); position limits from ``joints`` (wire units: rad, jaws mm). Links are capsules
+    from each joint to the next (density 1000 kg/m³, no contacts), all gravity compensated.
 
-def sim_mjcf(joints: Sequence[JointSpec] = BRAVO7, kv: float = 30.0) -> str:
-    """MJCF of the simulated arm: six hinges G…B, jaws slide A, one velocity actuator each."""
-    spec = {j.name: j for j in joints}
-    body = ""
-    closing = ""
-    indent = "    "
-    for k, (name, xyz, rpy, axis) in enumerate(_CHAIN):
-        nxt = _CHAIN[k + 1][1] if k + 1 < len(_CHAIN) else (0, 0, 0.124)
-        s = spec[name]
-        body += (
-            f'{indent}<body name="link_{name}" pos="{_vec(xyz)}" euler="{_vec(rpy)}" gravcomp="1">\n'
-            f'{indent}  <joint name="{name}" type="hinge" axis="{_vec(axis)}" range="{s.lower:g} {s.upper:g}" '
-            f'limited="true" armature="0.05" damping="0.1"/>\n'
-            f'{indent}  <geom type="capsule" fromto="0 0 0 {_vec(nxt)}" size="{_LINK_RADIUS}"/>\n'
-        )
-        closing = f"{indent}</body>\n" + closing
-        indent += "  "
-    a = spec["A"]
-    body += (
-        f'{indent}<body name="jaws" pos="0 0 0.133" gravcomp="1">\n'
-        f'{indent}  <joint name="A" type="slide" axis="0 0 1" range="{a.lower * _MM:g} {a.upper * _MM:g}" '
-        f'limited="true" armature="0.5" damping="1"/>\n'
-        f'{indent}  <geom type="box" size="0.01 0.02 0.02" mass="0.2"/>\n'
-        f"{indent}</body>\n"
-    )
-    acts = "".join(f'    <velocity name="v_{n}" joint="{n}" kv="{kv:g}"/>\n' for n, *_ in _CHAIN)
-    acts += f'    <velocity name="v_A" joint="A" kv="{kv:g}"/>\n'
-    return (
-        '<mujoco model="bravo7_hw_sim">\n'
-        '  <compiler angle="radian"/>\n'
-        '  <option timestep="0.002" integrator="implicitfast"/>\n'
-        '  <default><geom density="1000" contype="0" conaffinity="0"/></default>\n'
-        "  <worldbody>\n" + body + closing + "  </worldbody>\n"
-        "  <actuator>\n" + acts + "  </actuator>\n"
-        "</mujoco>\n"
-    )
+    Args:
+      joints: limits of G…B then A, by name.
+      kv: velocity actuator gain [N·m·s/rad; N·s/m for the jaws].
+      physics_dt: time step [s].
+
+    Returns:
+      an uncompiled ``mujoco.MjSpec`` (``.compile()`` gives the ``MjModel``).
+    """
+    import mujoco  # imported here: the protocol layer must not need MuJoCo
+
+    limits = {j.name: j for j in joints}
+    spec = mujoco.MjSpec()
+    spec.modelname = "bravo7_hw_sim"
+    spec.compiler.degree = False
+    spec.compiler.eulerseq = "XYZ"  # URDF rpy: extrinsic roll, pitch, yaw
+    spec.option.timestep = physics_dt
+    spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+    spec.default.geom.contype = 0  # joint-space physics: nothing collides
+    spec.default.geom.conaffinity = 0
+    spec.default.geom.density = 1000.0
+
+    def place(frame, xyz, rpy) -> None:
+        frame.pos = xyz
+        frame.alt.type = mujoco.mjtOrientation.mjORIENTATION_EULER
+        frame.alt.euler = rpy
+
+    parent = spec.worldbody
+    chain = bravo7.ARM_JOINTS
+    for k, joint in enumerate(chain):
+        body = parent.add_body(name=f"link_{joint.name}", gravcomp=1.0)
+        place(body, joint.xyz, joint.rpy)
+        lim = limits[joint.name]
+        body.add_joint(name=joint.name, type=mujoco.mjtJoint.mjJNT_HINGE, axis=joint.axis,
+                       range=[lim.lower, lim.upper], limited=mujoco.mjtLimited.mjLIMITED_TRUE,
+                       armature=_HINGE_ARMATURE, damping=_HINGE_DAMPING)
+        end = chain[k + 1].xyz if k + 1 < len(chain) else bravo7.TOOL_XYZ
+        body.add_geom(type=mujoco.mjtGeom.mjGEOM_CAPSULE, fromto=[0, 0, 0, *end], size=[bravo7.LINK_RADIUS, 0, 0])
+        parent = body
+    tool = parent.add_frame()
+    place(tool, bravo7.TOOL_XYZ, bravo7.TOOL_RPY)
+    jaws = tool.add_body(name="jaws", gravcomp=1.0)
+    place(jaws, bravo7.JAWS.xyz, bravo7.JAWS.rpy)
+    lim = limits[bravo7.JAWS.name]
+    jaws.add_joint(name=bravo7.JAWS.name, type=mujoco.mjtJoint.mjJNT_SLIDE, axis=bravo7.JAWS.axis,
+                   range=[lim.lower * _MM, lim.upper * _MM], limited=mujoco.mjtLimited.mjLIMITED_TRUE,
+                   armature=_JAWS_ARMATURE, damping=_JAWS_DAMPING)
+    jaws.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=_JAWS_HALF_SIZE, mass=_JAWS_MASS)
+    for joint in bravo7.JOINTS:
+        act = spec.add_actuator(name=f"v_{joint.name}", target=joint.name, trntype=mujoco.mjtTrn.mjTRN_JOINT)
+        act.set_to_velocity(kv=kv)
+    return spec
 
 
 class SimArm:
@@ -109,8 +130,7 @@ class SimArm:
         self._mj = mujoco
         self.config = config
         self.joints = tuple(joints)
-        self.model = mujoco.MjModel.from_xml_string(sim_mjcf(self.joints))
-        self.model.opt.timestep = config.physics_dt
+        self.model = sim_spec(self.joints, physics_dt=config.physics_dt).compile()
         self.data = mujoco.MjData(self.model)
         names = [j.name for j in self.joints]
         self._qadr = np.array([self.model.jnt_qposadr[self.model.joint(n).id] for n in names])
@@ -347,6 +367,7 @@ class LoopbackTransport:
 
     def __init__(self, link: SimLink, clock: VirtualClock, *, tick: float = 0.01) -> None:
         self.link, self.clock = link, clock
+        self.name = "loopback"
         self.sent: list[bytes] = []
         self._tick = tick
 

@@ -1,0 +1,43 @@
+"""The docking stage: settings from the composed config, and a tiny end-to-end run (slow)."""
+
+import json
+from pathlib import Path
+
+import pytest
+from hydra import compose, initialize_config_dir
+from omegaconf import OmegaConf
+
+from uvms_jax import evo
+from uvms_jax.settings import SettingsError, from_mapping
+
+CONFIGS = str(Path(__file__).resolve().parents[2] / "configs")
+
+
+def _composed(*overrides) -> dict:
+    with initialize_config_dir(config_dir=CONFIGS, version_base="1.3"):
+        return OmegaConf.to_container(compose(config_name="docking", overrides=list(overrides)), resolve=True)
+
+
+def test_settings_defaults_equal_the_full_config():
+    assert from_mapping(evo.DockingSettings, _composed()) == evo.DockingSettings()
+
+
+def test_settings_reject_unknown_keys():
+    with pytest.raises(SettingsError, match="unknown keys"):
+        from_mapping(evo.DockingSettings, {"ga": {"population": 10}})
+
+
+@pytest.mark.slow
+def test_tiny_run_writes_every_file(tmp_path):
+    s = from_mapping(evo.DockingSettings, _composed(
+        "docking/preset=fast", "n_runs=2", "grid.counts=[5,5,2,4]", "grid.refine_stages=1",
+        "wmax.n_per_side=5", "ga.population_size=12", "ga.max_generations=5", "cmaes.n_runs=2",
+        "cmaes.generations=3"))
+    run = evo.run_docking(s)
+    assert run.poses.shape == (2, 4) and run.fitness.shape == (2,) and len(run.histories) == 2
+    assert run.refined_grid.fitness >= run.grid.fitness
+    summary = evo.write_docking(run, tmp_path)
+    names = {"runs.csv", "grid_optimum.json", "cmaes.json", "wmax.json", "wmax_best.png",
+             "wmax_ill_placed.png", "convergence.png", "summary.json"}
+    assert names <= {p.name for p in tmp_path.iterdir()}
+    assert json.loads((tmp_path / "summary.json").read_text())["ga_fitness"] == summary["ga_fitness"]

@@ -1,0 +1,268 @@
+"""The docking run as one stage: GA runs, grid reference, CMA-ES, w_max maps, pose checks.
+
+:func:`run_docking` computes everything (docking paper Tables 2–3, Figs 9–10) and returns a
+:class:`DockingRun`; :func:`uvms_jax.evo.write_docking` turns it into files and plots.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import os
+import time
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from uvms_jax.evo._binary import BinaryCodec, make_codec
+from uvms_jax.evo._cmaes import run_cmaes
+from uvms_jax.evo._ga import BinaryGA, GAParams, run_ga, run_ga_batch
+from uvms_jax.evo._grid import grid_search, refine_grid_search
+from uvms_jax.evo._problem import DockingProblem, docking_point, evaluate, make_docking_problem
+from uvms_jax.evo._settings import FIELDS, DockingSettings, GASettings, SceneSettings
+from uvms_jax.evo._wmax import WmaxMap, wmax_map
+
+log = logging.getLogger(__name__)
+
+PERIODIC = (False, False, False, True)  # ψ wraps: the grid does not sample −π and π twice
+
+
+def docking_problem(scene: SceneSettings, dtype: str = "float32") -> DockingProblem:
+    """:func:`make_docking_problem` from :class:`SceneSettings`."""
+    return make_docking_problem(**dataclasses.asdict(scene), dtype=jnp.dtype(dtype))
+
+
+def make_ga(settings: GASettings, problem: DockingProblem) -> tuple[BinaryCodec, BinaryGA, GAParams]:
+    """Codec over the problem's box, static GA sizes and hyperparameters from the settings."""
+    s = settings
+    codec = make_codec(problem.pose_low, problem.pose_high, [getattr(s.bits, f) for f in FIELDS], gray=s.gray)
+    ga = BinaryGA(
+        population_size=s.population_size,
+        n_bits=codec.n_bits,
+        max_generations=s.max_generations,
+        n_elites=s.n_elites,
+        tournament_size=s.tournament_size,
+        eval_chunk=s.eval_chunk,
+    )
+    params = GAParams(
+        crossover_rate=s.crossover_rate,
+        mutation_rate=s.mutation_rate,
+        crossover_bias=s.crossover_bias,
+        rate_decay=s.rate_decay,
+        improvement_decay=s.improvement_decay,
+        crossover_rate_min=s.crossover_rate_min,
+        mutation_rate_min=s.mutation_rate_min,
+        stall_generations=s.stall_generations,
+        improvement_tol=s.improvement_tol,
+    )
+    return codec, ga, params
+
+
+@dataclasses.dataclass(frozen=True)
+class GridOptimum:
+    """Best grid point: ``pose (4,)`` [m, rad], fitness (eq. 15), M_a (eq. 1), D (eq. 3) [m],
+    grid points evaluated and wall time [s]."""
+
+    pose: np.ndarray
+    fitness: float
+    M_a: float
+    D: float
+    candidates: int
+    seconds: float
+
+
+@dataclasses.dataclass(frozen=True)
+class CMAESRuns:
+    """CMA-ES runs: best ``poses (R, 4)``, ``fitness (R,)``, ``history (R, generations)``,
+    batch wall time [s] after compilation, and evaluations per run."""
+
+    poses: np.ndarray
+    fitness: np.ndarray
+    history: np.ndarray
+    seconds: float
+    evaluations_per_run: int
+
+
+@dataclasses.dataclass(frozen=True)
+class PoseMap:
+    """The w_max map (eq. 16) of one docking pose ``(4,)`` and the pose's M_a (eq. 1)."""
+
+    pose: np.ndarray
+    map: WmaxMap
+    M_a: float
+
+    @property
+    def zero_fraction(self) -> float:
+        """Share of the task area with no valid IK branch."""
+        return self.map.zero_fraction
+
+    @property
+    def w_max_mean(self) -> float:
+        return float(self.map.w_max.mean())
+
+
+@dataclasses.dataclass(frozen=True)
+class DockingRun:
+    """Everything a docking run found (arrays are NumPy; R = ``settings.n_runs``).
+
+    Attributes:
+      settings: the settings of the run.
+      poses: ``(R, 4)`` best pose ``[x, y, z, ψ]`` of each GA run [m, rad].
+      fitness, M_a: ``(R,)`` their fitness (eq. 15) and area manipulability (eq. 1).
+      generations, evaluations: ``(R,)`` generations and fitness evaluations per run.
+      histories: per run, best fitness per generation, ``(generations[r],)``.
+      run_seconds: ``(R,)`` time of each run alone, or the batch time for each.
+      ga_batch_seconds: all R runs in one call, after compilation [s].
+      ga_compile_seconds: compilation and the first batch [s].
+      grid, refined_grid: the dense grid's optimum and its polish by zoom stages.
+      refine_stage_fitness: best fitness after each zoom stage.
+      cmaes: the CMA-ES baseline, or None when disabled.
+      wmax_best, wmax_ill_placed: w_max maps of the best GA pose and the ill-placed pose.
+      pose_checks: per GA run, where its pose lies (see :func:`pose_checks`).
+      load_average, device: machine state at the end of the run.
+    """
+
+    settings: DockingSettings
+    poses: np.ndarray
+    fitness: np.ndarray
+    M_a: np.ndarray
+    generations: np.ndarray
+    evaluations: np.ndarray
+    histories: tuple[np.ndarray, ...]
+    run_seconds: tuple[float, ...]
+    ga_batch_seconds: float
+    ga_compile_seconds: float
+    grid: GridOptimum
+    refined_grid: GridOptimum
+    refine_stage_fitness: tuple[float, ...]
+    cmaes: CMAESRuns | None
+    wmax_best: PoseMap
+    wmax_ill_placed: PoseMap
+    pose_checks: tuple[dict, ...]
+    load_average: tuple[float, float, float]
+    device: str
+
+    @property
+    def ga_ratio_to_grid(self) -> np.ndarray:
+        """``(R,)`` GA best fitness / grid optimum."""
+        return self.fitness / self.grid.fitness
+
+    @property
+    def ga_ratio_to_refined_grid(self) -> np.ndarray:
+        return self.fitness / self.refined_grid.fitness
+
+    @property
+    def all_face_task_area(self) -> bool:
+        """Every GA run's vehicle heads towards the task centre."""
+        return all(c["faces_task_area"] for c in self.pose_checks)
+
+
+def _timed(fn, *args):
+    t0 = time.perf_counter()
+    out = jax.block_until_ready(fn(*args))
+    return out, time.perf_counter() - t0
+
+
+def pose_checks(problem: DockingProblem, pose, p_init, tol: float) -> dict:
+    """Where a pose ``(4,)`` lies relative to the start ``p_init (3,)`` [m]: the quarter of the
+    top face nearest ``p_init`` (closed, within ``tol`` [m], for the arm base; open for the
+    docking point) and the heading vs the task area."""
+    pose = np.asarray(pose, dtype=float)
+    sx, sy = np.sign(p_init[0]), np.sign(p_init[1])
+    p_d = np.asarray(docking_point(jnp.asarray(pose), problem.p_bp))
+    c = np.asarray(problem.task_center)
+    bearing = np.arctan2(c[1] - pose[1], c[0] - pose[0])
+    off = float(np.abs(np.angle(np.exp(1j * (pose[3] - bearing)))))
+    return {
+        "base_in_near_quarter": bool(pose[0] * sx >= -tol and pose[1] * sy >= -tol),
+        "docking_point": p_d.tolist(),
+        "docking_point_in_near_quarter": bool(p_d[0] * sx > 0 and p_d[1] * sy > 0),
+        "heading_off_task_centre_deg": float(np.degrees(off)),
+        "faces_task_area": bool(off < np.pi / 2),  # the task centre lies ahead of the vehicle
+    }
+
+
+def _grid_optimum(problem: DockingProblem, x, fitness, candidates: int, seconds: float) -> GridOptimum:
+    e = evaluate(problem, x)
+    return GridOptimum(np.asarray(x), float(fitness), float(e.M_a), float(e.D), int(candidates), seconds)
+
+
+def _pose_map(problem: DockingProblem, pose, n_per_side: int) -> PoseMap:
+    return PoseMap(np.asarray(pose), wmax_map(problem, pose, n_per_side), float(evaluate(problem, pose).M_a))
+
+
+def run_docking(settings: DockingSettings) -> DockingRun:
+    """The docking experiment: GA batch (timed after a compile run), optional single-run
+    timing, dense grid + zoom refinement, optional CMA-ES, w_max maps, pose checks.
+
+    Raises:
+      ValueError: float64 asked for without ``jax_enable_x64`` (set it once at start).
+    """
+    if jnp.dtype(settings.dtype) == jnp.float64 and not jax.config.jax_enable_x64:
+        raise ValueError("dtype float64 needs jax.config.update('jax_enable_x64', True) before the run")
+    s = settings
+    problem = docking_problem(s.scene, s.dtype)
+    codec, ga, params = make_ga(s.ga, problem)
+    log.info("load average %s; devices %s", os.getloadavg(), jax.devices())
+
+    # GA: R runs in one call. The first call compiles; the second is timed.
+    keys = jax.random.split(jax.random.key(s.seed), s.n_runs)
+    _, t_compile = _timed(run_ga_batch, keys, problem, codec, ga, params)
+    res, t_batch = _timed(run_ga_batch, keys, problem, codec, ga, params)
+    log.info("GA: %d runs in %.3f s after compilation (compile + first run %.1f s)", s.n_runs, t_batch, t_compile)
+    seconds = [t_batch] * s.n_runs
+    if s.time_single_runs:
+        run_ga(keys[0], problem, codec, ga, params)  # compile the single-run path
+        seconds = [_timed(run_ga, keys[r], problem, codec, ga, params)[1] for r in range(s.n_runs)]
+
+    # Grid reference: a global grid (compiled once for any size), then zoom stages.
+    g = s.grid
+    low, high = problem.pose_low, problem.pose_high
+    grid_search(problem, low, high, (2, 2, 2, 2), PERIODIC, g.chunk_size)  # compile
+    grid, t_grid = _timed(grid_search, problem, low, high, g.counts, PERIODIC, g.chunk_size)
+    stages, t_refine = _timed(
+        refine_grid_search, problem, grid, g.refine_counts, g.refine_stages, g.refine_shrink, g.chunk_size
+    )
+    ref = stages[-1] if stages else grid
+    grid_opt = _grid_optimum(problem, grid.x, grid.fitness, grid.n_candidates, t_grid)
+    refined = _grid_optimum(problem, ref.x, ref.fitness, sum(st.n_candidates for st in stages), t_refine)
+    log.info("grid: %d candidates in %.1f s, optimum %.4f; refined (%d more) %.4f",
+             grid.n_candidates, t_grid, grid_opt.fitness, refined.candidates, refined.fitness)
+
+    cmaes = None
+    if s.cmaes.enabled:
+        c = s.cmaes
+        ckeys = jax.random.split(jax.random.key(s.seed + 1), c.n_runs)
+        args = (ckeys, problem, low, high, c.population_size, c.generations, c.std_init)
+        _timed(run_cmaes, *args)  # compile
+        cma, t_cma = _timed(run_cmaes, *args)
+        cmaes = CMAESRuns(np.asarray(cma.best_x), np.asarray(cma.best_fitness), np.asarray(cma.history),
+                          t_cma, c.population_size * c.generations)
+        log.info("CMA-ES: %d runs in %.2f s, best %.4f", c.n_runs, t_cma, float(np.max(cmaes.fitness)))
+
+    poses, fitness = np.asarray(res.best_x), np.asarray(res.best_fitness)
+    generations = np.asarray(res.generations)
+    best_pose = poses[int(np.argmax(fitness))]
+    tol = float(np.max(np.asarray(codec.resolution)[:2]))  # x = 0 / y = 0 is not on the lattice
+    return DockingRun(
+        settings=s,
+        poses=poses,
+        fitness=fitness,
+        M_a=np.asarray(evaluate(problem, res.best_x).M_a),
+        generations=generations,
+        evaluations=np.asarray(res.evaluations),
+        histories=tuple(np.asarray(h)[: int(n)] for h, n in zip(res.history, generations)),
+        run_seconds=tuple(seconds),
+        ga_batch_seconds=t_batch,
+        ga_compile_seconds=t_compile,
+        grid=grid_opt,
+        refined_grid=refined,
+        refine_stage_fitness=tuple(float(st.fitness) for st in stages),
+        cmaes=cmaes,
+        wmax_best=_pose_map(problem, best_pose, s.wmax.n_per_side),
+        wmax_ill_placed=_pose_map(problem, list(s.ill_placed_pose), s.wmax.n_per_side),
+        pose_checks=tuple(pose_checks(problem, x, s.scene.p_init, tol) for x in poses),
+        load_average=os.getloadavg(),
+        device=str(jax.devices()[0]),
+    )

@@ -1,0 +1,97 @@
+"""Files of a docking run: tables, JSON and figures in one output folder."""
+
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+
+import numpy as np
+
+from uvms_jax.evo._docking import DockingRun, GridOptimum
+from uvms_jax.evo._plots import plot_convergence, plot_wmax
+from uvms_jax.evo._settings import FIELDS
+
+
+def _pose(x) -> dict:
+    return dict(zip(FIELDS, np.asarray(x, dtype=float).tolist()))
+
+
+def _optimum(g: GridOptimum) -> dict:
+    return {"pose": _pose(np.asarray(g.pose)), "fitness": g.fitness, "Ma": g.M_a, "D": g.D}
+
+
+def docking_summary(run: DockingRun) -> dict:
+    """Acceptance figures of a run (the contents of summary.json)."""
+    s = run.settings
+    references = {"grid": run.grid.fitness, "refined_grid": run.refined_grid.fitness}
+    f_ga = run.fitness
+    checks = list(run.pose_checks)
+    return {
+        "ga_fitness": f_ga.tolist(),
+        **{f"ga_ratio_to_{k}": (f_ga / v).round(5).tolist() for k, v in references.items()},
+        **{f"ga_runs_within_{s.accept_ratio}_of_{k}": int(np.sum(f_ga >= s.accept_ratio * v)) for k, v in references.items()},
+        "ga_batch_seconds": run.ga_batch_seconds,
+        "ga_compile_and_first_batch_seconds": run.ga_compile_seconds,
+        "ga_generations": run.generations.tolist(),
+        "ga_evaluations": run.evaluations.tolist(),
+        "best_pose_checks": checks,
+        "all_bases_in_near_quarter": all(c["base_in_near_quarter"] for c in checks),
+        "all_docking_points_in_near_quarter": all(c["docking_point_in_near_quarter"] for c in checks),
+        "all_face_task_area": run.all_face_task_area,
+        "zero_w_fraction": {"best": run.wmax_best.zero_fraction, "ill_placed": run.wmax_ill_placed.zero_fraction},
+        "load_average": run.load_average,
+        "device": run.device,
+    }
+
+
+def write_docking(run: DockingRun, out: Path) -> dict:
+    """Write a run into the folder ``out`` and return the summary.
+
+    Files: runs.csv (one row per GA run: x, y, z, psi, fitness, Ma, generations, seconds),
+    grid_optimum.json (grid optimum and its zoom refinement), cmaes.json (when CMA-ES ran),
+    wmax.json (zero-w fraction, M_a and mean w_max of the best and the ill-placed pose),
+    wmax_best.png, wmax_ill_placed.png (eq. 16 maps), convergence.png, summary.json.
+    """
+    out = Path(out)
+    s = run.settings
+    grid = {**_optimum(run.grid), "counts": list(s.grid.counts), "candidates": run.grid.candidates,
+            "seconds": run.grid.seconds,
+            "refined": {**_optimum(run.refined_grid), "candidates": run.refined_grid.candidates,
+                        "seconds": run.refined_grid.seconds, "stages": list(run.refine_stage_fitness)}}
+    (out / "grid_optimum.json").write_text(json.dumps(grid, indent=2))
+
+    if run.cmaes is not None:
+        c = run.cmaes
+        (out / "cmaes.json").write_text(json.dumps({
+            "runs": [{**dict(zip(FIELDS, np.asarray(x).tolist())), "fitness": float(f)} for x, f in zip(c.poses, c.fitness)],
+            "seconds": c.seconds,
+            "evaluations_per_run": c.evaluations_per_run,
+            "ratio_to_grid": (c.fitness / run.grid.fitness).tolist(),
+            "ratio_to_refined_grid": (c.fitness / run.refined_grid.fitness).tolist(),
+        }, indent=2))
+
+    with open(out / "runs.csv", "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow([*FIELDS, "fitness", "Ma", "generations", "seconds"])
+        for r in range(len(run.fitness)):
+            w.writerow([*run.poses[r].round(6).tolist(), round(float(run.fitness[r]), 6), round(float(run.M_a[r]), 6),
+                        int(run.generations[r]), round(run.run_seconds[r], 4)])
+
+    maps = {"best": run.wmax_best, "ill_placed": run.wmax_ill_placed}
+    vmax = max(float(m.map.w_max.max()) for m in maps.values())
+    for name, m in maps.items():
+        label = ", ".join(f"{float(v):.3f}" for v in m.pose)
+        plot_wmax(m.map, f"{name.replace('_', '-')} pose [{label}]", out / f"wmax_{name}.png", vmax)
+    (out / "wmax.json").write_text(json.dumps({
+        name: {"pose": _pose(m.pose), "zero_w_fraction": m.zero_fraction, "Ma": m.M_a,
+               "w_max_mean": m.w_max_mean, "n_per_side": s.wmax.n_per_side}
+        for name, m in maps.items()
+    }, indent=2))
+
+    plot_convergence(list(run.histories), [] if run.cmaes is None else run.cmaes.history,
+                     {"grid optimum": run.grid.fitness, "refined grid": run.refined_grid.fitness},
+                     out / "convergence.png")
+    summary = docking_summary(run)
+    (out / "summary.json").write_text(json.dumps(summary, indent=2))
+    return summary

@@ -1,0 +1,196 @@
+"""The hardware stage: run a plan on a link (simulated or real) and write what happened.
+
+:func:`run_plan` is what ``uvms-hw run`` and the end-to-end pipeline both call;
+:func:`write_run` writes its files (``run.csv``, ``run.png``, ``result.json``).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import json
+import math
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Any
+
+from uvms_jax.planfile import Plan
+
+from ._check import PlanSummary, check_plan
+from ._client import Bravo7
+from ._config import HwConfig, SimConfig
+from ._executor import Executor, RunResult
+from ._joints import BRAVO7
+from ._runlog import RunLog
+from ._sim import LoopbackTransport, SimArm, SimLink, SimServer, VirtualClock
+from ._transport import UdpTransport
+
+__all__ = ["SIM_LINKS", "HwRun", "SimCounts", "run_plan", "run_report", "write_run"]
+
+# Simulated links by name: the arm in-process on a virtual clock (a run costs only its
+# computation), or behind a UDP socket on 127.0.0.1 in real time (the real arm's code path).
+SIM_LINKS = ("loopback", "udp")
+
+
+@dataclasses.dataclass(frozen=True)
+class SimCounts:
+    """What the simulated arm and its link counted during a run.
+
+    Attributes:
+      limit_violations: demands outside the limits the device received (and ignored).
+      dropped: datagrams lost by fault injection (both directions).
+      corrupted: replies with a byte changed by fault injection.
+    """
+
+    limit_violations: int
+    dropped: int
+    corrupted: int
+
+
+@dataclasses.dataclass(frozen=True)
+class HwRun:
+    """Outcome of :func:`run_plan`.
+
+    Attributes:
+      result: the executor's result (gates, errors, why it stopped).
+      log: commanded vs measured joint states of every tick (rad, jaws mm).
+      link: ``"loopback"``, ``"udp"`` (simulated arms) or the real link, e.g.
+        ``"udp 192.168.2.3:6789"`` or ``"serial /dev/ttyUSB0"``.
+      wall_s: wall-clock time of the run, simulator start-up included [s].
+      sim: the simulated arm's counters (None on a real arm).
+    """
+
+    result: RunResult
+    log: RunLog
+    link: str
+    wall_s: float
+    sim: SimCounts | None = None
+
+    @property
+    def ok(self) -> bool:
+        """Every segment completed."""
+        return self.result.ok
+
+    @property
+    def check(self) -> PlanSummary:
+        """The dry run's summary of the plan."""
+        return self.result.summary
+
+
+def run_plan(
+    plan: Plan,
+    *,
+    link: str | Bravo7 = "loopback",
+    config: HwConfig = HwConfig(),
+    sim: SimConfig = SimConfig(),
+    progress: Callable[[int, int, str], None] | None = None,
+) -> HwRun:
+    """Dry-run check ``plan``, then execute it on ``link``.
+
+    Args:
+      plan: joint waypoints G…B [rad] and jaws steps [mm].
+      link: ``"loopback"``: a simulated arm in this process on a virtual clock;
+        ``"udp"``: a simulated arm served on 127.0.0.1 over UDP, in real time; or an open
+        :class:`Bravo7` client (a real arm in real time; the caller closes it). A simulated
+        arm starts at the plan's first waypoint with the jaws at 0 mm.
+      config: executor, safety and link settings.
+      sim: the simulated arm and its faults (ignored for a client).
+      progress: called ``(segment index, n_segments, segment name)`` as segments start.
+
+    Returns:
+      the run; a run stopped for safety (arm told to hold) is ``ok=False`` with the reason,
+      not an exception.
+
+    Raises:
+      PlanError: the dry run refused the plan; nothing was started or sent.
+      ValueError: ``link`` is neither a simulated link name nor a client.
+    """
+    if not (isinstance(link, Bravo7) or link in SIM_LINKS):
+        raise ValueError(f"link must be one of {list(SIM_LINKS)} or an open Bravo7 client, got {link!r}")
+    check_plan(plan, config)  # before any simulator exists: a refused plan starts nothing
+    log = RunLog(tuple(j.name for j in BRAVO7))
+    t0 = time.perf_counter()
+    if isinstance(link, Bravo7):
+        result = Executor(link, config, log=log, progress=progress).run(plan)
+        return HwRun(result, log, _link_name(link), time.perf_counter() - t0)
+    with _simulated(link, plan, config, sim) as (client, sleep, sim_link):
+        result = Executor(client, config, sleep=sleep, log=log, progress=progress).run(plan)
+    counts = SimCounts(sim_link.arm.limit_violations, sim_link.dropped, sim_link.corrupted)
+    return HwRun(result, log, link, time.perf_counter() - t0, counts)
+
+
+@contextlib.contextmanager
+def _simulated(link: str, plan: Plan, config: HwConfig,
+               sim: SimConfig) -> Iterator[tuple[Bravo7, Callable[[float], None], SimLink]]:
+    """A client of a simulated arm at the plan's start: ``(client, sleep, link)``."""
+    start = next(s.q[0] for s in plan.segments if s.q)  # the dry run ensured there is one
+    arm = SimArm(sim, [*start, 0.0])
+    if link == "loopback":
+        clock = VirtualClock()
+        sim_link = SimLink(arm)
+        with Bravo7(LoopbackTransport(sim_link, clock), clock=clock.now,
+                    request_timeout=config.request_timeout_s) as client:
+            yield client, clock.sleep, sim_link
+    else:
+        with SimServer(arm) as server, Bravo7(UdpTransport(*server.address),
+                                              request_timeout=config.request_timeout_s) as client:
+            yield client, time.sleep, server.link
+
+
+def _link_name(client: Bravo7) -> str:
+    return getattr(client.transport, "name", type(client.transport).__name__)
+
+
+def _finite(value: float, digits: int | None = None) -> float | None:
+    """JSON has no NaN: None for 'not measured'."""
+    if math.isnan(value):
+        return None
+    return value if digits is None else round(value, digits)
+
+
+def run_report(run: HwRun, out: Path | str | None = None, plan_path: Path | str | None = None) -> dict[str, Any]:
+    """``result.json``'s content: the run's key figures, plain JSON values.
+
+    Keys: ``ok``, ``reason``, ``gates``, ``max_gate_error_rad`` [rad], ``max_gate_error_mm`` [mm]
+    (None without gates), ``grips``, ``duration_s`` (on the link's clock, virtual for
+    ``loopback``) [s], ``abort_after_s`` [s] (None if ok), ``ticks``, ``link_timeouts``,
+    ``wall_s`` [s], ``link``, then ``plan`` and ``out`` (paths, when given) and, on a simulated
+    arm, ``sim``: ``{limit_violations, dropped, corrupted}``.
+    """
+    r = run.result
+    report: dict[str, Any] = {
+        "ok": r.ok,
+        "reason": r.reason,
+        "gates": len(r.gates),
+        "max_gate_error_rad": _finite(r.max_gate_error_rad),
+        "max_gate_error_mm": _finite(r.max_gate_error_mm),
+        "grips": r.grips,
+        "duration_s": round(r.duration_s, 3),
+        "abort_after_s": _finite(r.abort_after_s, 3),
+        "ticks": r.ticks,
+        "link_timeouts": r.link_timeouts,
+        "wall_s": round(run.wall_s, 3),
+        "link": run.link,
+    }
+    if plan_path is not None:
+        report["plan"] = str(plan_path)
+    if out is not None:
+        report["out"] = str(out)
+    if run.sim is not None:
+        report["sim"] = dataclasses.asdict(run.sim)
+    return report
+
+
+def write_run(run: HwRun, out: Path | str, *, plot: bool = True,
+              plan_path: Path | str | None = None) -> dict[str, Any]:
+    """Write ``run.csv`` (every tick), ``run.png`` (if ``plot`` and anything was logged) and
+    ``result.json`` (:func:`run_report`) into ``out`` (created); returns the report."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    run.log.write_csv(out / "run.csv")
+    if plot and run.log.rows:
+        run.log.plot(out / "run.png")
+    report = run_report(run, out, plan_path)
+    (out / "result.json").write_text(json.dumps(report, indent=2))
+    return report

@@ -1,0 +1,121 @@
+"""Figures of the planning stage: end-effector paths, plan joint curves, rendered frames.
+
+matplotlib is imported inside each function with the Agg backend (files only, no display).
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import numpy as np
+
+from uvms_jax import kin, planfile
+from uvms_jax.plan._collision import densify
+from uvms_jax.plan._scene import Scene
+from uvms_jax.plan._targets import NodeTarget
+from uvms_jax.plan._tasks import EdgeResult
+
+__all__ = ["plot_ee_paths", "plot_plan_joints", "render_frames"]
+
+log = logging.getLogger(__name__)
+
+_EE_PATH_STEP = 0.02  # [rad] interpolation step of the drawn paths: smooth curves, few points
+
+
+def _pyplot():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def plot_ee_paths(scene: Scene, results: Sequence[EdgeResult], path: Path) -> None:
+    """End-effector paths of every planned edge over the scene (3-D and top view), world frame.
+
+    All densified paths go through one ``kin.fk`` call: one XLA compilation, not one per path
+    length."""
+    plt = _pyplot()
+    chain = kin.bravo7()
+    ok = [r for r in results if r.success]
+    dense = [np.asarray(densify(r.plan.path, _EE_PATH_STEP)) for r in ok]
+    p_all = np.asarray(kin.fk(chain, np.concatenate(dense)))[:, :, 3] if dense else np.zeros((0, 4))
+    p_world = (scene.T_world_base @ p_all.T).T[:, :3]
+    fig = plt.figure(figsize=(13, 6))
+    ax3 = fig.add_subplot(1, 2, 1, projection="3d")
+    ax2 = fig.add_subplot(1, 2, 2)
+    corners = np.array([(-1, -1), (1, -1), (1, 1), (-1, 1), (-1, -1)])
+    for t in scene.spec.tables[1:]:  # the first table is the floor under everything
+        c = corners * np.asarray(t.size[:2]) / 2
+        pts = (t.T_world_top @ np.c_[c, np.zeros(5), np.ones(5)].T).T[:, :3]
+        ax3.plot(*pts.T, color="0.5")
+        ax2.plot(pts[:, 0], pts[:, 1], color="0.5")
+    for node in list(scene.objects) + list(scene.bases):
+        T = scene.T_world_object(node) if node in scene.objects else scene.T_world_base_top(node)
+        ax3.scatter(*T[:3, 3], color="tab:orange" if node in scene.objects else "tab:red")
+        ax2.annotate(str(node), T[:2, 3])
+    cmap = plt.get_cmap("viridis")
+    bounds = np.cumsum([0] + [len(d) for d in dense])
+    for i, (a, b) in enumerate(zip(bounds[:-1], bounds[1:])):
+        color = cmap(i / max(1, len(dense)))
+        ax3.plot(*p_world[a:b].T, color=color, lw=0.8)
+        ax2.plot(p_world[a:b, 0], p_world[a:b, 1], color=color, lw=0.8)
+    name = results[0].planner if results else ""
+    ax3.set(xlabel="x [m]", ylabel="y [m]", zlabel="z [m]", title=f"{name}: end-effector paths ({len(ok)} edges)")
+    ax2.set(xlabel="x [m]", ylabel="y [m]", title="top view (node numbers)", aspect="equal")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def plot_plan_joints(plan: planfile.Plan, path: Path) -> None:
+    """Joint angles [rad] of a plan's waypoints over time [s], segments one after another."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(12, 4.5))
+    t0, ts, qs = 0.0, [], []
+    for seg in plan.segments:
+        if seg.t:
+            ts.append(np.asarray(seg.t) + t0)
+            qs.append(np.asarray(seg.q))
+            t0 = ts[-1][-1]
+    if not ts:
+        raise ValueError("the plan has no motion segment to plot")
+    t, q = np.concatenate(ts), np.concatenate(qs)
+    for j, name in enumerate(plan.joint_names):
+        ax.plot(t, q[:, j], marker=".", ms=3, label=name)
+    ax.set(xlabel="time [s] (waypoints; synchronised rest-to-rest legs)", ylabel="joint angle [rad]",
+           title="plan.json joint waypoints")
+    ax.legend(ncol=6)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def render_frames(scene: Scene, targets: Mapping[int, NodeTarget], out_dir: Path) -> int:
+    """Offscreen frames ``frame_start.png`` and ``frame_node<n>.png`` (each node's grasp/final
+    configuration) into ``out_dir``; returns how many were written, 0 where no GL context
+    exists (set ``MUJOCO_GL`` before MuJoCo is first imported to choose the backend)."""
+    try:
+        import mujoco
+
+        m = scene.model
+        d = mujoco.MjData(m)
+        renderer = mujoco.Renderer(m, 480, 640)
+    except Exception as e:  # no EGL/OSMesa/GLFW context on this machine
+        log.warning("offscreen rendering unavailable (%s); skipping frames", e)
+        return 0
+    plt = _pyplot()
+    cam = mujoco.MjvCamera()
+    cam.lookat[:] = (0, 0, 0.45)
+    cam.distance, cam.azimuth, cam.elevation = 2.2, 135, -30
+    frames = [("start", np.asarray(scene.spec.start_q))] + [(f"node{n}", t.q_at) for n, t in targets.items()]
+    for name, q in frames:
+        d.qpos[:] = q
+        mujoco.mj_forward(m, d)
+        renderer.update_scene(d, cam)
+        plt.imsave(out_dir / f"frame_{name}.png", renderer.render())
+    renderer.close()
+    return len(frames)

@@ -1,0 +1,68 @@
+"""Files of the planning stage: what :func:`write_task_graph` and :func:`write_plan` put in a folder.
+
+``targets.json``: node → ``q_pre``, ``q_at`` [rad], ``yaw`` [rad], ``manipulability``,
+``candidates``, plus ``start`` (the start configuration). ``edges.csv``: one row per planner and
+edge (``planner, src, dst, success``, the five metrics, ``revalidated``; the metrics of a failed
+edge are empty except its planning time). ``metrics_<planner>.json``: metric → ``(N, N)`` matrix
+(null = no edge). ``cost_<planner>.csv``: the ``(N, N)`` cost matrix (NaN = forbidden).
+``ee_paths_<planner>.png``; ``plan.json`` (:mod:`uvms_jax.planfile`) and ``joints.png``.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+
+import numpy as np
+
+from uvms_jax import planfile, sched
+from uvms_jax.plan._plots import plot_ee_paths, plot_plan_joints
+from uvms_jax.plan._taskgraph import TaskGraphPlan
+from uvms_jax.plan._tasks import EdgeResult
+
+__all__ = ["write_plan", "write_task_graph"]
+
+# The metrics' names in edges.csv and metrics_<planner>.json (sched reads them back).
+_FILE_METRICS = sched.EDGE_CSV_COLUMNS
+
+
+def _edge_row(r: EdgeResult) -> dict:
+    values = tuple(r.metrics) if r.metrics is not None else (np.nan,) * len(_FILE_METRICS)
+    m = dict(zip(_FILE_METRICS, values))
+    m[_FILE_METRICS[0]] = r.plan.planning_time_s  # measured even when planning fails
+    return {"planner": r.planner, "src": r.src, "dst": r.dst, "success": r.success, **m, "revalidated": r.revalidated}
+
+
+def _write_csv(path: Path, rows: list[dict]) -> None:
+    with path.open("w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+
+
+def write_task_graph(task_plan: TaskGraphPlan, out: Path) -> None:
+    """Write ``targets.json``, ``edges.csv`` and per planner ``metrics_<planner>.json``,
+    ``cost_<planner>.csv`` and ``ee_paths_<planner>.png`` into the folder ``out``."""
+    out = Path(out)
+    scene = task_plan.scene
+    (out / "targets.json").write_text(json.dumps({
+        str(n): {"q_pre": t.q_pre.tolist(), "q_at": t.q_at.tolist(), "yaw": t.yaw,
+                 "manipulability": t.manipulability, "candidates": t.n_candidates}
+        for n, t in task_plan.targets.items()} | {"start": list(scene.spec.start_q)}, indent=1))
+    rows = []
+    for planner, results in task_plan.by_planner.items():
+        rows += [_edge_row(r) for r in results]
+        mats = task_plan.metrics[planner]
+        (out / f"metrics_{planner}.json").write_text(json.dumps(
+            {k: np.where(np.isnan(v), None, v).tolist() for k, v in zip(_FILE_METRICS, mats)}))
+        np.savetxt(out / f"cost_{planner}.csv", task_plan.costs[planner], delimiter=",", fmt="%.6g")
+        plot_ee_paths(scene, results, out / f"ee_paths_{planner}.png")
+    _write_csv(out / "edges.csv", rows)
+
+
+def write_plan(plan: planfile.Plan, out: Path) -> None:
+    """Write ``plan.json`` (``planfile.plan_to_dict``) and its joint plot ``joints.png`` into ``out``."""
+    out = Path(out)
+    (out / "plan.json").write_text(json.dumps(planfile.plan_to_dict(plan), indent=1))
+    plot_plan_joints(plan, out / "joints.png")

@@ -1,0 +1,64 @@
+"""Figures of the surrogate design run (dexterity paper Figs. 8–15); matplotlib is imported lazily."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Mapping
+
+import numpy as np
+
+from uvms_jax.surrogate._design import Design
+
+
+def _pyplot():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def plot_ffbn_design(name: str, design: Design, error_goal: float, path: Path) -> None:
+    """Max relative test error vs hidden neurons of an FFBN design loop (Figs. 10/14) → PNG."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(5.5, 3.8))
+    sizes = [s.size for s in design.steps]
+    ax.semilogy(sizes, [s.test_error for s in design.steps], "o-", label="max relative test error")
+    ax.axhline(error_goal, color="r", ls="--", label=f"E = {error_goal:g}")
+    ax.set(xlabel="hidden neurons", ylabel="max |(T − S)/T|", title=f"{name.upper()} design process")
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def plot_rbfn_design(name: str, design: Design, error_goal: float, path: Path) -> None:
+    """Max relative test error and RBF units vs spread of an RBFN design loop (Figs. 8/12) → PNG."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(5.5, 3.8))
+    spreads = [s.spread for s in design.steps]
+    ax.semilogy(spreads, [s.test_error for s in design.steps], "o-", label="max relative test error")
+    ax.axhline(error_goal, color="r", ls="--", label=f"E = {error_goal:g}")
+    ax.set(xlabel="spread (normalised inputs)", ylabel="max |(T − S)/T|", title=f"{name.upper()} design process")
+    ax2 = ax.twinx()
+    ax2.plot(spreads, [s.size for s in design.steps], "s:", color="gray", label="units")
+    ax2.set_ylabel("RBF units")
+    ax.legend(loc="upper right")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def plot_training(designs: Mapping[str, Design], path: Path) -> None:
+    """Training mse [index units²] of each selected network, per epoch or added unit (Figs. 9/11/13/15) → PNG."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(6, 4))
+    for name, d in designs.items():
+        label = "unit" if name.startswith("rbfn") else "epoch"
+        ax.semilogy(np.arange(len(d.history)), d.history, label=f"{name} (per {label})")
+    ax.set(xlabel="epoch / added unit", ylabel="training mse [index units²]", title="Training of the selected networks")
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
