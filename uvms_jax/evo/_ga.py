@@ -80,23 +80,27 @@ class GAState:
     done: Array
 
 
+# Random draws in fixed dtypes: a run draws the same numbers whether or not the process has
+# enabled jax_enable_x64 (the pipeline does, for IK and training), so its results do not depend on it.
+_DRAW = jnp.float32
+
 def _tournament(key: Array, fitness: Array, size: int) -> Array:
     """Index of the fittest of ``size`` individuals drawn with replacement."""
-    idx = jax.random.randint(key, (size,), 0, fitness.shape[0])
+    idx = jax.random.randint(key, (size,), 0, fitness.shape[0], dtype=jnp.int32)
     return idx[jnp.argmax(fitness[idx])]
 
 
 def _one_point_crossover(key: Array, a: Bits, b: Bits, p: Array) -> tuple[Bits, Bits]:
     """With probability ``p`` swap the tails of ``a`` and ``b`` after a random cut."""
     k_do, k_cut = jax.random.split(key)
-    cut = jax.random.randint(k_cut, (), 1, a.shape[-1])
-    head = (jnp.arange(a.shape[-1]) < cut) | ~(jax.random.uniform(k_do) < p)
+    cut = jax.random.randint(k_cut, (), 1, a.shape[-1], dtype=jnp.int32)
+    head = (jnp.arange(a.shape[-1]) < cut) | ~(jax.random.uniform(k_do, dtype=_DRAW) < p)
     return jnp.where(head, a, b), jnp.where(head, b, a)
 
 
 def _mutate(key: Array, bits: Bits, p: Array) -> Bits:
     """Flip each bit independently with probability ``p``."""
-    return bits ^ (jax.random.uniform(key, bits.shape) < p)
+    return bits ^ (jax.random.uniform(key, bits.shape, dtype=_DRAW) < p)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -144,7 +148,7 @@ class BinaryGA:
 
     def init(self, key: Array, params: GAParams) -> GAState:
         """Random initial population (uniform bits); nothing evaluated yet."""
-        population = jax.random.bernoulli(key, 0.5, (self.population_size, self.n_bits))
+        population = jax.random.bernoulli(key, jnp.asarray(0.5, _DRAW), (self.population_size, self.n_bits))
         dtype = jnp.asarray(params.crossover_rate, dtype=float).dtype
         return GAState(
             population=population,
