@@ -25,6 +25,7 @@ from uvms_jax.kin._chain import with_dtype
 from uvms_jax.kin._export import bravo7_mjcf
 from uvms_jax.kin._export import bravo7_mjcf_body
 from uvms_jax.kin._export import bravo7_urdf
+from uvms_jax.kin._export import quat_wxyz
 from uvms_jax.kin._export import to_urdf
 from uvms_jax.kin._fk import Kinematics
 from uvms_jax.kin._fk import fk

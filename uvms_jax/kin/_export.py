@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from typing import Sequence
 
+import mujoco
 import numpy as np
 
 from uvms_jax import bravo7 as _b7
@@ -90,24 +91,12 @@ def bravo7_urdf() -> str:
     return _urdf_text(_b7.NAME, BRAVO7_JOINTS, BRAVO7_TOOL_XYZ, _b7.TOOL_RPY, extra=jaws)
 
 
-def _quat_wxyz(R: np.ndarray) -> np.ndarray:
-    """Unit quaternion ``(w, x, y, z)`` of a rotation matrix (Shepperd's method)."""
-    R = np.asarray(R, dtype=np.float64)
-    t = np.trace(R)
-    if t > 0:
-        s = 2.0 * np.sqrt(1.0 + t)
-        q = [0.25 * s, (R[2, 1] - R[1, 2]) / s, (R[0, 2] - R[2, 0]) / s, (R[1, 0] - R[0, 1]) / s]
-    else:
-        i = int(np.argmax(np.diag(R)))
-        j, k = (i + 1) % 3, (i + 2) % 3
-        s = 2.0 * np.sqrt(1.0 + R[i, i] - R[j, j] - R[k, k])
-        q = [0.0] * 4
-        q[0] = (R[k, j] - R[j, k]) / s
-        q[1 + i] = 0.25 * s
-        q[1 + j] = (R[j, i] + R[i, j]) / s
-        q[1 + k] = (R[k, i] + R[i, k]) / s
-    q = np.asarray(q)
-    return q / np.linalg.norm(q)
+def quat_wxyz(R: np.ndarray) -> np.ndarray:
+    """Unit quaternion ``(w, x, y, z)`` of a rotation matrix ``(3, 3)``, as MJCF writes it
+    (MuJoCo's ``mju_mat2Quat``)."""
+    q = np.zeros(4)
+    mujoco.mju_mat2Quat(q, np.ascontiguousarray(R, dtype=np.float64).reshape(9))
+    return q
 
 
 def bravo7_mjcf_body(
@@ -131,7 +120,7 @@ def bravo7_mjcf_body(
     for i, joint in enumerate(BRAVO7_JOINTS):
         pad = "  " * depth
         child = BRAVO7_JOINTS[i + 1].xyz if i + 1 < len(BRAVO7_JOINTS) else BRAVO7_TOOL_XYZ
-        q = _quat_wxyz(np.asarray(rpy_matrix(np.asarray(joint.rpy, dtype=np.float64))))
+        q = quat_wxyz(np.asarray(rpy_matrix(np.asarray(joint.rpy, dtype=np.float64))))
         lines.append(f'{pad}<body name="link_{joint.name}" pos="{_fmt(joint.xyz)}" quat="{_fmt(q)}">')
         lines.append(
             f'{pad}  <joint name="{joint.name}" type="hinge" axis="{_fmt(joint.axis)}" '

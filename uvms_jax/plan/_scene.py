@@ -26,6 +26,7 @@ from typing import Any
 
 import mujoco
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from uvms_jax import bravo7, kin
 
@@ -50,15 +51,7 @@ _CYLINDER_SIDES = 32  # inscribed polygon: radius error r(1 - cos(π/32)) ≈ 0.
 
 def rpy_to_matrix(rpy: Sequence[float]) -> np.ndarray:
     """Rotation ``Rz(yaw) Ry(pitch) Rx(roll)`` (URDF fixed-axis roll-pitch-yaw), ``(3, 3)``."""
-    r, p, y = (float(a) for a in rpy)
-    cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
-    return np.array(
-        [
-            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
-            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
-            [-sp, cp * sr, cp * cr],
-        ]
-    )
+    return Rotation.from_euler("xyz", np.asarray(rpy, dtype=float)).as_matrix()
 
 
 def _pose(R=np.eye(3), p=(0.0, 0.0, 0.0)) -> np.ndarray:
@@ -70,12 +63,6 @@ def _pose(R=np.eye(3), p=(0.0, 0.0, 0.0)) -> np.ndarray:
 
 def _rz(yaw: float) -> np.ndarray:
     return rpy_to_matrix((0.0, 0.0, yaw))
-
-
-def _quat(R: np.ndarray) -> np.ndarray:
-    q = np.zeros(4)
-    mujoco.mju_mat2Quat(q, np.ascontiguousarray(R, dtype=np.float64).reshape(9))
-    return q
 
 
 def _fmt(v) -> str:
@@ -370,7 +357,7 @@ class Scene:
             mname = mesh(f"m_{label}", _box_vertices(size))
             world.append(
                 f'<geom name="{label}" type="mesh" mesh="{mname}" pos="{_fmt(T[:3, 3])}" '
-                f'quat="{_fmt(_quat(T[:3, :3]))}" rgba="{rgba}" contype="{SCENE_BITS[0]}" conaffinity="{SCENE_BITS[1]}"/>'
+                f'quat="{_fmt(kin.quat_wxyz(T[:3, :3]))}" rgba="{rgba}" contype="{SCENE_BITS[0]}" conaffinity="{SCENE_BITS[1]}"/>'
             )
 
         L, W, H = s.cage_size
@@ -384,7 +371,7 @@ class Scene:
         under = s.tables[0]
         top = under.T_world_top
         world.append(
-            f'<geom name="{under.name}" type="plane" pos="{_fmt(top[:3, 3])}" quat="{_fmt(_quat(top[:3, :3]))}" '
+            f'<geom name="{under.name}" type="plane" pos="{_fmt(top[:3, 3])}" quat="{_fmt(kin.quat_wxyz(top[:3, :3]))}" '
             f'size="{under.size[0] / 2} {under.size[1] / 2} 0.05" rgba="0.6 0.55 0.5 1" '
             f'contype="{SCENE_BITS[0]}" conaffinity="{SCENE_BITS[1]}"/>'
         )
@@ -411,11 +398,11 @@ class Scene:
             mname = mesh(f"m_{o.name}", o.vertices())
             world.append(
                 f'<geom name="n{o.node}:{o.name}" type="mesh" mesh="{mname}" pos="{_fmt(T[:3, 3])}" '
-                f'quat="{_fmt(_quat(T[:3, :3]))}" rgba="1 0.55 0.1 1" contype="{SCENE_BITS[0]}" conaffinity="{SCENE_BITS[1]}"/>'
+                f'quat="{_fmt(kin.quat_wxyz(T[:3, :3]))}" rgba="1 0.55 0.1 1" contype="{SCENE_BITS[0]}" conaffinity="{SCENE_BITS[1]}"/>'
             )
 
         arm = ET.fromstring(
-            kin.bravo7_mjcf_body(s.mount_pos, _quat(self.T_world_base[:3, :3]), s.link_radius, s.jaws_open)
+            kin.bravo7_mjcf_body(s.mount_pos, kin.quat_wxyz(self.T_world_base[:3, :3]), s.link_radius, s.jaws_open)
         )
         finger_length = 0.0
         tool_site = None
@@ -446,7 +433,7 @@ class Scene:
             mname = f"m_{o.name}"
             ET.SubElement(link_b, "geom", {
                 "name": f"held_{o.name}", "type": "mesh", "mesh": mname, "pos": _fmt(T[:3, 3]),
-                "quat": _fmt(_quat(T[:3, :3])), "rgba": "1 0.55 0.1 0.8", "contype": "0", "conaffinity": "0",
+                "quat": _fmt(kin.quat_wxyz(T[:3, :3])), "rgba": "1 0.55 0.1 0.8", "contype": "0", "conaffinity": "0",
             })
         for a, b in s.self_collision_exclude:
             if "base_link" in (a, b):
