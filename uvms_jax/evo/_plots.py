@@ -7,20 +7,12 @@ from pathlib import Path
 import numpy as np
 
 from uvms_jax.evo._wmax import WmaxMap
-
-
-def _pyplot():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
+from uvms_jax.plotting import pyplot
 
 
 def plot_wmax(m: WmaxMap, title: str, path: Path, vmax: float) -> None:
     """Heat map of ``w_max`` (eq. 16) over the task area, zero-w area shaded red, to ``path``."""
-    plt = _pyplot()
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(5, 4.2))
     im = ax.pcolormesh(m.x, m.y, m.w_max.T, shading="nearest", cmap="viridis", vmin=0.0, vmax=vmax)
     zero = np.ma.masked_where(m.w_max.T > 0, np.ones_like(m.w_max.T))
@@ -35,7 +27,7 @@ def plot_wmax(m: WmaxMap, title: str, path: Path, vmax: float) -> None:
 
 def plot_convergence(ga_hist, cma_hist, references: dict[str, float], path: Path) -> None:
     """Best fitness per generation of every GA (and CMA-ES) run, with reference lines."""
-    plt = _pyplot()
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(6.5, 4))
     for i, h in enumerate(ga_hist):
         ax.plot(np.arange(1, len(h) + 1), h, color="C0", alpha=0.8, label="GA runs" if i == 0 else None)

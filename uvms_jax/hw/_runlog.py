@@ -8,6 +8,8 @@ import math
 from collections.abc import Sequence
 from pathlib import Path
 
+from uvms_jax.plotting import pyplot
+
 __all__ = ["RunLog"]
 
 
@@ -45,11 +47,7 @@ class RunLog:
 
     def plot(self, path: str | Path, title: str = "Bravo 7 run: commanded vs measured") -> Path:
         """One panel per joint, commanded (dashed) over measured (solid); PNG at ``path``."""
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-
+        plt = pyplot()
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
         n = len(self.joint_names)

@@ -9,7 +9,6 @@ import math
 from pathlib import Path
 
 import jax
-import numpy as np
 
 from uvms_jax import evo, hw, kin, planfile, sched, surrogate
 from uvms_jax import plan as planning

@@ -16,6 +16,7 @@ from uvms_jax.plan._collision import densify
 from uvms_jax.plan._scene import Scene
 from uvms_jax.plan._targets import NodeTarget
 from uvms_jax.plan._tasks import EdgeResult
+from uvms_jax.plotting import pyplot
 
 __all__ = ["plot_ee_paths", "plot_plan_joints", "render_frames"]
 
@@ -24,21 +25,12 @@ log = logging.getLogger(__name__)
 _EE_PATH_STEP = 0.02  # [rad] interpolation step of the drawn paths: smooth curves, few points
 
 
-def _pyplot():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
 def plot_ee_paths(scene: Scene, results: Sequence[EdgeResult], path: Path) -> None:
     """End-effector paths of every planned edge over the scene (3-D and top view), world frame.
 
     All densified paths go through one ``kin.fk`` call: one XLA compilation, not one per path
     length."""
-    plt = _pyplot()
+    plt = pyplot()
     chain = kin.bravo7()
     ok = [r for r in results if r.success]
     dense = [np.asarray(densify(r.plan.path, _EE_PATH_STEP)) for r in ok]
@@ -73,7 +65,7 @@ def plot_ee_paths(scene: Scene, results: Sequence[EdgeResult], path: Path) -> No
 
 def plot_plan_joints(plan: planfile.Plan, path: Path) -> None:
     """Joint angles [rad] of a plan's waypoints over time [s], segments one after another."""
-    plt = _pyplot()
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(12, 4.5))
     t0, ts, qs = 0.0, [], []
     for seg in plan.segments:
@@ -107,7 +99,7 @@ def render_frames(scene: Scene, targets: Mapping[int, NodeTarget], out_dir: Path
     except Exception as e:  # no EGL/OSMesa/GLFW context on this machine
         log.warning("offscreen rendering unavailable (%s); skipping frames", e)
         return 0
-    plt = _pyplot()
+    plt = pyplot()
     cam = mujoco.MjvCamera()
     cam.lookat[:] = (0, 0, 0.45)
     cam.distance, cam.azimuth, cam.elevation = 2.2, 135, -30

@@ -5,24 +5,16 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Mapping, Sequence
 
+from uvms_jax.plotting import pyplot
 from uvms_jax.sched._problem import PickPlaceProblem
 from uvms_jax.sched._schedule import Schedule
 from uvms_jax.sched._thesis import THESIS_NODE_NAMES
 
 
-def _pyplot():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
 def plot_sweep(out: Path, sweep: Sequence, solved: Mapping[str, Schedule]) -> None:
     """``grasp_iterations.png``: GRASP cost and time versus iterations (thesis Figs 5.9–5.12),
     with greedy / A* / exact as horizontal lines. ``sweep``: ``SweepPoint``s."""
-    plt = _pyplot()
+    plt = pyplot()
     it = [r.iterations for r in sweep]
     fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4))
     a.plot(it, [r.cost_mean for r in sweep], "o-", label="GRASP (mean)")
@@ -44,7 +36,7 @@ def plot_sweep(out: Path, sweep: Sequence, solved: Mapping[str, Schedule]) -> No
 def plot_route(out: Path, problem: PickPlaceProblem, schedule: Schedule, greedy: Schedule | None) -> None:
     """``route.png``: schematic layout (start/goal left, objects in the middle column, bases
     on the right) with the chosen schedule and the greedy one drawn as arrows."""
-    plt = _pyplot()
+    plt = pyplot()
     pos = {problem.start: (0.0, 0.5), problem.goal: (0.0, -0.5)}
     for k, o in enumerate(problem.objects):
         pos[o] = (1.0, 1.5 - 3.0 * k / max(problem.n_objects - 1, 1))

@@ -7,21 +7,13 @@ from typing import Mapping
 
 import numpy as np
 
+from uvms_jax.plotting import pyplot
 from uvms_jax.surrogate._design import Design
-
-
-def _pyplot():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
 
 
 def plot_ffbn_design(name: str, design: Design, error_goal: float, path: Path) -> None:
     """Max relative test error vs hidden neurons of an FFBN design loop (Figs. 10/14) → PNG."""
-    plt = _pyplot()
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(5.5, 3.8))
     sizes = [s.size for s in design.steps]
     ax.semilogy(sizes, [s.test_error for s in design.steps], "o-", label="max relative test error")
@@ -35,7 +27,7 @@ def plot_ffbn_design(name: str, design: Design, error_goal: float, path: Path) -
 
 def plot_rbfn_design(name: str, design: Design, error_goal: float, path: Path) -> None:
     """Max relative test error and RBF units vs spread of an RBFN design loop (Figs. 8/12) → PNG."""
-    plt = _pyplot()
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(5.5, 3.8))
     spreads = [s.spread for s in design.steps]
     ax.semilogy(spreads, [s.test_error for s in design.steps], "o-", label="max relative test error")
@@ -52,7 +44,7 @@ def plot_rbfn_design(name: str, design: Design, error_goal: float, path: Path) -
 
 def plot_training(designs: Mapping[str, Design], path: Path) -> None:
     """Training mse [index units²] of each selected network, per epoch or added unit (Figs. 9/11/13/15) → PNG."""
-    plt = _pyplot()
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(6, 4))
     for name, d in designs.items():
         label = "unit" if name.startswith("rbfn") else "epoch"
