@@ -2,7 +2,8 @@
 PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
-STAMP := $(VENV)/.installed
+RUNTIME := $(VENV)/.installed-runtime
+DEV := $(VENV)/.installed-dev
 
 # Compiled XLA programs persist between runs of the demo and the tests: a second `make test` or
 # `make demo` skips most of the compile time (the largest part of both on a CPU). Benchmarks
@@ -12,26 +13,33 @@ demo test test-all: export JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS ?= 0.5
 
 .PHONY: setup demo test test-all bench clean
 
-setup: $(STAMP)
+setup: $(DEV)
 
-# torch is pinned to the CPU build first so that pytorch-kinematics does not pull a CUDA build.
-$(STAMP): pyproject.toml
+# The demo needs what the package imports; the tests and benchmarks also need the peers they
+# compare against (torch, pytorch-kinematics, OR-Tools, crcmod: the `dev` extra).
+$(RUNTIME): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip
+	$(PY) -m pip install -q -e .
+	touch $(RUNTIME)
+
+# torch is installed first, pinned to the CPU build, so that pytorch-kinematics does not pull
+# a CUDA build.
+$(DEV): $(RUNTIME)
 	$(PY) -m pip install -q torch==2.13.0
 	$(PY) -m pip install -q -e '.[dev]'
-	touch $(STAMP)
+	touch $(DEV)
 
-demo: $(STAMP)
+demo: $(RUNTIME)
 	$(PY) experiments/pipeline.py
 
-test: $(STAMP)
+test: $(DEV)
 	$(PY) -m pytest -q -n 2 -m "not slow"
 
-test-all: $(STAMP)
+test-all: $(DEV)
 	$(PY) -m pytest -q -n 2
 
-bench: $(STAMP)
+bench: $(DEV)
 	@for b in benchmarks/*.py; do echo "== $$b"; $(PY) $$b || exit 1; done
 
 clean:
