@@ -24,17 +24,63 @@ already be. Joint angles are in rad, within the limits of docs/theory.md §1.3.
 
 The hardware runner checks a plan against the arm's limits before any motion
 (:func:`uvms_jax.hw.check_plan`).
+
+**ROS-shaped trajectories.** :func:`to_joint_trajectory` writes a plan as a plain object shaped
+like ``trajectory_msgs/JointTrajectory`` (no ROS needed) and :func:`from_joint_trajectory`
+reads one back; :func:`load_plan` and :func:`save_plan` pick YAML (``.yaml``/``.yml``) or JSON by
+the file suffix, and :func:`load_plan` tells the two formats apart by their keys::
+
+    joint_names: [G, F, E, D, C, B, A]          # "A" (the jaws) only if the plan has gripper steps
+    points:
+      - positions: [...rad..., jaws m]          # one value per joint name
+        velocities: [0, 0, 0, 0, 0, 0, 0]       # [rad/s, m/s]
+        time_from_start: {sec: 0, nanosec: 0}   # strictly increasing
+
+- Waypoints: every waypoint becomes a point at its time from the plan's start; a segment's first
+  waypoint, which repeats the previous one, is written once.
+- Velocities are zero at every point: the plan moves rest to rest between waypoints (the
+  synchronised profile of :mod:`uvms_jax.motion` has ``ds/dt = 0`` at both ends of every move,
+  and the executor stops at each gate). A controller that interpolates with these velocities
+  (cubic or quintic splines) therefore stays on the straight joint-space line between
+  waypoints, the line the planner collision-checked.
+- Gripper steps: the jaws are the prismatic joint "A" in metres (``bravo7.JAWS``; the plan
+  speaks millimetres). A gripper step is a point where the arm stands still and "A" moves to
+  the new opening, ``(upper - lower) / velocity`` of the jaws later (their full travel at their
+  speed limit, 0.35 s; the executor waits for the jaws' gate anyway). Before the first gripper
+  step "A" holds ``jaws_start_mm`` (by default the first step's opening). Reading back, a point
+  where the arm stands still is a gripper step; so a plan that stands still at a motion
+  waypoint, or starts with a gripper step, cannot be written.
+- What a JointTrajectory cannot hold is lost: segment names and the boundaries between two
+  motions (a plan read back has one motion segment between gripper steps, named after its
+  points) and the ``meta`` object. Times keep nanosecond resolution. The motion itself (every
+  waypoint, the time between waypoints, every gripper step) survives the round trip.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import json
+import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-__all__ = ["PLAN_VERSION", "Plan", "PlanError", "Segment", "load_plan", "parse_plan", "plan_to_dict"]
+import yaml
+
+from uvms_jax import bravo7
+
+__all__ = [
+    "PLAN_VERSION",
+    "Plan",
+    "PlanError",
+    "Segment",
+    "from_joint_trajectory",
+    "load_plan",
+    "parse_plan",
+    "plan_to_dict",
+    "save_plan",
+    "to_joint_trajectory",
+]
 
 PLAN_VERSION = 1
 
@@ -131,13 +177,195 @@ def parse_plan(obj: Mapping[str, Any]) -> Plan:
     return Plan(tuple(names), tuple(out))
 
 
+_YAML_SUFFIXES = (".yaml", ".yml")
+_NS_PER_S = 1_000_000_000
+_MM_PER_M = 1000.0
+# time between the point before a gripper step and the step's point: the jaws' full travel at
+# their speed limit [s]
+_JAWS_STEP_S = (bravo7.JAWS.upper - bravo7.JAWS.lower) / bravo7.JAWS.velocity
+
+
+def _is_joint_trajectory(obj: Any) -> bool:
+    return isinstance(obj, Mapping) and "points" in obj and "segments" not in obj
+
+
 def load_plan(path: str | Path) -> Plan:
-    """Read and parse ``plan.json``; raises PlanError for unreadable or malformed files."""
+    """Read a plan file: ``plan.json`` or a JointTrajectory object (see the module docstring),
+    as YAML (``.yaml``/``.yml``) or JSON (any other suffix).
+
+    Raises:
+      PlanError: unreadable file, malformed YAML/JSON, or a malformed plan or trajectory.
+    """
+    path = Path(path)
     try:
-        obj = json.loads(Path(path).read_text())
-    except (OSError, json.JSONDecodeError) as e:
+        text = path.read_text()
+        obj = yaml.safe_load(text) if path.suffix.lower() in _YAML_SUFFIXES else json.loads(text)
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError, yaml.YAMLError) as e:
         raise PlanError(f"cannot read plan {path}: {e}") from e
-    return parse_plan(obj)
+    return from_joint_trajectory(obj) if _is_joint_trajectory(obj) else parse_plan(obj)
+
+
+def save_plan(plan: Plan, path: str | Path, *, joint_trajectory: bool = False,
+              jaws_start_mm: float | None = None) -> None:
+    """Write ``plan`` to ``path`` as ``plan.json``'s object or, with ``joint_trajectory``, as a
+    JointTrajectory object (:func:`to_joint_trajectory`); YAML for ``.yaml``/``.yml``, JSON
+    otherwise.
+
+    Raises:
+      PlanError: the plan cannot be written as a JointTrajectory (see :func:`to_joint_trajectory`).
+    """
+    path = Path(path)
+    obj = to_joint_trajectory(plan, jaws_start_mm) if joint_trajectory else plan_to_dict(plan)
+    if path.suffix.lower() in _YAML_SUFFIXES:
+        path.write_text(yaml.safe_dump(obj, sort_keys=False, default_flow_style=None))
+    else:
+        path.write_text(json.dumps(obj, indent=1))
+
+
+def _duration(t: float) -> dict[str, int]:
+    """``builtin_interfaces/Duration`` of ``t`` [s] (t ≥ 0), rounded to the nanosecond."""
+    ns = round(t * _NS_PER_S)
+    return {"sec": ns // _NS_PER_S, "nanosec": ns % _NS_PER_S}
+
+
+def to_joint_trajectory(plan: Plan, jaws_start_mm: float | None = None) -> dict[str, Any]:
+    """``plan`` as a ``trajectory_msgs/JointTrajectory``-shaped object (module docstring).
+
+    Args:
+      plan: the plan; its segment times must increase strictly (as ``hw.check_plan`` asks).
+      jaws_start_mm: jaws opening before the first gripper step [mm]; None: that step's opening.
+
+    Returns:
+      ``{"joint_names": [...], "points": [{"positions", "velocities", "time_from_start"}]}``;
+      positions in rad (arm) and m (jaws "A"), velocities all zero, times ``{sec, nanosec}``.
+
+    Raises:
+      PlanError: a plan that starts with a gripper step, stands still at a motion waypoint,
+        is not continuous between segments, has non-increasing times, already names a joint
+        "A", or a ``jaws_start_mm`` outside the jaws' travel.
+    """
+    jaws = [s.jaws_mm for s in plan.segments if s.jaws_mm is not None]
+    names = list(plan.joint_names)
+    if jaws:
+        if bravo7.JAWS.name in names:
+            raise PlanError(f"plan already has a joint {bravo7.JAWS.name!r}, the jaws' name")
+        names.append(bravo7.JAWS.name)
+    jaws_m = (jaws[0] if jaws_start_mm is None else jaws_start_mm) / _MM_PER_M if jaws else None
+    if jaws and not bravo7.JAWS.lower <= jaws_m <= bravo7.JAWS.upper:
+        raise PlanError(f"jaws_start_mm {jaws_start_mm} outside [{bravo7.JAWS.lower * _MM_PER_M}, "
+                        f"{bravo7.JAWS.upper * _MM_PER_M}] mm")
+    points: list[dict[str, Any]] = []
+    q_last: tuple[float, ...] | None = None
+    t_last = 0.0  # time from the plan's start of the last point [s]
+
+    def add(q: tuple[float, ...], t: float) -> None:
+        nonlocal q_last, t_last
+        positions = list(q) + ([jaws_m] if jaws else [])
+        points.append({"positions": positions, "velocities": [0.0] * len(positions),
+                       "time_from_start": _duration(t)})
+        q_last, t_last = q, t
+
+    for i, s in enumerate(plan.segments):
+        where = f"segment {i} ({s.name})"
+        if any(b <= a for a, b in zip(s.t, s.t[1:])):
+            raise PlanError(f"{where}: times must increase strictly, got {list(s.t)}")
+        t0 = t_last
+        for k, (t, q) in enumerate(zip(s.t, s.q)):
+            if q_last is None:
+                add(q, t0 + t - s.t[0])
+            elif k == 0:
+                if q != q_last:
+                    raise PlanError(f"{where}: first waypoint does not repeat the previous one")
+            elif q == q_last:
+                raise PlanError(f"{where}.q[{k}]: the arm stands still, which a JointTrajectory "
+                                "reads as a gripper step")
+            else:
+                add(q, t0 + t - s.t[0])
+        if s.jaws_mm is not None:
+            if q_last is None:
+                raise PlanError(f"{where}: the plan starts with a gripper step, before any arm position")
+            jaws_m = s.jaws_mm / _MM_PER_M
+            add(q_last, t_last + _JAWS_STEP_S)
+    return {"joint_names": names, "points": points}
+
+
+def _nanoseconds(d: Any, where: str) -> int:
+    if not isinstance(d, Mapping) or set(d) != {"sec", "nanosec"}:
+        raise PlanError(f"{where}: expected {{sec: int, nanosec: int}}, got {d!r}")
+    sec, nsec = d["sec"], d["nanosec"]
+    if any(isinstance(v, bool) or not isinstance(v, int) for v in (sec, nsec)) or not 0 <= nsec < _NS_PER_S:
+        raise PlanError(f"{where}: sec must be an integer and nanosec an integer in [0, 1e9), got {d!r}")
+    return sec * _NS_PER_S + nsec
+
+
+def from_joint_trajectory(obj: Mapping[str, Any]) -> Plan:
+    """A :class:`Plan` from a ``trajectory_msgs/JointTrajectory``-shaped object (module docstring).
+
+    Joint "A", if present, is the jaws [m]; every other name is an arm joint, in the given
+    order. Velocities, accelerations and efforts are checked for length and otherwise ignored:
+    the executor times every move itself. ``header`` is ignored.
+
+    Raises:
+      PlanError: a malformed object (missing or unknown keys, wrong lengths, non-numbers,
+        times not strictly increasing) or a jaws value that is not finite.
+    """
+    if not isinstance(obj, Mapping):
+        raise PlanError(f"JointTrajectory must be an object, got {type(obj).__name__}")
+    unknown = set(obj) - {"header", "joint_names", "points"}
+    if unknown:
+        raise PlanError(f"JointTrajectory: unknown keys {sorted(unknown)}")
+    names = obj.get("joint_names")
+    if (not isinstance(names, Sequence) or isinstance(names, (str, bytes)) or not names
+            or not all(isinstance(n, str) for n in names) or len(set(names)) != len(names)):
+        raise PlanError(f"JointTrajectory.joint_names must be a non-empty list of distinct names, got {names!r}")
+    pts = obj.get("points")
+    if not isinstance(pts, Sequence) or isinstance(pts, (str, bytes)) or not pts:
+        raise PlanError("JointTrajectory.points must be a non-empty list")
+    names = list(names)
+    i_jaws = names.index(bravo7.JAWS.name) if bravo7.JAWS.name in names else None
+    arm = [i for i in range(len(names)) if i != i_jaws]
+    if not arm:
+        raise PlanError("JointTrajectory.joint_names has no arm joint")
+    rows: list[tuple[int, tuple[float, ...], float | None]] = []  # (time [ns], arm q [rad], jaws [mm])
+    for k, p in enumerate(pts):
+        where = f"JointTrajectory.points[{k}]"
+        if not isinstance(p, Mapping):
+            raise PlanError(f"{where}: expected an object")
+        bad = set(p) - {"positions", "velocities", "accelerations", "effort", "time_from_start"}
+        if bad:
+            raise PlanError(f"{where}: unknown keys {sorted(bad)}")
+        pos = _floats(p.get("positions"), f"{where}.positions")
+        for key in ("positions", "velocities", "accelerations", "effort"):
+            vals = pos if key == "positions" else _floats(p.get(key, []), f"{where}.{key}")
+            if vals and len(vals) != len(names) or (key == "positions" and not vals):
+                raise PlanError(f"{where}.{key}: {len(vals)} values for {len(names)} joints")
+        if not all(math.isfinite(v) for v in pos):
+            raise PlanError(f"{where}.positions: values must be finite, got {list(pos)}")
+        ns = _nanoseconds(p.get("time_from_start"), f"{where}.time_from_start")
+        if rows and ns <= rows[-1][0]:
+            raise PlanError(f"{where}.time_from_start must be later than the previous point's")
+        jaws = None if i_jaws is None else pos[i_jaws] * _MM_PER_M
+        rows.append((ns, tuple(pos[i] for i in arm), jaws))
+
+    segments: list[Segment] = []
+    run: list[int] = [0]  # point indices of the motion being collected
+
+    def close_motion() -> None:
+        if run:
+            t0 = rows[run[0]][0]
+            segments.append(Segment(f"points {run[0]}-{run[-1]}", tuple((rows[j][0] - t0) / _NS_PER_S for j in run),
+                                    tuple(rows[j][1] for j in run)))
+
+    for k in range(1, len(rows)):
+        if rows[k][1] == rows[k - 1][1] and i_jaws is not None:  # the arm stands still: a jaws step
+            close_motion()
+            segments.append(Segment(f"jaws {rows[k][2]:g} mm", (), (), rows[k][2]))
+            run = []
+        else:
+            run = run or [k - 1]  # a motion after a jaws step starts where the arm stands
+            run.append(k)
+    close_motion()
+    return Plan(tuple(names[i] for i in arm), tuple(segments))
 
 
 def plan_to_dict(plan: Plan) -> dict[str, Any]:

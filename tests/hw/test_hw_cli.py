@@ -81,3 +81,56 @@ def test_yaml_mirrors_dataclass_defaults(tmp_path, plan_file):
 def test_hw_fault_flag_parses():
     args = build_parser().parse_args(["run", "plan.json", "--sim", "--hw-fault", "d:0x04@1.5"])
     assert args.hw_fault == {"fault_joint": "D", "fault_bits": 4, "fault_after_s": 1.5}
+
+
+def test_version(capsys):
+    import uvms_jax
+
+    with pytest.raises(SystemExit) as e:
+        main(["--version"])
+    assert e.value.code == 0 and capsys.readouterr().out.strip() == f"uvms-hw {uvms_jax.__version__}"
+
+
+def _help(*command: str) -> str:
+    import contextlib
+    import io
+
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf), pytest.raises(SystemExit) as e:
+        main([*command, "--help"])
+    assert e.value.code == 0
+    return buf.getvalue()
+
+
+def test_help_shows_defaults_and_exit_codes():
+    text = _help("run")
+    assert f"(default: {HwConfig().rate_hz}, or --config)" in text
+    assert f"(default: {HwConfig().speed_scale}, or --config)" in text
+    assert "exit status:" in text and "2  plan refused or bad arguments" in text
+    assert "(default: None)" not in text
+    assert "(default: 6789)" in _help("sim")
+    assert "--ros OUT" in _help("export") and "exit status:" in _help()
+
+
+@pytest.mark.parametrize("bad", ["0", "1.5", "-0.2", "fast"])
+def test_speed_scale_range(bad, capsys):
+    with pytest.raises(SystemExit) as e:
+        main(["run", str(EXAMPLE), "--dry-run", "--speed-scale", bad])
+    assert e.value.code == 2
+    err = capsys.readouterr().err
+    assert "argument --speed-scale:" in err and "(0, 1]" in err and "Traceback" not in err
+
+
+def test_speed_scale_reaches_the_executor(tmp_path, capsys):
+    from uvms_jax.hw.cli import _configs
+
+    args = build_parser().parse_args(["run", "plan.json", "--speed-scale", "0.5"])
+    assert _configs(args)[0] == dataclasses.replace(HwConfig(), speed_scale=0.5)
+    # a plan slow enough for half speed runs on the simulated arm
+    obj = plan_to_dict(short_plan())
+    for s in obj["segments"]:
+        s["t"] = [0.0, 2.0]
+    p = tmp_path / "slow.json"
+    p.write_text(json.dumps(obj))
+    assert main(["run", str(p), "--sim", "--speed-scale", "0.5", "--no-plot", "--out", str(tmp_path / "o")]) == 0
+    assert json.loads(capsys.readouterr().out.strip().splitlines()[-1])["ok"]

@@ -1,12 +1,16 @@
 """``uvms-hw``: run a plan on a Bravo 7 (real or simulated), or serve the simulated arm.
 
-    uvms-hw run PLAN [--sim | --udp HOST:PORT | --serial DEV] [--dry-run]
+    uvms-hw run PLAN [--sim | --udp HOST:PORT | --serial DEV] [--dry-run] [--speed-scale S]
                      [--drop P] [--corrupt P] [--latency S] [--stuck-joint X]
                      [--hw-fault X:BITS[@T]] [--config hw.yaml] [--out DIR] ...
+    uvms-hw export PLAN --ros OUT.yaml [--jaws-start MM]
     uvms-hw sim [--port 6789] [--drop P] ...
+    uvms-hw --version
 
-Exit status: 0 plan completed (or dry run passed); 1 run aborted safely (arm told to hold);
-2 plan refused or bad arguments. Outputs in ``--out`` (default ``outputs/hw/<time>``):
+PLAN is a ``plan.json`` or a ``trajectory_msgs/JointTrajectory``-shaped file, YAML or JSON by
+its suffix (:mod:`uvms_jax.planfile`); ``export`` writes a plan as the latter.
+Exit status: 0 plan completed (or dry run passed, or exported); 1 run aborted safely (arm told
+to hold); 2 plan refused or bad arguments. Outputs in ``--out`` (default ``outputs/hw/<time>``):
 ``run.csv`` (commanded vs measured), ``run.png`` and ``result.json``.
 Defaults come from :class:`~uvms_jax.hw.HwConfig` / ``SimConfig`` (or ``--config``, a YAML
 file shaped like ``configs/hw/default.yaml``); flags override them. ``run`` is
@@ -23,7 +27,8 @@ import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
-from uvms_jax.planfile import PlanError, load_plan
+from uvms_jax import __version__
+from uvms_jax.planfile import PlanError, load_plan, save_plan
 
 from ._check import check_plan
 from ._client import Bravo7
@@ -35,6 +40,37 @@ from ._transport import LinkError, SerialTransport, Transport, UdpTransport, par
 __all__ = ["build_parser", "main"]
 
 EXIT_OK, EXIT_ABORTED, EXIT_REFUSED = 0, 1, 2
+
+_EPILOG = """exit status:
+  0  plan completed, dry run passed or plan exported
+  1  run aborted safely (the arm was told to hold)
+  2  plan refused or bad arguments"""
+
+
+class _HelpFormatter(argparse.ArgumentDefaultsHelpFormatter, argparse.RawDescriptionHelpFormatter):
+    """Shows defaults, except where a flag has none of its own (None: the config decides, and
+    its help says the config's default; False: a switch)."""
+
+    def _get_help_string(self, action: argparse.Action) -> str | None:
+        if action.default is None or action.default is False:
+            return action.help
+        return super()._get_help_string(action)
+
+
+def _hw_default(name: str) -> str:
+    """``(default: X)`` for a flag that overrides HwConfig field ``name``."""
+    return f"(default: {getattr(HwConfig, name)}, or --config)"
+
+
+def _speed_scale(text: str) -> float:
+    """``--speed-scale``: a fraction in (0, 1] of the joints' velocity and acceleration limits."""
+    try:
+        s = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number in (0, 1], got {text!r}") from None
+    if not 0 < s <= 1:
+        raise argparse.ArgumentTypeError(f"must be in (0, 1] (a fraction of the joint limits), got {s:g}")
+    return s
 
 
 def _parse_fault(text: str) -> dict:
@@ -49,7 +85,7 @@ def _parse_fault(text: str) -> dict:
 
 
 def _sim_args(p: argparse.ArgumentParser) -> None:
-    g = p.add_argument_group("simulated arm faults")
+    g = p.add_argument_group("simulated arm faults (default: none, or the --config sim section)")
     g.add_argument("--drop", type=float, help="probability a datagram is lost (each direction)")
     g.add_argument("--corrupt", type=float, help="probability a reply has one byte changed")
     g.add_argument("--latency", type=float, help="added reply latency [s]")
@@ -61,29 +97,45 @@ def _sim_args(p: argparse.ArgumentParser) -> None:
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser (exposed for tests and docs)."""
-    p = argparse.ArgumentParser(prog="uvms-hw", description=__doc__.split("\n\n")[0])
+    p = argparse.ArgumentParser(prog="uvms-hw", description=__doc__.split("\n\n")[0].replace("``", ""),
+                                epilog=_EPILOG, formatter_class=_HelpFormatter)
+    p.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = p.add_subparsers(dest="command", required=True)
 
-    r = sub.add_parser("run", help="check and execute a plan.json")
-    r.add_argument("plan", type=Path)
+    def command(name: str, help: str) -> argparse.ArgumentParser:
+        return sub.add_parser(name, help=help, description=help, epilog=_EPILOG, formatter_class=_HelpFormatter)
+
+    r = command("run", "check and execute a plan (plan.json or JointTrajectory YAML/JSON)")
+    r.add_argument("plan", type=Path, help="plan.json, or a JointTrajectory .yaml/.yml/.json")
     link = r.add_mutually_exclusive_group()
     link.add_argument("--sim", action="store_true", help="run against the simulated arm (UDP, 127.0.0.1)")
     link.add_argument("--udp", metavar="HOST:PORT", help="real arm over UDP (factory 192.168.2.3:6789)")
     link.add_argument("--serial", metavar="DEV", help="real arm over serial, 115200 8N1")
     r.add_argument("--dry-run", action="store_true", help="only check the plan; send nothing")
     r.add_argument("--config", type=Path, help="YAML with executor/sim sections (configs/hw/default.yaml)")
-    r.add_argument("--out", type=Path, help="output folder (default outputs/hw/<time>)")
-    r.add_argument("--rate", type=float, help="streaming rate [Hz]")
-    r.add_argument("--threshold", type=float, help="reached-gate threshold [rad]")
-    r.add_argument("--gate-timeout", type=float, help="gate timeout after each move [s]")
-    r.add_argument("--link-timeout", type=float, help="lost-link timeout [s]")
+    r.add_argument("--out", type=Path, help="output folder (default: outputs/hw/<time>)")
+    r.add_argument("--rate", type=float, help=f"streaming rate [Hz] {_hw_default('rate_hz')}")
+    r.add_argument("--threshold", type=float,
+                   help=f"reached-gate threshold [rad] {_hw_default('gate_threshold_rad')}")
+    r.add_argument("--gate-timeout", type=float,
+                   help=f"gate timeout after each move [s] {_hw_default('gate_timeout_s')}")
+    r.add_argument("--link-timeout", type=float, help=f"lost-link timeout [s] {_hw_default('link_timeout_s')}")
+    r.add_argument("--speed-scale", type=_speed_scale, metavar="S",
+                   help=f"fraction (0, 1] of the joints' velocity and acceleration limits {_hw_default('speed_scale')}")
     r.add_argument("--approach", action="store_true", help="move to the plan start first")
     r.add_argument("--no-plot", action="store_true", help="skip the PNG")
     _sim_args(r)
 
-    s = sub.add_parser("sim", help="serve the simulated Bravo 7 over UDP until interrupted")
-    s.add_argument("--host", default="127.0.0.1")
-    s.add_argument("--port", type=int, default=6789)
+    e = command("export", "write a plan as a trajectory_msgs/JointTrajectory-shaped YAML/JSON file")
+    e.add_argument("plan", type=Path, help="plan.json, or a JointTrajectory .yaml/.yml/.json")
+    e.add_argument("--ros", type=Path, required=True, metavar="OUT",
+                   help="output file: YAML for .yaml/.yml, JSON otherwise")
+    e.add_argument("--jaws-start", type=float, metavar="MM",
+                   help="jaws opening before the first gripper step [mm] (default: that step's opening)")
+
+    s = command("sim", "serve the simulated Bravo 7 over UDP until interrupted")
+    s.add_argument("--host", default="127.0.0.1", help="address to bind")
+    s.add_argument("--port", type=int, default=6789, help="UDP port (the arm's factory port)")
     s.add_argument("--config", type=Path, help="YAML with a sim section")
     _sim_args(s)
     return p
@@ -99,6 +151,7 @@ def _configs(args: argparse.Namespace) -> tuple[HwConfig, SimConfig]:
         "rate_hz": getattr(args, "rate", None), "gate_threshold_rad": getattr(args, "threshold", None),
         "gate_timeout_s": getattr(args, "gate_timeout", None),
         "link_timeout_s": getattr(args, "link_timeout", None),
+        "speed_scale": getattr(args, "speed_scale", None),
         "approach": True if getattr(args, "approach", False) else None}.items() if v is not None}
     hw = dataclasses.replace(hw, **over)
     sim_over = {k: v for k, v in {
@@ -170,6 +223,16 @@ def _run(args: argparse.Namespace) -> int:
     return EXIT_OK if run.ok else EXIT_ABORTED
 
 
+def _export(args: argparse.Namespace) -> int:
+    try:
+        save_plan(load_plan(args.plan), args.ros, joint_trajectory=True, jaws_start_mm=args.jaws_start)
+    except PlanError as e:
+        print(f"uvms-hw: {e}", file=sys.stderr)
+        return EXIT_REFUSED
+    print(f"wrote {args.ros} (trajectory_msgs/JointTrajectory)", file=sys.stderr)
+    return EXIT_OK
+
+
 def _serve(args: argparse.Namespace) -> int:
     _, sim_cfg = _configs(args)
     with SimServer(SimArm(sim_cfg), host=args.host, port=args.port) as server:
@@ -189,6 +252,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         if args.command == "run":
             return _run(args)
+        if args.command == "export":
+            return _export(args)
         return _serve(args)
     except (ValueError, OSError) as e:  # bad config values, unreadable files
         print(f"uvms-hw: {e}", file=sys.stderr)

@@ -9,8 +9,9 @@ import math
 from pathlib import Path
 
 import jax
+import numpy as np
 
-from uvms_jax import evo, hw, kin, planfile, sched, surrogate
+from uvms_jax import bravo7, evo, hw, kin, planfile, sched, surrogate
 from uvms_jax import plan as planning
 from uvms_jax.pipeline._report import StageReport, md_table
 from uvms_jax.pipeline._settings import PipelineSettings
@@ -21,6 +22,9 @@ log = logging.getLogger(__name__)
 THESIS_SOLVER_MS = {"greedy": 0.0121, "grasp": 110.2, "astar": 0.9435, "exact": None}
 # Docking paper Table 3 (docs/theory.md §3): best pose and the M_a range of its seven GA runs.
 PAPER_DOCKING = {"pose": (-0.32, -0.36, 0.24, 0.79), "Ma": (0.134, 0.181)}
+# hw/run.mp4: the ~92 s demo run → ~730 frames, 22–25 s of software (Mesa) rendering on 2 cores.
+VIDEO_FPS = 8.0
+VIDEO_SIZE = (480, 360)  # width, height [pixels]
 
 
 @dataclasses.dataclass
@@ -197,7 +201,46 @@ def execute(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
              "(thesis 4.6: every encoder within the threshold before the next motion). The thesis validated its "
              "real-arm runs with motion capture (~2 mm); `run.csv` logs commanded vs measured states for the same "
              "comparison. Same plan on a real arm: `uvms-hw run PLAN --dry-run`, then `--udp 192.168.2.3:6789`."]
+    if hs.plot and run.log.rows:
+        notes.append(_run_video(s, flow, run.log, out, res))
     return StageReport("hw", "Execution on the simulated Bravo 7 (docs/theory.md §6, thesis 4.6)", [table], res, notes)
+
+
+def _measured_arm(run_log: hw.RunLog) -> tuple[np.ndarray, np.ndarray]:
+    """Times ``(n,)`` [s] and measured arm angles ``(n, 6)`` G…B [rad] of the log rows whose
+    measured arm state is complete (a state that did not arrive is NaN in the log)."""
+    names = run_log.joint_names
+    n = len(names)
+    cols = [4 + n + names.index(j.name) for j in bravo7.ARM_JOINTS]
+    rows = np.asarray([[r[0], *(r[c] for c in cols)] for r in run_log.rows], dtype=float)
+    rows = rows[np.all(np.isfinite(rows), axis=1)]
+    return rows[:, 0], rows[:, 1:]
+
+
+def _run_video(s: PipelineSettings, flow: Flow, run_log: hw.RunLog, out: Path, res: dict) -> str:
+    """``out/run.mp4``: the measured run in the planning stage's scene, else the scenario's
+    (the example plan was planned in the thesis cage of ``configs/scenario/thesis_cage.yaml``);
+    returns the summary note."""
+    if flow.task_plan is not None:
+        scene = flow.task_plan.scene
+    elif s.scenario:
+        scene = planning.build_scene(s.scenario)
+    else:
+        return "No video of the run: no scene (run the plan stage or give a scenario)."
+    t, q = _measured_arm(run_log)
+    if len(t) == 0:
+        return "No video of the run: no complete measured state was logged."
+    try:
+        video = planning.render_run_video(scene, t, q, out / "run.mp4", fps=VIDEO_FPS, size=VIDEO_SIZE)
+    except RuntimeError as e:  # no offscreen GL context on this machine
+        log.warning("no video of the run: %s", e)
+        return f"No video of the run: {e}."
+    res["video_frames"] = video.frames
+    res["video_render_s"] = video.seconds
+    link = f"{out.name}/{video.path.name}"
+    return (f"Video of the run: [{link}]({link}) — measured joint angles in the MuJoCo scene, {video.fps:g} fps, "
+            f"{VIDEO_SIZE[0]}×{VIDEO_SIZE[1]}, {video.frames} frames, rendered offscreen in {video.seconds:.1f} s "
+            "(arm only: the jaws' opening and the carried objects are not drawn).")
 
 
 STAGE_FNS = {"docking": docking, "surrogate": surrogates, "plan": plan, "schedule": schedule, "hw": execute}

@@ -5,6 +5,8 @@
   metric tensors, cost matrices, :class:`PlannerSummary`), :func:`plan_for_schedule` → a
   :class:`uvms_jax.planfile.Plan`; files: :func:`write_task_graph`, :func:`write_plan`;
   figures: :func:`plot_ee_paths`, :func:`plot_plan_joints`, :func:`render_frames`;
+  video of an executed run: :func:`render_run_video` → :class:`VideoInfo` (MP4, offscreen
+  MuJoCo, camera :func:`scene_camera`);
 * scene: :class:`SceneSpec` (from ``configs/scenario/*.yaml``), :func:`build_scene` →
   :class:`Scene` (MuJoCo model, object and base poses, grasp), :class:`Context`;
 * collision: :class:`CollisionChecker` — ``is_valid``, ``clearance``, their batched versions,
@@ -59,5 +61,8 @@ from uvms_jax.plan._tasks import metric_tensor
 from uvms_jax.plan._tasks import plan_edge
 from uvms_jax.plan._tasks import plan_from_edges
 from uvms_jax.plan._tasks import task_edges
+from uvms_jax.plan._video import VideoInfo
+from uvms_jax.plan._video import render_run_video
+from uvms_jax.plan._video import scene_camera
 from uvms_jax.plan._write import write_plan
 from uvms_jax.plan._write import write_task_graph

@@ -16,6 +16,7 @@ from uvms_jax.plan._collision import densify
 from uvms_jax.plan._scene import Scene
 from uvms_jax.plan._targets import NodeTarget
 from uvms_jax.plan._tasks import EdgeResult
+from uvms_jax.plan._video import scene_camera
 from uvms_jax.plotting import pyplot
 
 __all__ = ["plot_ee_paths", "plot_plan_joints", "render_frames"]
@@ -100,9 +101,7 @@ def render_frames(scene: Scene, targets: Mapping[int, NodeTarget], out_dir: Path
         log.warning("offscreen rendering unavailable (%s); skipping frames", e)
         return 0
     plt = pyplot()
-    cam = mujoco.MjvCamera()
-    cam.lookat[:] = (0, 0, 0.45)
-    cam.distance, cam.azimuth, cam.elevation = 2.2, 135, -30
+    cam = scene_camera()
     frames = [("start", np.asarray(scene.spec.start_q))] + [(f"node{n}", t.q_at) for n, t in targets.items()]
     for name, q in frames:
         d.qpos[:] = q
