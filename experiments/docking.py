@@ -19,6 +19,7 @@ from __future__ import annotations
 import logging
 from pathlib import Path
 
+import _cli  # the scripts' folder: one-line config errors, --help
 import hydra
 import jax
 from hydra.core.hydra_config import HydraConfig
@@ -35,7 +36,8 @@ jax.config.update("jax_default_matmul_precision", "highest")
 @hydra.main(version_base="1.3", config_path="../configs", config_name="docking")
 def main(cfg: DictConfig) -> dict:
     out = Path(HydraConfig.get().runtime.output_dir)
-    settings = from_mapping(evo.DockingSettings, OmegaConf.to_container(cfg, resolve=True))
+    with _cli.config_errors():
+        settings = from_mapping(evo.DockingSettings, OmegaConf.to_container(cfg, resolve=True))
     if settings.dtype == "float64":
         jax.config.update("jax_enable_x64", True)
     run = evo.run_docking(settings)
@@ -47,4 +49,4 @@ def main(cfg: DictConfig) -> dict:
 
 
 if __name__ == "__main__":
-    main()
+    _cli.run(main)

@@ -148,8 +148,16 @@ def write(rows: list[dict[str, Any]], override_keys: list[str], out: Path,
     return csv_path, md_path
 
 
+class _OneLineErrors(argparse.ArgumentParser):
+    """argparse whose usage errors are one line (``gather: error: ...``, exit 2), as the
+    experiments' configuration errors; ``--help`` still shows the usage."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {message} (--help: usage)\n")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p = _OneLineErrors(description=__doc__.split("\n\n")[0])
     p.add_argument("sweep_dir", type=Path, help="a multirun folder (hydra.sweep.dir)")
     p.add_argument("--file", help=f"result file in each job folder (default: first of {', '.join(DEFAULT_FILES)})")
     p.add_argument("--columns", nargs="+", metavar="PATTERN",
@@ -159,7 +167,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         rows, keys = gather(args.sweep_dir, args.file)
     except FileNotFoundError as e:
-        print(f"gather: {e}", file=sys.stderr)
+        print(f"gather: error: {e}", file=sys.stderr)
         return 2
     csv_path, md_path = write(rows, keys, args.out or args.sweep_dir, args.columns)
     print(md_path.read_text(), end="")

@@ -28,6 +28,7 @@ from pathlib import Path
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 
+import _cli  # noqa: E402  # the scripts' folder: one-line config errors, --help
 import hydra  # noqa: E402
 import jax  # noqa: E402
 from hydra.core.hydra_config import HydraConfig  # noqa: E402
@@ -75,9 +76,12 @@ def main(cfg: DictConfig) -> dict:
     # float64; the docking GA and all timings ask for float32 explicitly.
     jax.config.update("jax_enable_x64", True)
     jax.config.update("jax_default_matmul_precision", "highest")
-    settings = settings_of(cfg)
+    with _cli.config_errors():
+        settings = settings_of(cfg)
+        if "schedule" in settings.stages:
+            _cli.reject_unused_weights(settings.sched.source.kind)
     return run_pipeline(settings, Path(HydraConfig.get().runtime.output_dir), OmegaConf.to_yaml(cfg))
 
 
 if __name__ == "__main__":
-    main()
+    _cli.run(main)

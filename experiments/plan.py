@@ -17,6 +17,7 @@ import logging
 import os
 from pathlib import Path
 
+import _cli  # the scripts' folder: one-line config errors, --help
 import hydra
 import jax
 from hydra.core.hydra_config import HydraConfig
@@ -35,7 +36,8 @@ log = logging.getLogger(__name__)
 def main(cfg: DictConfig) -> dict:
     jax.config.update("jax_enable_x64", True)  # IK in float64
     out = Path(HydraConfig.get().runtime.output_dir)
-    settings = from_mapping(P.PlanSettings, OmegaConf.to_container(cfg.plan, resolve=True))
+    with _cli.config_errors():
+        settings = from_mapping(P.PlanSettings, OmegaConf.to_container(cfg.plan, resolve=True), "plan")
     scene = P.build_scene(OmegaConf.to_container(cfg.scenario, resolve=True))
     task_plan = P.plan_task_graph(jax.random.PRNGKey(settings.seed), scene, settings)
     P.write_task_graph(task_plan, out)
@@ -53,4 +55,4 @@ def main(cfg: DictConfig) -> dict:
 
 
 if __name__ == "__main__":
-    main()
+    _cli.run(main)

@@ -18,6 +18,7 @@ from __future__ import annotations
 import logging
 from pathlib import Path
 
+import _cli  # the scripts' folder: one-line config errors, --help
 import hydra
 import jax
 from hydra.core.hydra_config import HydraConfig
@@ -32,12 +33,15 @@ log = logging.getLogger(__name__)
 
 def settings(cfg: DictConfig) -> sched.SchedSettings:
     """The typed settings of the config's ``sched`` section (a missing ``???`` raises)."""
-    return from_mapping(sched.SchedSettings, OmegaConf.to_container(cfg.sched, resolve=True, throw_on_missing=True))
+    return from_mapping(sched.SchedSettings, OmegaConf.to_container(cfg.sched, resolve=True, throw_on_missing=True),
+                        "sched")
 
 
 @hydra.main(version_base="1.3", config_path="../configs", config_name="schedule")
 def main(cfg: DictConfig) -> None:
-    s = settings(cfg)
+    with _cli.config_errors():
+        s = settings(cfg)
+        _cli.reject_unused_weights(s.source.kind)
     out = Path(HydraConfig.get().runtime.output_dir)
     run = sched.run_schedule(jax.random.key(cfg.seed), s, root=Path(get_original_cwd()))
     sched.write_schedule(run, out, plots=s.plots)
@@ -45,4 +49,4 @@ def main(cfg: DictConfig) -> None:
 
 
 if __name__ == "__main__":
-    main()
+    _cli.run(main)

@@ -23,6 +23,7 @@ from __future__ import annotations
 import logging
 from pathlib import Path
 
+import _cli  # the scripts' folder: one-line config errors, --help
 import hydra
 import jax
 from hydra.core.hydra_config import HydraConfig
@@ -41,7 +42,8 @@ def settings_from_cfg(cfg: DictConfig) -> surrogate.SurrogateSettings:
 
 @hydra.main(version_base="1.3", config_path="../configs", config_name="surrogate")
 def main(cfg: DictConfig) -> None:
-    settings = settings_from_cfg(cfg)
+    with _cli.config_errors():
+        settings = settings_from_cfg(cfg)
     # Decided once, before any JAX work: float64 datasets and training need x64.
     if settings.train_dtype == "float64":
         jax.config.update("jax_enable_x64", True)
@@ -51,4 +53,4 @@ def main(cfg: DictConfig) -> None:
 
 
 if __name__ == "__main__":
-    main()
+    _cli.run(main)

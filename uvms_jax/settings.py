@@ -91,7 +91,8 @@ def from_mapping(cls: type[T], mapping: Mapping[str, Any] | None, where: str = "
     """``cls`` (a dataclass) built from ``mapping``, converting nested mappings and lists.
 
     Keys absent from ``mapping`` take the dataclass defaults; unknown keys, missing required
-    keys and values of the wrong type raise :class:`SettingsError` naming the key path.
+    keys, values of the wrong type and values that the dataclass's ``__post_init__`` rejects
+    (``ValueError``) raise :class:`SettingsError` naming the key path.
     """
     if mapping is None:
         mapping = {}
@@ -105,5 +106,7 @@ def from_mapping(cls: type[T], mapping: Mapping[str, Any] | None, where: str = "
     kwargs = {k: _convert(hints[k], v, f"{where}.{k}" if where else k) for k, v in mapping.items()}
     try:
         return cls(**kwargs)
-    except TypeError as e:
+    except SettingsError:
+        raise
+    except (TypeError, ValueError) as e:  # missing keys; checks of the dataclass's __post_init__
         raise SettingsError(f"{where or cls.__name__}: {e}") from e

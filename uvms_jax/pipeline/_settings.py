@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Mapping
-from typing import Any
+from typing import Any, Literal
 
 from uvms_jax import evo, hw, sched, surrogate
 from uvms_jax import plan as planning
@@ -24,7 +24,7 @@ class HwStageSettings:
       executor, sim: the executor's and the simulated arm's settings.
     """
 
-    link: str = "loopback"
+    link: Literal["loopback", "udp"] = "loopback"
     plan: str | None = None
     plot: bool = True
     executor: hw.HwConfig = hw.HwConfig()

@@ -230,7 +230,7 @@ def run_schedule(
     else:
         problem, nm = problem_from_metrics(raw_metrics, src.compat, src.start, src.goal, weights, src.mirror_goal)
     if nm is None:
-        log.warning("%s; the weights %s are ignored", note, weights.name)
+        log.info("%s; the weights %s are ignored", note, weights.name)
     solved = solve_all(key, problem, settings)
     best = min(solved.values(), key=lambda s: s.cost)
     sweep = grasp_sweep(key, problem, settings) if settings.iterations_sweep else []

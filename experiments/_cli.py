@@ -1,0 +1,119 @@
+"""What every experiment's command line shares: one-line configuration errors, quiet backend
+probing, and a ``--help`` that lists the experiment's own config groups.
+
+An experiment reads its config inside ``with _cli.config_errors():`` and ends with
+``_cli.run(main)`` instead of ``main()``. A configuration error — a value of the wrong type
+(``uvms_jax.settings.SettingsError``), an unknown key or group option, an override that cannot
+be parsed, a missing ``???`` value — then prints one line naming the key and exits with status
+2, without a traceback::
+
+    $ python experiments/schedule.py sched.grasp.iterations=abc
+    error: sched.grasp.iterations: expected an integer, got 'abc'
+
+Any other exception keeps its full traceback; ``HYDRA_FULL_ERROR=1`` shows it for
+configuration errors too. Importing this module (the scripts' folder is on ``sys.path``) also
+registers the ``uvms_config_groups`` resolver that ``configs/hydra/help/uvms.yaml`` uses.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import os
+import sys
+from collections.abc import Callable, Iterator, Sequence
+from typing import Any
+
+from hydra.core.global_hydra import GlobalHydra
+from hydra.core.hydra_config import HydraConfig
+from hydra.errors import ConfigCompositionException, MissingConfigException, OverrideParseException
+from omegaconf import OmegaConf
+from omegaconf.errors import ConfigAttributeError, ConfigKeyError, OmegaConfBaseException
+
+from uvms_jax.settings import SettingsError
+
+USAGE_EXIT = 2  # as argparse: the command line is wrong, nothing ran
+CONFIG_ERRORS = (SettingsError, ConfigCompositionException, OverrideParseException, OmegaConfBaseException)
+# Read before run() sets it: the user's own HYDRA_FULL_ERROR=1 asks for tracebacks.
+SHOW_TRACEBACK = os.environ.get("HYDRA_FULL_ERROR") == "1"
+
+# JAX logs at INFO which platforms it could not load ("Unable to initialize backend 'tpu'") and
+# warns when a GPU exists without a CUDA jaxlib; neither says anything about the run.
+logging.getLogger("jax._src.xla_bridge").setLevel(logging.ERROR)
+
+
+def one_line(e: BaseException) -> str:
+    """A configuration error as one line that names the key (or config) at fault."""
+    cause = e.__cause__
+    if isinstance(e, MissingConfigException):
+        first = str(e).splitlines()[0].strip()
+        return f"{first}; available: {', '.join(e.options)}" if e.options else first
+    if isinstance(e, OmegaConfBaseException) or isinstance(cause, OmegaConfBaseException):
+        oc = e if isinstance(e, OmegaConfBaseException) else cause
+        key, msg = getattr(oc, "full_key", None), str(getattr(oc, "msg", None) or oc).splitlines()[0].strip()
+        if isinstance(oc, (ConfigKeyError, ConfigAttributeError)) and key:  # not in a struct config
+            return f"{key}: unknown key"
+        return f"{key}: {msg}" if key else msg
+    return " ".join(line.strip() for line in str(e).splitlines() if line.strip())
+
+
+@contextlib.contextmanager
+def config_errors() -> Iterator[None]:
+    """Inside it, a configuration error (``CONFIG_ERRORS``) prints one line and exits with
+    status 2 (``SystemExit``, which Hydra's job runner passes on without reporting the job as
+    failed in a second line)."""
+    try:
+        yield
+    except CONFIG_ERRORS as e:
+        if SHOW_TRACEBACK:
+            raise
+        print(f"error: {one_line(e)}", file=sys.stderr)
+        sys.exit(USAGE_EXIT)
+
+
+def run(main: Callable[[], Any]) -> None:
+    """Run a ``@hydra.main`` function; errors in composing the config (unknown key or group
+    option, bad override) → one line on stderr, exit 2."""
+    # Hydra prints its own multi-line report and exits 1 unless HYDRA_FULL_ERROR is set; with
+    # it set, the exception reaches this frame.
+    os.environ["HYDRA_FULL_ERROR"] = "1"
+    with config_errors():
+        main()
+
+
+def overridden(*keys: str) -> list[str]:
+    """The command-line overrides of this job (``key=value``) that set one of ``keys`` (a config
+    group such as ``sched/weights`` or a key such as ``sched.weights``) or a key below them."""
+
+    def hits(override: str) -> bool:
+        key = override.lstrip("+~").split("=", 1)[0].split("@", 1)[0]
+        return any(key == k or key.startswith(k + ".") or key.startswith(k + "/") for k in keys)
+
+    return [o for o in HydraConfig.get().overrides.task if hits(o)]
+
+
+def reject_unused_weights(source_kind: str) -> None:
+    """Raise ``SettingsError`` when the command line sets metric weights that a ready cost
+    matrix (``source_kind == "matrix"``) would ignore: an override that changes nothing."""
+    if source_kind != "matrix":
+        return
+    ov = overridden("sched/weights", "sched.weights")
+    if ov:
+        raise SettingsError(f"{ov[0]}: the weights are unused with a ready cost matrix (sched/source=thesis_matrix); "
+                            "they apply to metric sources (sched/source=synthetic or edges_csv)")
+
+
+def _config_groups(*, _root_: Any) -> str:
+    """The app's config groups and their options, one line each (the selected one starred):
+    the groups of this config's defaults list, from ``hydra.runtime.choices``."""
+    loader = GlobalHydra.instance().config_loader()
+    lines = []
+    for group, choice in sorted(_root_.hydra.runtime.choices.items()):
+        if group.startswith("hydra/"):
+            continue
+        options: Sequence[str] = loader.get_group_options(group.split("@", 1)[0])
+        lines.append(f"{group}: " + ", ".join(f"{o}*" if o == choice else o for o in options))
+    return "\n".join(lines)
+
+
+OmegaConf.register_new_resolver("uvms_config_groups", _config_groups, replace=True)

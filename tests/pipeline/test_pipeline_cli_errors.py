@@ -1,0 +1,90 @@
+"""The experiments' command lines (subprocesses): a bad override is one line and exit status 2,
+an override that changes nothing is an error, ``--help`` lists the experiment's own groups, and
+a good run logs no backend probing."""
+
+import subprocess
+import sys
+
+import pytest
+from _pipeline_helpers import ROOT
+
+USAGE_EXIT = 2  # experiments/_cli.py: a configuration error
+
+
+def _run(script: str, *args: str, tmp_path=None) -> subprocess.CompletedProcess:
+    run_dir = [f"hydra.run.dir={tmp_path}"] if tmp_path is not None else []
+    return subprocess.run([sys.executable, f"experiments/{script}", *args, *run_dir],
+                          cwd=ROOT, capture_output=True, text=True, timeout=300)
+
+
+def _one_error_line(proc: subprocess.CompletedProcess) -> str:
+    """The single line that a configuration error prints (stdout and stderr together)."""
+    lines = [line for line in (proc.stdout + proc.stderr).splitlines() if line.strip()]
+    assert proc.returncode == USAGE_EXIT, proc.stdout + proc.stderr
+    assert "Traceback" not in proc.stderr
+    assert len(lines) == 1, lines
+    assert lines[0].startswith("error: ")
+    return lines[0]
+
+
+@pytest.mark.parametrize(("script", "override", "expected"), [
+    ("schedule.py", "sched.grasp.iterations=abc", "error: sched.grasp.iterations: expected an integer, got 'abc'"),
+    ("schedule.py", "sched.nope=1", "error: sched.nope: unknown key"),
+    ("schedule.py", "sched/source=nope", "Could not find 'sched/source/nope'; available: edges_csv, synthetic"),
+    ("schedule.py", "sched/source=edges_csv", "error: sched.source.path: Missing mandatory value"),
+    ("docking.py", "ga.population_size=abc", "error: ga.population_size: expected an integer, got 'abc'"),
+    ("plan.py", "plan.budget_s=fast", "error: plan.budget_s: expected a number, got 'fast'"),
+    ("surrogate.py", "sampling.nope=1", "error: sampling.nope: unknown key"),
+    ("pipeline.py", "experiment=nope", "Could not find 'experiment/nope'; available: full, tiny"),
+    ("pipeline.py", "stages=[schedule,fly]", "unknown stages ['fly']"),
+    ("pipeline.py", "hw.plan=[1", "no viable alternative at input"),
+])
+def test_bad_override_is_one_line(tmp_path, script, override, expected):
+    assert expected in _one_error_line(_run(script, override, tmp_path=tmp_path))
+
+
+@pytest.mark.parametrize(("script", "overrides"), [
+    ("schedule.py", ["sched/weights=security"]),
+    ("schedule.py", ["sched.weights.security=0.9"]),
+    ("pipeline.py", ["stages=[schedule]", "sched/weights=speed"]),
+])
+def test_weights_on_a_ready_matrix_are_an_error(tmp_path, script, overrides):
+    line = _one_error_line(_run(script, *overrides, tmp_path=tmp_path))
+    assert f"error: {overrides[-1]}: the weights are unused with a ready cost matrix" in line
+    assert not (tmp_path / "results.json").exists()
+
+
+def test_weights_on_metrics_run_and_log_no_backend_probing(tmp_path):
+    # The same weights override on a metric source changes the costs: accepted.
+    proc = _run("schedule.py", "sched/source=synthetic", "sched/weights=security", "sched.solvers=[greedy]",
+                "sched.timing_repeats=1", "sched.iterations_sweep=[]", "sched.plots=false", tmp_path=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert (tmp_path / "results.json").exists()
+    log = proc.stdout + proc.stderr
+    assert "greedy" in log
+    assert "Unable to initialize backend" not in log and "xla_bridge" not in log
+
+
+def test_gather_usage_error_is_one_line():
+    proc = subprocess.run([sys.executable, "experiments/gather.py"], cwd=ROOT, capture_output=True, text=True)
+    lines = [line for line in proc.stderr.splitlines() if line.strip()]
+    assert proc.returncode == USAGE_EXIT and len(lines) == 1 and "sweep_dir" in lines[0], proc.stderr
+
+
+@pytest.mark.parametrize(("script", "own", "foreign"), [
+    ("docking.py", ["docking/preset: fast, full*", "ga: paper*"], ["sched/weights", "surrogate:", "scenario"]),
+    ("schedule.py", ["sched/source: edges_csv, synthetic, thesis_matrix*", "sched/weights: equal*"],
+     ["docking/preset", "ga:", "surrogate:"]),
+    ("surrogate.py", ["surrogate: paper*, small"], ["sched/weights", "ga:", "docking/preset"]),
+    ("plan.py", ["plan: default*", "scenario: thesis_cage*"], ["sched/weights", "ga:", "surrogate:"]),
+    ("pipeline.py", ["experiment: full, tiny", "ga: paper*", "sched/weights: equal*", "hw: default*"],
+     ["docking/preset", "sched/source", "surrogate:"]),
+])
+def test_help_lists_own_groups_only(script, own, foreign):
+    proc = _run(script, "--help")
+    assert proc.returncode == 0, proc.stderr
+    groups = proc.stdout.split("== Configuration groups ==")[1].split("== Config ==")[0]
+    for line in own:
+        assert line in groups, groups
+    for name in foreign:
+        assert name not in groups, groups
