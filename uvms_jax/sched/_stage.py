@@ -103,7 +103,7 @@ class ScheduleRun:
       note: where the costs came from.
       weights: the weights (used only when ``weights_used``).
       solved: solver name → its schedule (wall time: median over the timing repeats).
-      best: the cheapest schedule of ``solved``.
+      best: the cheapest schedule of ``solved`` (the exact one on a tie).
       rows: per solver, the table row (solver, path, cost, time_ms, then ``K_<metric>`` and
         ``N_<metric>`` for each metric: weight and normalised sum along the schedule).
       sweep: GRASP sweep points (empty when no sweep was asked for).
@@ -232,7 +232,8 @@ def run_schedule(
     if nm is None:
         log.info("%s; the weights %s are ignored", note, weights.name)
     solved = solve_all(key, problem, settings)
-    best = min(solved.values(), key=lambda s: s.cost)
+    # The exact solution wins ties: it is the reference the other solvers are measured against.
+    best = min(solved.values(), key=lambda s: (s.cost, s.solver != "exact"))
     sweep = grasp_sweep(key, problem, settings) if settings.iterations_sweep else []
     return ScheduleRun(
         problem=problem,
