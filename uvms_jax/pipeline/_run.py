@@ -8,8 +8,8 @@ import time
 from pathlib import Path
 
 import jax
-from tqdm import tqdm
 
+from uvms_jax import progress
 from uvms_jax.pipeline._report import write_summary
 from uvms_jax.pipeline._settings import STAGES, PipelineSettings
 from uvms_jax.pipeline._stages import STAGE_FNS, Flow
@@ -35,7 +35,7 @@ def run_pipeline(settings: PipelineSettings, out: Path, config_text: str = "") -
     log.info("pipeline stages %s into %s; devices %s", order, out, jax.devices())
     flow, reports = Flow(), []
     t_start = time.perf_counter()
-    for name in tqdm(order, desc="pipeline", unit="stage", disable=None):
+    for name in progress.bar(order, desc="pipeline", unit="stage"):
         stage_out = out / name
         stage_out.mkdir(parents=True, exist_ok=True)
         log.info("== stage %s", name)

@@ -11,7 +11,7 @@ from pathlib import Path
 import jax
 import numpy as np
 
-from uvms_jax import bravo7, evo, hw, kin, planfile, sched, surrogate
+from uvms_jax import bravo7, evo, hw, kin, planfile, progress, sched, surrogate
 from uvms_jax import plan as planning
 from uvms_jax.pipeline._report import StageReport, md_table
 from uvms_jax.pipeline._settings import PipelineSettings
@@ -166,8 +166,6 @@ def schedule(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
 
 def execute(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
     """Dry-run check, then execution of the scheduled plan (or ``hw.plan``) on the simulated Bravo 7."""
-    from tqdm import tqdm
-
     hs = s.hw
     if hs.plan is not None:
         the_plan, source = planfile.load_plan(hs.plan), hs.plan
@@ -175,17 +173,11 @@ def execute(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
         the_plan, source = flow.plan, flow.plan_source
     else:
         raise ValueError("the hw stage needs a plan: run the plan and schedule stages, or set hw.plan")
-    bar = tqdm(total=len(the_plan.segments), unit="seg", desc="hw", leave=False, disable=None)
-
-    def progress(i: int, n: int, name: str) -> None:
-        bar.n = i
-        bar.set_description(f"hw {name[:24]}")
-        bar.refresh()
-
-    try:
-        run = hw.run_plan(the_plan, link=hs.link, config=hs.executor, sim=hs.sim, progress=progress)
-    finally:
-        bar.close()
+    with progress.bar(total=len(the_plan.segments), desc="hw", unit="seg") as bar:
+        run = hw.run_plan(the_plan, link=hs.link, config=hs.executor, sim=hs.sim,
+                          progress=lambda i, n, name: bar.update(i - bar.n))  # i: segments finished
+        if run.ok:
+            bar.update(bar.total - bar.n)
     res = hw.write_run(run, out, plot=hs.plot, plan_path=source)
     if not run.ok:
         log.warning("simulated run aborted (arm told to hold): %s", run.result.reason)
