@@ -1,12 +1,16 @@
-"""Throughput of w and KCI for the 12-DOF UVMS: uvms_jax vs pytorch-kinematics, one process.
+"""Throughput of w and KCI: uvms_jax vs pytorch-kinematics, one process.
 
 Prints one JSON object. Both sides evaluate the same chain (pytorch-kinematics loads the URDF
 exported by ``uvms_jax.kin.to_urdf``) on the same device, in float32:
-  uvms_jax: one jitted call ``manipulability_of(chain, q)`` (fused Jacobian + unrolled
-            Cholesky) / ``kci_of(chain, q)`` (fused Jacobian + unrolled Jacobi);
-  peer:     ``chain.jacobian(q)`` then ``sqrt(det(J Jᵀ))`` / ``svdvals`` in torch.
+  uvms_jax: one jitted call ``manipulability_of(chain, q, task)`` (fused Jacobian + unrolled
+            Cholesky) / ``kci_of(chain, q, task)`` (fused Jacobian + unrolled Jacobi);
+  peer:     ``chain.jacobian(q)``, the task rows, then ``sqrt(det G)`` of the smaller Gram
+            matrix G (J Jᵀ or Jᵀ J) / ``svdvals`` in torch.
+The chain is the 12-DOF UVMS by default, or any arm imported with ``--urdf`` (e.g. a 4-DOF
+arm with ``--task full`` exercises the ``sqrt(det Jᵀ J)`` path).
 
 Usage: python benchmarks/kin_indices.py [--device cpu|cuda] [--batches 1e3,1e4,1e5,1e6]
+       [--urdf FILE --base LINK --tip LINK] [--task full|position|orientation|vx,vy,vz,wz]
 """
 
 from __future__ import annotations
@@ -58,24 +62,31 @@ def main() -> None:
     parser.add_argument("--batches", default="1e3,1e4,1e5,1e6")
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--peer-max-batch", type=float, default=1e7, help="skip the peer above this batch")
+    parser.add_argument("--urdf", default=None, help="benchmark this arm instead of the 12-DOF UVMS")
+    parser.add_argument("--base", default=None, help="base link of --urdf (default: its root)")
+    parser.add_argument("--tip", default=None, help="tip link of --urdf (default: its only leaf)")
+    parser.add_argument("--task", default="full", help="full, position, orientation or rows, e.g. vx,vy,vz,wz")
     args = parser.parse_args()
     batches = [int(float(b)) for b in args.batches.split(",")]
+    task = args.task if args.task in ("full", "position", "orientation") else tuple(args.task.split(","))
+    task_idx = list(indices.task_rows(task))
 
-    chain = kin.uvms12()
+    chain = kin.uvms12() if args.urdf is None else kin.from_urdf(args.urdf, base_link=args.base, tip_link=args.tip)
     lo = np.maximum(np.asarray(chain.lower), -1.0)
     hi = np.minimum(np.asarray(chain.upper), 1.0)
-    w_fn = jax.jit(lambda q: indices.manipulability_of(chain, q))
-    kci_fn = jax.jit(lambda q: indices.kci_of(chain, q))
+    w_fn = jax.jit(lambda q: indices.manipulability_of(chain, q, task))
+    kci_fn = jax.jit(lambda q: indices.kci_of(chain, q, task))
 
     tdev = torch.device(args.device)
     peer = pk.build_serial_chain_from_urdf(kin.to_urdf(chain), "tool").to(dtype=torch.float32, device=tdev)
 
     def peer_w(q):
-        J = peer.jacobian(q)
-        return torch.sqrt(torch.clamp(torch.linalg.det(J @ J.transpose(-1, -2)), min=0.0))
+        J = peer.jacobian(q)[:, task_idx]
+        G = J @ J.transpose(-1, -2) if J.shape[-2] <= J.shape[-1] else J.transpose(-1, -2) @ J
+        return torch.sqrt(torch.clamp(torch.linalg.det(G), min=0.0))
 
     def peer_kci(q):
-        s = torch.linalg.svdvals(peer.jacobian(q))
+        s = torch.linalg.svdvals(peer.jacobian(q)[:, task_idx])
         return s[..., -1] / s[..., 0]
 
     def sync():
@@ -85,7 +96,7 @@ def main() -> None:
     rows = []
     for n in batches:
         key = jax.random.key(n)
-        q = jax.random.uniform(key, (n, 12), jnp.float32, lo, hi)
+        q = jax.random.uniform(key, (n, chain.n_joints), jnp.float32, lo, hi)
         q.block_until_ready()
         row = {"batch": n}
         check = np.asarray(q[: min(n, 1000)])  # both sides must compute the same numbers
@@ -108,7 +119,9 @@ def main() -> None:
         json.dumps(
             {
                 "benchmark": "kin_indices",
-                "chain": "uvms12",
+                "chain": chain.name,
+                "n_joints": chain.n_joints,
+                "task": task_idx,
                 "dtype": "float32",
                 "jax_device": str(jax.devices()[0]),
                 "torch_device": args.device,

@@ -1,5 +1,6 @@
-"""Dexterity indices (docs/theory.md §2): manipulability w, KCI, normalised Jacobian, area
-manipulability M_a (docking paper eq. 1) and static joint torques."""
+"""Dexterity indices (docs/theory.md §2): manipulability w, KCI (for any number of joints and a
+chosen task space), normalised Jacobian, area manipulability M_a (docking paper eq. 1) and
+static joint torques."""
 
 from uvms_jax.indices._area import approach_down
 from uvms_jax.indices._area import area_manipulability
@@ -14,3 +15,4 @@ from uvms_jax.indices._indices import manipulability_of
 from uvms_jax.indices._indices import normalized_jacobian
 from uvms_jax.indices._indices import payload_wrench
 from uvms_jax.indices._indices import singular_values
+from uvms_jax.indices._indices import task_rows

@@ -1,11 +1,21 @@
 """Dexterity indices of a Jacobian (docs/theory.md §2): manipulability, KCI, normalised Jacobian, torques.
 
-All functions take ``J: (..., m, n)`` with ``m ≤ n`` and broadcast over leading axes.
+Every index is a function of the ``r = min(m, n)`` singular values ``σ1 ≥ … ≥ σr`` of a
+Jacobian ``J: (..., m, n)`` (m task rows, n joints), so it is defined for every shape:
+
+- ``w = σ1 ⋯ σr``: ``sqrt(det J Jᵀ)`` when ``m ≤ n`` (Yoshikawa), ``sqrt(det Jᵀ J)`` when
+  ``m > n`` — an arm with fewer joints than task dimensions is scored by the volume its n
+  joint rates span, not by a determinant that is 0 because of the shape alone.
+- ``KCI = σr / σ1`` (the inverse of the matrix condition number, as ``numpy.linalg.cond``).
+
+The task space is a choice of rows of the 6-row geometric Jacobian (``task=``): ``"full"``,
+``"position"``, ``"orientation"`` or row names from ``vx vy vz wx wy wz`` (or indices 0–5).
 """
 
 from __future__ import annotations
 
 import functools
+from typing import Sequence
 
 import jax
 import jax.numpy as jnp
@@ -13,13 +23,51 @@ from jax import Array
 
 from uvms_jax.kin import Chain, check_joint_array, jacobian_rows
 
+ROW_NAMES = ("vx", "vy", "vz", "wx", "wy", "wz")
+TASKS = {"full": (0, 1, 2, 3, 4, 5), "position": (0, 1, 2), "orientation": (3, 4, 5)}
 
 
-def _check_jacobian(J) -> Array:
+def task_rows(task: str | Sequence[str | int] | None) -> tuple[int, ...]:
+    """Rows of the geometric Jacobian ``[v; ω]`` that span a task space.
+
+    Args:
+      task: ``None`` or ``"full"`` (all six), ``"position"`` (``vx vy vz``), ``"orientation"``
+        (``wx wy wz``), or a sequence of row names (``"vx"`` … ``"wz"``) or indices 0–5,
+        e.g. ``("vx", "vy", "vz", "wz")`` for position and heading.
+
+    Raises:
+      ValueError: unknown name, index out of range, repeated or no rows.
+    """
+    if task is None:
+        return TASKS["full"]
+    if isinstance(task, str):
+        if task not in TASKS:
+            raise ValueError(f"unknown task {task!r}; expected one of {sorted(TASKS)} or a sequence of rows {ROW_NAMES}")
+        return TASKS[task]
+    rows = []
+    for r in task:
+        if isinstance(r, str):
+            if r not in ROW_NAMES:
+                raise ValueError(f"unknown Jacobian row {r!r}; expected one of {ROW_NAMES}")
+            rows.append(ROW_NAMES.index(r))
+        elif int(r) == r and 0 <= int(r) < 6:
+            rows.append(int(r))
+        else:
+            raise ValueError(f"Jacobian row index {r!r} out of range 0–5")
+    if not rows or len(set(rows)) != len(rows):
+        raise ValueError(f"a task needs distinct rows, got {tuple(task)}")
+    return tuple(rows)
+
+
+def _check_jacobian(J, task=None) -> Array:
     J = jnp.asarray(J)
-    if J.ndim < 2 or J.shape[-2] > J.shape[-1]:
-        raise ValueError(f"J must have shape (..., m, n) with m <= n, got {J.shape}")
-    return J
+    if J.ndim < 2:
+        raise ValueError(f"J must have shape (..., m, n), got {J.shape}")
+    if task is None:
+        return J
+    if J.shape[-2] != 6:
+        raise ValueError(f"task= selects rows of a 6-row geometric Jacobian; J has shape {J.shape}")
+    return J[..., list(task_rows(task)), :]
 
 
 def _gram(J: Array) -> Array:
@@ -34,13 +82,18 @@ def _safe_sqrt(x: Array) -> Array:
 
 
 def _gram_rows(rows) -> list:
-    """``J Jᵀ`` of a Jacobian given as m rows of n scalars (see :func:`uvms_jax.kin.jacobian_rows`)."""
+    """The smaller Gram matrix of J given as m rows of n scalars (see
+    :func:`uvms_jax.kin.jacobian_rows`): ``J Jᵀ`` (m × m) if ``m ≤ n``, else ``Jᵀ J`` (n × n).
+    Both have the squared singular values of J as eigenvalues, and no zero ones from the shape."""
     m, n = len(rows), len(rows[0])
-    return [[sum(rows[a][k] * rows[b][k] for k in range(n)) for b in range(m)] for a in range(m)]
+    if m <= n:
+        return [[sum(rows[a][k] * rows[b][k] for k in range(n)) for b in range(m)] for a in range(m)]
+    return [[sum(rows[k][a] * rows[k][b] for k in range(m)) for b in range(n)] for a in range(n)]
 
 
 def manipulability_from_rows(rows):
-    """``w = ∏ diag(chol(J Jᵀ)) = sqrt(det J Jᵀ)`` for J as m rows of n scalars.
+    """``w = ∏ diag(chol(G)) = sqrt(det G)`` for J as m rows of n scalars, G its smaller Gram
+    matrix (``J Jᵀ`` if ``m ≤ n``, else ``Jᵀ J``): the product of the min(m, n) singular values.
 
     The Cholesky factorisation is unrolled on scalars, so over a batch it is one fused
     elementwise kernel. A pivot that is not positive (rank-deficient J) gives 0 for that
@@ -70,36 +123,51 @@ def _manipulability(J: Array) -> Array:
     return manipulability_from_rows(_rows(J))
 
 
-def manipulability(J) -> Array:
-    """Yoshikawa manipulability ``w = sqrt(det(J Jᵀ)) = σ1 ⋯ σm``, shape ``(...)``.
+def manipulability(J, task=None) -> Array:
+    """Manipulability ``w = σ1 ⋯ σr``, ``r = min(m, n)``, shape ``(...)``.
 
-    From an unrolled Cholesky factorisation of ``J Jᵀ`` (no SVD, no pivoting). ``w ≥ 0``,
-    exactly 0 at singular configurations, with finite gradients there. For w of a chain at
-    many configurations, :func:`manipulability_of` is much faster (it never stores J).
+    ``sqrt(det J Jᵀ)`` (Yoshikawa) for ``m ≤ n``; ``sqrt(det Jᵀ J)`` for ``m > n`` (fewer
+    joints than task dimensions). From an unrolled Cholesky factorisation of the smaller Gram
+    matrix (no SVD, no pivoting). ``w ≥ 0``, exactly 0 at singular configurations, with
+    finite gradients there. For w of a chain at many configurations,
+    :func:`manipulability_of` is much faster (it never stores J).
+
+    Args:
+      J: ``(..., m, n)`` Jacobian.
+      task: rows of a 6-row geometric J to keep (see :func:`task_rows`); None: all rows of J.
     """
-    return _manipulability(_check_jacobian(J))
+    return _manipulability(_check_jacobian(J, task))
 
 
-@jax.jit
-def _manipulability_of(chain: Chain, q: Array) -> Array:
-    return manipulability_from_rows(jacobian_rows(chain, q))
+@functools.partial(jax.jit, static_argnames="rows")
+def _manipulability_of(chain: Chain, q: Array, rows: tuple[int, ...]) -> Array:
+    J = jacobian_rows(chain, q)
+    return manipulability_from_rows([J[r] for r in rows])
 
 
-@jax.jit
-def _kci_of(chain: Chain, q: Array) -> Array:
-    return kci_from_rows(jacobian_rows(chain, q))
+@functools.partial(jax.jit, static_argnames="rows")
+def _kci_of(chain: Chain, q: Array, rows: tuple[int, ...]) -> Array:
+    J = jacobian_rows(chain, q)
+    return kci_from_rows([J[r] for r in rows])
 
 
-def manipulability_of(chain: Chain, q) -> Array:
-    """w of ``chain`` at ``q: (..., n)`` — equal to ``manipulability(jacobian(chain, q))``,
-    computed in one fused kernel that never stores J (the fast path for populations, grids
-    and datasets)."""
-    return _manipulability_of(chain, check_joint_array(chain, q))
+def manipulability_of(chain: Chain, q, task="full") -> Array:
+    """w of ``chain`` at ``q: (..., n)`` in a task space — equal to
+    ``manipulability(jacobian(chain, q), task)``, computed in one fused kernel that never
+    stores J (the fast path for populations, grids and datasets).
+
+    Args:
+      chain: any chain; with fewer joints than task rows, w is ``sqrt(det Jᵀ J)``.
+      q: ``(..., n)`` joint values [rad | m].
+      task: ``"full"``, ``"position"``, ``"orientation"`` or rows (see :func:`task_rows`).
+    """
+    return _manipulability_of(chain, check_joint_array(chain, q), task_rows(task))
 
 
-def kci_of(chain: Chain, q) -> Array:
-    """KCI of ``chain`` at ``q: (..., n)``, equal to ``kci(jacobian(chain, q))``, fused."""
-    return _kci_of(chain, check_joint_array(chain, q))
+def kci_of(chain: Chain, q, task="full") -> Array:
+    """KCI of ``chain`` at ``q: (..., n)`` in a task space, equal to
+    ``kci(jacobian(chain, q), task)``, fused (arguments as :func:`manipulability_of`)."""
+    return _kci_of(chain, check_joint_array(chain, q), task_rows(task))
 
 
 JACOBI_SWEEPS = 8  # cyclic sweeps; quadratic convergence reaches float64 round-off on 6×6 by ~6
@@ -143,7 +211,7 @@ def symmetric_eigenvalues_from_rows(A) -> list:
 
 
 def kci_from_rows(rows):
-    """KCI ``σ_min / σ_max = sqrt(λ_min / λ_max)`` of ``J Jᵀ``, J as m rows of n scalars."""
+    """KCI ``σ_r / σ_1 = sqrt(λ_min / λ_max)`` of the smaller Gram matrix, J as m rows of n scalars."""
     eig = symmetric_eigenvalues_from_rows(_gram_rows(rows))
     lmin, lmax = functools.reduce(jnp.minimum, eig), functools.reduce(jnp.maximum, eig)
     ratio = jnp.maximum(lmin, 0.0) / jnp.where(lmax > 0, lmax, 1.0)
@@ -155,14 +223,16 @@ def _kci(J: Array) -> Array:
     return kci_from_rows(_rows(J))
 
 
-def kci(J) -> Array:
-    """Kinematic conditioning index ``σ_min / σ_max`` ∈ [0, 1], shape ``(...)``; 0 for ``J = 0``."""
-    return _kci(_check_jacobian(J))
+def kci(J, task=None) -> Array:
+    """Kinematic conditioning index ``σr / σ1`` ∈ [0, 1] over the ``r = min(m, n)`` singular
+    values of ``J: (..., m, n)``, shape ``(...)``; 0 for ``J = 0``. ``task`` as in
+    :func:`manipulability`."""
+    return _kci(_check_jacobian(J, task))
 
 
-def singular_values(J) -> Array:
-    """Singular values ``(..., m)`` of ``J``, descending."""
-    return jnp.linalg.svd(_check_jacobian(J), compute_uv=False)
+def singular_values(J, task=None) -> Array:
+    """The ``min(m, n)`` singular values ``(..., min(m, n))`` of ``J``, descending."""
+    return jnp.linalg.svd(_check_jacobian(J, task), compute_uv=False)
 
 
 def normalized_jacobian(J, joint_speed_max, task_speed_max) -> Array:

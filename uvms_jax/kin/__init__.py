@@ -12,6 +12,9 @@ Conventions (written once, used everywhere):
   ``ξ'_i`` as columns.
 - Every public function accepts any leading batch shape, works under ``jit``/``vmap`` and
   computes in the dtype of its input (float32 by default, float64 when x64 is enabled).
+
+Robots: the papers' models (``docking_arm``, ``uvms12``, ``bravo7``), any arm from a file
+(``from_urdf``, ``from_mjcf``) and any arm on a vehicle (``uvms``); see docs/robots.md.
 """
 
 from uvms_jax.kin._chain import Chain
@@ -40,7 +43,13 @@ from uvms_jax.kin._ik import elbow_ik
 from uvms_jax.kin._ik import numeric_ik
 from uvms_jax.kin._ik import reaches
 from uvms_jax.kin._ik import wrap_into_limits
+from uvms_jax.kin._import import CONTINUOUS_LIMITS
+from uvms_jax.kin._import import from_mjcf
+from uvms_jax.kin._import import from_urdf
 from uvms_jax.kin._models import BRAVO7_JOINTS
 from uvms_jax.kin._models import bravo7
 from uvms_jax.kin._models import docking_arm
 from uvms_jax.kin._models import uvms12
+from uvms_jax.kin._vehicle import VEHICLE_DOFS
+from uvms_jax.kin._vehicle import adjoint_twists
+from uvms_jax.kin._vehicle import uvms

@@ -6,15 +6,14 @@ import numpy as np
 
 from uvms_jax import bravo7 as _b7
 from uvms_jax.kin._chain import (
-    PRISMATIC,
     REVOLUTE,
     Chain,
     UrdfJoint,
     chain_from_urdf_joints,
     make_chain,
-    prismatic_twist,
     revolute_twist,
 )
+from uvms_jax.kin._vehicle import uvms
 
 # Docking arm (docking paper, docs/theory.md §1.1).
 DOCKING_ARM_LIMITS = (
@@ -50,31 +49,41 @@ def docking_arm(l0: float = 0.1, l1: float = 0.4, l2: float = 0.4) -> Chain:
 def uvms12(y_mb: float = 0.75, l1: float = 0.1, l2: float = 0.4, l3: float = 0.4) -> Chain:
     """12-DOF UVMS of the dexterity paper (docs/theory.md §1.2): vehicle x, y, z, θx, θy, θz + 6R arm.
 
-    Prismatic x, y, z and XYZ-Euler rotations through the vehicle CoG (the base frame), then
-    the arm with base MB ``y_mb`` ahead of the CoG, stretched along +y. Tool at ``q4``.
+    :func:`~uvms_jax.kin.uvms` of the 6R elbow arm with its base MB ``y_mb`` ahead of the
+    vehicle CoG (the base frame), stretched along +y: axes ``z, −x, −x, z, −x, y`` through MB
+    ``(0, y_mb, l1)``, the elbow ``(0, y_mb + l2, l1)`` and the wrist centre
+    ``(0, y_mb + l2 + l3, l1)``, where the tool sits, aligned with the vehicle frame at q = 0.
     Vehicle translations are unlimited in principle; the limits here (±10 m) only bound
     samplers. Lengths in metres.
     """
+    return uvms(_uvms12_arm(l1, l2, l3), mount=_translation((0.0, y_mb, 0.0)), name="uvms12")
+
+
+def _translation(p) -> np.ndarray:
+    T = np.eye(4)
+    T[:3, 3] = p
+    return T
+
+
+def _uvms12_arm(l1: float, l2: float, l3: float) -> Chain:
+    """The dexterity paper's arm in its own base frame (MB below the shoulder, +y forward).
+
+    Joint frames sit where the axes meet the links: the base, the shoulder, the elbow and
+    (three times) the wrist centre.
+    """
     x, y, z = np.eye(3)
-    q2, q3, q4 = (0.0, y_mb, l1), (0.0, y_mb + l2, l1), (0.0, y_mb + l2 + l3, l1)
-    arm = [(z, q2), (-x, q2), (-x, q3), (z, q4), (-x, q4), (y, q4)]
-    twists = [prismatic_twist(x), prismatic_twist(y), prismatic_twist(z)]
-    twists += [revolute_twist(w, (0, 0, 0)) for w in (x, y, z)]
-    twists += [revolute_twist(w, q) for w, q in arm]
-    tool = np.eye(4)
-    tool[:3, 3] = q4
-    big = 10.0
-    lower = [-big] * 3 + [-np.pi] * 3 + list(DOCKING_ARM_LIMITS[0])
-    upper = [big] * 3 + [np.pi] * 3 + list(DOCKING_ARM_LIMITS[1])
+    base, shoulder, elbow, wrist = (0.0, 0.0, 0.0), (0.0, 0.0, l1), (0.0, l2, l1), (0.0, l2 + l3, l1)
+    axes = [(z, base), (-x, shoulder), (-x, elbow), (z, wrist), (-x, wrist), (y, wrist)]
     return make_chain(
-        twists=np.stack(twists),
-        T_base_tool0=tool,
-        lower=lower,
-        upper=upper,
-        kinds=[PRISMATIC] * 3 + [REVOLUTE] * 9,
-        joint_names=["x", "y", "z", "theta_x", "theta_y", "theta_z"] + [f"theta_m{i}" for i in range(1, 7)],
-        velocity_limits=[1.0] * 3 + [0.5] * 3 + [1.0] * 6,
-        name="uvms12",
+        twists=np.stack([revolute_twist(w, q) for w, q in axes]),
+        T_base_tool0=_translation(wrist),
+        lower=DOCKING_ARM_LIMITS[0],
+        upper=DOCKING_ARM_LIMITS[1],
+        kinds=[REVOLUTE] * 6,
+        joint_names=[f"theta_m{i}" for i in range(1, 7)],
+        T_base_joint0=np.stack([_translation(q) for _, q in axes]),
+        velocity_limits=[1.0] * 6,
+        name="uvms12_arm",
     )
 
 

@@ -1,0 +1,287 @@
+"""Serial chains from robot description files: URDF (parsed by yourdfpy) and MJCF (compiled by MuJoCo).
+
+Both importers reduce the file to the same facts, all at ``q = 0`` and in the chosen base
+frame: per moving joint on the path from the base to the tip, its kind, unit axis, a point of
+the axis, the frame of the link it moves, limits and speed; then the tool pose. Fixed joints
+(URDF) and joint-less bodies (MJCF) are folded into this geometry; joints on branches off the
+path (fingers, other arms) are ignored.
+"""
+
+from __future__ import annotations
+
+import io
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import mujoco
+import numpy as np
+
+from uvms_jax.kin._chain import PRISMATIC, REVOLUTE, Chain, make_chain, prismatic_twist, revolute_twist
+
+# A continuous joint (URDF) or an unlimited hinge (MJCF) turns forever; the chain gets the limits
+# [−π, π], which reach every angle once, so samplers and IK see each pose exactly once.
+CONTINUOUS_LIMITS = (-np.pi, np.pi)
+DEFAULT_SPEED = 1.0  # [rad/s or m/s] where the file gives no positive velocity limit
+
+# MuJoCo's enums as plain ints: the compiled model's arrays hold numpy integers.
+_J = mujoco.mjtJoint
+_FREE, _BALL, _SLIDE, _HINGE = int(_J.mjJNT_FREE), int(_J.mjJNT_BALL), int(_J.mjJNT_SLIDE), int(_J.mjJNT_HINGE)
+_EQ_JOINT = int(mujoco.mjtEq.mjEQ_JOINT)
+
+
+@dataclass(frozen=True)
+class _Joint:
+    """One moving joint at q = 0, in the base frame."""
+
+    name: str
+    kind: str
+    axis: np.ndarray  # (3,) unit
+    point: np.ndarray  # (3,) a point of the axis [m]
+    frame: np.ndarray  # (4, 4) pose of the link it moves
+    lower: float
+    upper: float
+    speed: float
+
+
+def _unit(axis, joint: str) -> np.ndarray:
+    axis = np.asarray(axis, dtype=np.float64)
+    norm = np.linalg.norm(axis)
+    if not np.isfinite(norm) or norm < 1e-12:
+        raise ValueError(f"joint {joint!r}: axis {axis} has zero length")
+    return axis / norm
+
+
+def _build(joints: list[_Joint], T_base_tool0: np.ndarray, name: str) -> Chain:
+    if not joints:
+        raise ValueError(f"no moving joint between the base and the tip of {name!r}")
+    twists = [
+        revolute_twist(j.axis, j.point) if j.kind == REVOLUTE else prismatic_twist(j.axis) for j in joints
+    ]
+    return make_chain(
+        twists=np.stack(twists),
+        T_base_tool0=T_base_tool0,
+        lower=[j.lower for j in joints],
+        upper=[j.upper for j in joints],
+        kinds=[j.kind for j in joints],
+        joint_names=[j.name for j in joints],
+        T_base_joint0=np.stack([j.frame for j in joints]),
+        velocity_limits=[j.speed for j in joints],
+        name=name,
+    )
+
+
+def _is_text(source) -> bool:
+    return isinstance(source, str) and source.lstrip().startswith("<")
+
+
+def _pick(what: str, given: str | None, candidates: list[str], known: set[str], hint: str) -> str:
+    """The named link/body, or the only candidate; a clear error otherwise."""
+    if given is not None:
+        if given not in known:
+            raise ValueError(f"{what} {given!r} not found; the file has: {', '.join(sorted(known))}")
+        return given
+    if len(candidates) != 1:
+        raise ValueError(f"cannot choose the {what}: candidates are {sorted(candidates)}; pass {hint}")
+    return candidates[0]
+
+
+def _path(parent_of: dict, base: str, tip: str, what: str) -> list[str]:
+    """Nodes from just below ``base`` down to ``tip`` (parent_of: child → parent)."""
+    path, node = [], tip
+    while node != base:
+        if node not in parent_of:
+            raise ValueError(f"the tip {tip!r} is not below the base {base!r} in this {what}")
+        path.append(node)
+        node = parent_of[node]
+    return path[::-1]
+
+
+def from_urdf(source, base_link: str | None = None, tip_link: str | None = None, name: str | None = None) -> Chain:
+    """The serial chain from ``base_link`` to ``tip_link`` of a URDF.
+
+    Revolute, continuous and prismatic joints become chain joints (in path order); fixed
+    joints are folded into the geometry. Origins use URDF's ``rpy`` convention
+    (``R = Rz(yaw) Ry(pitch) Rx(roll)``); axes need not be unit vectors. Joint frames are the
+    URDF link frames at ``q = 0``; the tool frame is ``tip_link``'s frame (any link is a frame,
+    so a named tool frame is just a link). Meshes are never read.
+
+    Args:
+      source: a path (``str`` or :class:`~pathlib.Path`) or the URDF text itself.
+      base_link: default: the root link.
+      tip_link: default: the only leaf link (an error lists the leaves when there are several).
+      name: model name; default: the robot's name.
+
+    Returns:
+      A :class:`Chain` whose base frame is ``base_link``'s frame. Limits: the URDF's;
+      ``[−π, π]`` for continuous joints; speeds from ``<limit velocity>``, 1 where missing or 0.
+
+    Raises:
+      ValueError: unknown links, a tip not below the base, and on the path: mimic, floating or
+        planar joints, a revolute/prismatic joint without ``<limit>``, or a zero axis.
+    """
+    try:
+        import yourdfpy  # the URDF parser: an optional dependency, needed only here
+    except ImportError as err:
+        raise ImportError("kin.from_urdf needs yourdfpy: pip install 'uvms-jax[urdf]'") from err
+
+    if _is_text(source):
+        handle = io.BytesIO(source.encode())
+    else:
+        handle = os.fspath(source)
+        if not os.path.isfile(handle):
+            raise ValueError(f"URDF file not found: {handle}")
+    urdf = yourdfpy.URDF.load(handle, build_scene_graph=False, load_meshes=False, load_collision_meshes=False)
+    robot = urdf.robot
+    links = {link.name for link in robot.links}
+    joint_of = {j.child: j for j in robot.joints}
+    parents = {j.parent for j in robot.joints}
+    base = _pick("base link", base_link, sorted(links - set(joint_of)), links, "base_link=")
+    tip = _pick("tip link", tip_link, sorted(links - parents), links, "tip_link=")
+    T = np.eye(4)
+    joints = []
+    for link in _path({c: j.parent for c, j in joint_of.items()}, base, tip, "URDF"):
+        j = joint_of[link]
+        if j.mimic is not None:
+            raise ValueError(f"joint {j.name!r} mimics {j.mimic.joint!r}: coupled joints are not supported in a chain")
+        if j.type in ("floating", "planar"):
+            raise ValueError(f"joint {j.name!r} is {j.type}: only revolute, continuous, prismatic and fixed joints")
+        if j.type not in ("fixed", "revolute", "continuous", "prismatic"):
+            raise ValueError(f"joint {j.name!r} has unknown type {j.type!r}")
+        T = T @ (np.eye(4) if j.origin is None else np.asarray(j.origin, dtype=np.float64))
+        if j.type == "fixed":
+            continue
+        if j.type == "continuous":
+            lower, upper = CONTINUOUS_LIMITS
+        elif j.limit is None or j.limit.lower is None or j.limit.upper is None:
+            raise ValueError(f"{j.type} joint {j.name!r} needs <limit lower=… upper=…>")
+        else:
+            lower, upper = float(j.limit.lower), float(j.limit.upper)
+            if not lower < upper:
+                raise ValueError(f"joint {j.name!r}: limits [{lower}, {upper}] are inverted or empty")
+        speed = j.limit.velocity if j.limit is not None and j.limit.velocity else None
+        joints.append(
+            _Joint(
+                name=j.name,
+                kind=PRISMATIC if j.type == "prismatic" else REVOLUTE,
+                axis=T[:3, :3] @ _unit(j.axis, j.name),
+                point=T[:3, 3].copy(),
+                frame=T.copy(),
+                lower=lower,
+                upper=upper,
+                speed=float(speed) if speed and speed > 0 else DEFAULT_SPEED,
+            )
+        )
+    return _build(joints, T, robot.name if name is None else name)
+
+
+def _pose(p, xmat) -> np.ndarray:
+    T = np.eye(4)
+    T[:3, :3] = np.asarray(xmat, dtype=np.float64).reshape(3, 3)
+    T[:3, 3] = p
+    return T
+
+
+def from_mjcf(
+    source,
+    base_body: str | None = None,
+    tip_body: str | None = None,
+    tip_site: str | None = None,
+    name: str | None = None,
+) -> Chain:
+    """The serial chain from ``base_body`` to a tip body or site of an MJCF model.
+
+    The model is compiled by MuJoCo (:class:`mujoco.MjSpec`), then posed at ``qpos = 0`` of
+    every hinge and slide joint; the chain's joint values are MuJoCo's ``qpos`` (a joint's
+    ``ref`` is honoured). Hinges become revolute joints, slides prismatic; several joints in
+    one body follow in the file's order. Joint frames are the moved body's frame at ``q = 0``
+    with its origin on the joint axis. MuJoCo has no speed limits: every speed is 1.
+
+    Args:
+      source: a path (``str`` or :class:`~pathlib.Path`; meshes resolve relative to it) or
+        the MJCF text.
+      base_body: default: the world frame.
+      tip_body, tip_site: the tool frame (give at most one); default: the only leaf body.
+      name: model name; default: the MJCF model's name.
+
+    Returns:
+      A :class:`Chain` whose base frame is ``base_body``'s frame. Limits: the joint ranges;
+      ``[−π, π]`` for unlimited hinges.
+
+    Raises:
+      ValueError: unknown names, a tip not below the base, and on the path: ball or free
+        joints, an unlimited slide, or a joint coupled to another by an equality constraint.
+    """
+    if tip_body is not None and tip_site is not None:
+        raise ValueError("give tip_body or tip_site, not both")
+    if _is_text(source):
+        spec = mujoco.MjSpec.from_string(source)
+    else:
+        path = Path(source)
+        if not path.is_file():
+            raise ValueError(f"MJCF file not found: {path}")
+        spec = mujoco.MjSpec.from_file(str(path))
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    data.qpos[:] = model.qpos0
+    hinge_or_slide = np.isin(model.jnt_type, (_HINGE, _SLIDE))
+    data.qpos[model.jnt_qposadr[hinge_or_slide]] = 0.0
+    mujoco.mj_kinematics(model, data)
+
+    bodies = {model.body(b).name or f"body{b}": b for b in range(model.nbody)}
+    body_name = {b: n for n, b in bodies.items()}
+    parent_of = {body_name[b]: body_name[int(model.body_parentid[b])] for b in range(1, model.nbody)}
+    base = _pick("base body", base_body, [body_name[0]], set(bodies), "base_body=")
+    if tip_site is not None:
+        sites = {model.site(s).name for s in range(model.nsite)}
+        if tip_site not in sites:
+            raise ValueError(f"site {tip_site!r} not found; the model has: {', '.join(sorted(sites))}")
+        sid = model.site(tip_site).id
+        tip = body_name[int(model.site_bodyid[sid])]
+        T_world_tool = _pose(data.site_xpos[sid], data.site_xmat[sid])
+    else:
+        leaves = sorted(set(parent_of) - set(parent_of.values()))
+        tip = _pick("tip body", tip_body, leaves, set(bodies), "tip_body= or tip_site=")
+        T_world_tool = _pose(data.xpos[bodies[tip]], data.xmat[bodies[tip]])
+    T_base_world = np.linalg.inv(_pose(data.xpos[bodies[base]], data.xmat[bodies[base]]))
+
+    coupled = {
+        int(j)
+        for e in range(model.neq)
+        if int(model.eq_type[e]) == _EQ_JOINT
+        for j in (model.eq_obj1id[e], model.eq_obj2id[e])
+        if j >= 0
+    }
+    joints = []
+    for body in _path(parent_of, base, tip, "MJCF model"):
+        b = bodies[body]
+        for j in range(model.body_jntadr[b], model.body_jntadr[b] + model.body_jntnum[b]):
+            jname = model.joint(j).name or f"joint{j}"
+            jtype = int(model.jnt_type[j])
+            if jtype in (_FREE, _BALL):
+                kind = "free" if jtype == _FREE else "ball"
+                raise ValueError(f"joint {jname!r} is a {kind} joint: only hinge and slide joints form a chain")
+            if j in coupled:
+                raise ValueError(f"joint {jname!r} is coupled to another by an equality constraint")
+            revolute = jtype == _HINGE
+            if model.jnt_limited[j]:
+                lower, upper = (float(x) for x in model.jnt_range[j])
+            elif revolute:
+                lower, upper = CONTINUOUS_LIMITS
+            else:
+                raise ValueError(f"slide joint {jname!r} has no range: give it limited=\"true\" range=\"…\"")
+            frame = T_base_world @ _pose(data.xanchor[j], data.xmat[b])
+            joints.append(
+                _Joint(
+                    name=jname,
+                    kind=REVOLUTE if revolute else PRISMATIC,
+                    axis=_unit(T_base_world[:3, :3] @ data.xaxis[j], jname),
+                    point=frame[:3, 3].copy(),
+                    frame=frame,
+                    lower=lower,
+                    upper=upper,
+                    speed=DEFAULT_SPEED,
+                )
+            )
+    model_name = spec.modelname or "mjcf"
+    return _build(joints, T_base_world @ T_world_tool, model_name if name is None else name)
