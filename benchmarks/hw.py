@@ -4,10 +4,12 @@
   packets, next to the peer — the same codec computing the CRC with the ``crc`` library's
   own per-call ``Calculator.checksum`` (the straightforward use of the library);
 * request→response round trip on loopback [ms]: a broadcast REQUEST of POSITION+VELOCITY to
-  the simulated Bravo 7 (UDP 127.0.0.1) until all 14 answers are decoded — with the simulator
+  the simulated Bravo 7 (UDP 127.0.0.1) until all 14 answers (14 datagrams) are decoded — with the simulator
   in its own process (``uvms-hw sim``) and as a thread of the client's process (as
   ``uvms-hw run --sim`` does; shares the GIL, whose 5 ms switch interval shows in p99) — next
-  to the peer: a bare UDP echo thread returning as many bytes (the floor of sockets alone).
+  to the peer: a bare UDP echo thread returning as many bytes (the floor of sockets alone);
+* a 100 Hz state stream (heartbeat) from ``uvms-hw sim`` in its own process: complete states
+  per second and datagrams the client sent per state, next to polling (one request per state).
 
 Run: ``.venv/bin/python benchmarks/hw.py [--n 2000]``.
 """
@@ -89,17 +91,50 @@ def _time_reads(address: tuple[str, int], n: int) -> list[float]:
     return ts
 
 
-def round_trip(n: int) -> dict:
-    out = {}
-    # the simulator in its own process (`uvms-hw sim`): no GIL shared with the client
+def _sim_process() -> tuple[subprocess.Popen, tuple[str, int]]:
+    """``uvms-hw sim`` in its own process (no GIL shared with the client) on a free port."""
     probe = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     probe.bind(("127.0.0.1", 0))
     port = probe.getsockname()[1]
     probe.close()
     proc = subprocess.Popen([sys.executable, "-m", "uvms_jax.hw.cli", "sim", "--port", str(port)],
                             stderr=subprocess.DEVNULL)
+    return proc, ("127.0.0.1", port)
+
+
+def stream(seconds: float = 3.0, hz: int = 100) -> dict:
+    proc, address = _sim_process()
     try:
-        out["bravo7_sim_process"] = _percentiles(_time_reads(("127.0.0.1", port), n))
+        with Bravo7(UdpTransport(*address), request_timeout=0.5) as c:
+            c.read_state(retries=40)  # the process is up
+            out = {}
+            for name in ("polled", "streamed"):
+                sent0, n, t0 = c.packets_sent, 0, time.perf_counter()
+                if name == "streamed":
+                    c.start_stream(hz)
+                    sent0 = c.packets_sent
+                since = c.clock()
+                while time.perf_counter() - t0 < seconds:
+                    if name == "polled":
+                        c.read_state()
+                    else:
+                        since = c.stream_state(since=since, timeout=0.1).t
+                    n += 1
+                out[name] = {"states_per_s": round(n / (time.perf_counter() - t0), 1),
+                             "packets_sent_per_state": round((c.packets_sent - sent0) / n, 3)}
+            c.stop_stream()
+            out["stream_hz"] = hz
+    finally:
+        proc.terminate()
+        proc.wait(10)
+    return out
+
+
+def round_trip(n: int) -> dict:
+    out = {}
+    proc, address = _sim_process()
+    try:
+        out["bravo7_sim_process"] = _percentiles(_time_reads(address, n))
     finally:
         proc.terminate()
         proc.wait(10)
@@ -150,6 +185,7 @@ def main() -> None:
         "device": f"{platform.machine()} CPU, Python {platform.python_version()}",
         "codec": codec(a.packets),
         "round_trip": round_trip(a.n),
+        "stream": stream(),
     }
     print(json.dumps(res))
 

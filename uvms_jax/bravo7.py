@@ -1,7 +1,11 @@
 """The Reach Bravo 7: every number the project knows about the arm, in one place.
 
 Kinematics from the public Blueprint Lab URDF (docs/theory.md §1.3), device ids of the BPL
-protocol (docs/theory.md §6) and the size of the project's primitive collision model.
+protocol (docs/theory.md §6), the size of the project's primitive collision model, and the
+manufacturer's kinematic and dynamic data (Blueprint Lab, "Reach Bravo Kinematics and
+Dynamics", 2020): its standard-DH table and each link's mass, centre of mass, inertia and
+buoyancy, given in its own link frames and mapped here into the URDF link frames
+(:func:`urdf_inertials`; docs/hardware.md says how, a test proves it).
 ``uvms_jax.kin`` (the POE chain, URDF/MJCF export), ``uvms_jax.plan`` (the collision scene)
 and ``uvms_jax.hw`` (joint limits, the simulator) all build on these tables.
 
@@ -14,10 +18,18 @@ Units: metres and radians; the jaws A move in metres here (the wire speaks milli
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 __all__ = [
     "ARM_JOINTS",
+    "DH_BASE_XYZ",
+    "DH_INERTIALS",
+    "DH_JOINT_SIGNS",
+    "DH_LINKS",
+    "INERTIAL_BODIES",
+    "DHLink",
+    "Inertial",
     "JAWS",
     "JOINTS",
     "LINK_RADIUS",
@@ -26,6 +38,9 @@ __all__ = [
     "TOOL_XYZ",
     "URDF_PI",
     "Joint",
+    "dh_inertial_frames",
+    "urdf_frames",
+    "urdf_inertials",
 ]
 
 NAME = "bravo7"
@@ -94,3 +109,180 @@ JOINTS: tuple[Joint, ...] = ARM_JOINTS + (JAWS,)
 # along the tubes; capsules of 0.045 m make the wrist capsules (D, E) touch link B in poses the
 # real arm reaches (the thesis's grasps among them), so the model uses 0.04 m.
 LINK_RADIUS = 0.04
+
+
+# -- the manufacturer's kinematic and dynamic data ---------------------------------------------
+
+
+@dataclass(frozen=True)
+class DHLink:
+    """One row of the manufacturer's standard-DH table: ``Rz(θ) Tz(d) Tx(a) Rx(α)``.
+
+    Attributes:
+      d: offset along the previous z [m].
+      theta_offset: added to the joint angle, θ = sign·q + theta_offset [rad] (the whole θ for
+        the fixed last row).
+      a: length along the new x [m].
+      alpha: twist about the new x [rad].
+    """
+
+    d: float
+    theta_offset: float
+    a: float
+    alpha: float
+
+
+# θa = atan(5.2/293.55): the elbow's 5.2 mm offset (a thesis table prints 395.55, a typo).
+_THETA_A = math.atan2(5.2, 293.55)
+# Rows 0…5 turn with the joints G, F, E, D, C, B; row 6 is the fixed step to the jaws.
+DH_LINKS: tuple[DHLink, ...] = (
+    DHLink(107.4e-3, math.pi, 46.0e-3, math.pi / 2),
+    DHLink(0.0, -math.pi / 2 + _THETA_A, 293.6e-3, 0.0),
+    DHLink(0.0, -math.pi / 2 - _THETA_A, 40.8e-3, -math.pi / 2),
+    DHLink(-160.0e-3, 0.0, 40.8e-3, -math.pi / 2),
+    DHLink(0.0, 0.0, 40.8e-3, -math.pi / 2),
+    DHLink(-223.5e-3, 0.0, 0.0, math.pi / 2),
+    DHLink(0.0, -math.pi / 2, 120.0e-3, 0.0),
+)
+# How the URDF joint angles q (G…B) turn the DH rows: θ_i = sign_i·q_i + theta_offset_i. The
+# base rotate G turns about -z in the URDF and +z in the DH table.
+DH_JOINT_SIGNS: tuple[int, ...] = (-1, 1, 1, 1, 1, 1)
+# The DH base frame in the URDF base frame (same orientation) [m]: on the G axis, 107.4 mm
+# below the F axis (URDF: G at x 66.5 mm; F axis at z 78 + 67.4 = 145.4 mm).
+DH_BASE_XYZ: tuple[float, float, float] = (0.0665, 0.0, 0.078 + 0.0674 - 0.1074)
+
+
+@dataclass(frozen=True)
+class Inertial:
+    """Mass properties of one link, in one link frame (SI units).
+
+    Attributes:
+      mass: [kg].
+      com: centre of mass [m].
+      inertia: (xx, yy, zz, xy, xz, yz) of the inertia tensor about the centre of mass, axes
+        of the frame [kg·m²].
+      volume: displaced water volume [m³].
+      cob: centre of buoyancy [m].
+    """
+
+    mass: float
+    com: tuple[float, float, float]
+    inertia: tuple[float, float, float, float, float, float]
+    volume: float
+    cob: tuple[float, float, float]
+
+
+def _published(mass, com_mm, inertia_kg_mm2, volume_l, cob_mm) -> Inertial:
+    """An :class:`Inertial` from the units of the manufacturer's table (mm, kg·mm², L)."""
+    return Inertial(mass, tuple(c * 1e-3 for c in com_mm), tuple(i * 1e-6 for i in inertia_kg_mm2),
+                    volume_l * 1e-3, tuple(c * 1e-3 for c in cob_mm))
+
+
+# Links 0 (base) … 7 (jaws, closed), each in the manufacturer's link frame (dh_inertial_frames).
+DH_INERTIALS: tuple[Inertial, ...] = (
+    _published(1.25, (-18, -4, -1), (2108, 2573, 3483, 182, -15, -21), 0.72, (-18, -3, -3)),
+    _published(1.55, (17, -7, 57), (11442, 12980, 3202, -484, 3405, -1265), 0.60, (27, -11, 92)),
+    _published(1.98, (117, 15, 6), (3960, 69099, 70450, 4200, 3204, -24), 1.94, (145, 35, -1)),
+    _published(1.14, (22, -29, 1), (3213, 2327, 4340, -1548, -31, 6), 0.47, (33, -43, -7)),
+    _published(1.14, (18, 6, -117), (21232, 22252, 2054, 330, -3738, -1278), 0.51, (20, 12, -140)),
+    _published(1.03, (20, -24, 1), (2430, 2026, 3330, -1144, -40, 11), 0.43, (33, -38, -8)),
+    _published(1.04, (0, 0, -128), (22359, 22363, 936, 1, -19, 15), 0.48, (0, 0, -152)),
+    _published(0.47, (28, -1, 0), (244, 1130, 1178, -12, 0, 1), 0.16, (28, 1, 0)),
+)
+# The URDF body each manufacturer's link is fixed to: the base, the links turned by G…B, and
+# the jaws (given in the tool frame, the jaws closed).
+INERTIAL_BODIES: tuple[str, ...] = ("base", "G", "F", "E", "D", "C", "B", "tool")
+
+
+# 4×4 homogeneous transforms as nested lists: enough linear algebra for fixed frame maps,
+# without NumPy (this module stays importable without it).
+def _mul(A, B):
+    return [[sum(A[i][k] * B[k][j] for k in range(4)) for j in range(4)] for i in range(4)]
+
+
+def _inv(T):
+    R = [[T[j][i] for j in range(3)] for i in range(3)]
+    p = [-sum(R[i][k] * T[k][3] for k in range(3)) for i in range(3)]
+    return [R[0] + [p[0]], R[1] + [p[1]], R[2] + [p[2]], [0.0, 0.0, 0.0, 1.0]]
+
+
+def _transform(R=((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)), p=(0.0, 0.0, 0.0)):
+    return [list(R[0]) + [p[0]], list(R[1]) + [p[1]], list(R[2]) + [p[2]], [0.0, 0.0, 0.0, 1.0]]
+
+
+def _axis_angle(axis, angle):
+    x, y, z = axis
+    c, s = math.cos(angle), math.sin(angle)
+    v = 1.0 - c
+    return ((c + x * x * v, x * y * v - z * s, x * z * v + y * s),
+            (y * x * v + z * s, c + y * y * v, y * z * v - x * s),
+            (z * x * v - y * s, z * y * v + x * s, c + z * z * v))
+
+
+def _origin(xyz, rpy):
+    """URDF joint origin: translation, then R = Rz(yaw) Ry(pitch) Rx(roll)."""
+    r, p, y = rpy
+    Rz, Ry, Rx = (_transform(_axis_angle(a, t)) for a, t in (((0, 0, 1), y), ((0, 1, 0), p), ((1, 0, 0), r)))
+    T = _mul(_mul(Rz, Ry), Rx)
+    for i in range(3):
+        T[i][3] = xyz[i]
+    return T
+
+
+def urdf_frames(q) -> list:
+    """URDF FK: 4×4 frames (nested lists) of the base, the links G…B and the tool, in the base
+    frame [m], for joint angles ``q`` (6,) G…B [rad]."""
+    T = _transform()
+    out = [T]
+    for joint, angle in zip(ARM_JOINTS, q):
+        T = _mul(_mul(T, _origin(joint.xyz, joint.rpy)), _transform(_axis_angle(joint.axis, angle)))
+        out.append(T)
+    out.append(_mul(T, _origin(TOOL_XYZ, TOOL_RPY)))
+    return out
+
+
+def dh_inertial_frames(q) -> list:
+    """The manufacturer's link frames 0…7, in the URDF base frame, for URDF angles ``q`` (6,).
+
+    Link 0's frame is the DH base frame; link k ≥ 1's is the DH frame k-1 turned by its row's
+    θ (origin on that joint's axis, turning with link k), before the row's d, a and α. This is
+    the frame in which the table's centres of mass sit on their links (a test checks it).
+    """
+    T = _transform(p=DH_BASE_XYZ)
+    out = [T]
+    for i, row in enumerate(DH_LINKS):
+        theta = row.theta_offset + (DH_JOINT_SIGNS[i] * q[i] if i < len(DH_JOINT_SIGNS) else 0.0)
+        turned = _mul(T, _transform(_axis_angle((0, 0, 1), theta)))
+        out.append(turned)
+        step = _mul(_transform(p=(0.0, 0.0, row.d)), _transform(p=(row.a, 0.0, 0.0)))
+        T = _mul(_mul(turned, step), _transform(_axis_angle((1, 0, 0), row.alpha)))
+    return out
+
+
+def urdf_inertials() -> tuple[Inertial, ...]:
+    """:data:`DH_INERTIALS` mapped into the URDF frames of :data:`INERTIAL_BODIES` (SI units).
+
+    Each manufacturer's link frame is fixed to its URDF body; the fixed transform is taken in
+    the mid-range pose. Its rotation is the same in every pose (quarter turns, and for link 2 the elbow
+    offset angle θa); its offset holds to the few millimetres by which the two descriptions of
+    the arm differ (tests/hw prove both). Inertia tensors are rotated, centres moved.
+    """
+    q_mid = tuple(0.5 * (j.lower + j.upper) for j in ARM_JOINTS)  # halves the pose-dependent spread
+    urdf, dh = urdf_frames(q_mid), dh_inertial_frames(q_mid)
+    out = []
+    for k, (inertial, body) in enumerate(zip(DH_INERTIALS, INERTIAL_BODIES)):
+        X = _mul(_inv(urdf[0 if body == "base" else -1 if body == "tool" else "GFEDCB".index(body) + 1]), dh[k])
+        R = [row[:3] for row in X[:3]]
+        p = [X[i][3] for i in range(3)]
+
+        def point(v):
+            return tuple(p[i] + sum(R[i][j] * v[j] for j in range(3)) for i in range(3))
+
+        xx, yy, zz, xy, xz, yz = inertial.inertia
+        inertia = ((xx, xy, xz), (xy, yy, yz), (xz, yz, zz))
+        rot = [[sum(R[i][a] * inertia[a][b] * R[j][b] for a in range(3) for b in range(3)) for j in range(3)]
+               for i in range(3)]
+        out.append(Inertial(inertial.mass, point(inertial.com),
+                            (rot[0][0], rot[1][1], rot[2][2], rot[0][1], rot[0][2], rot[1][2]),
+                            inertial.volume, point(inertial.cob)))
+    return tuple(out)

@@ -49,3 +49,45 @@ def assert_within_limits(packets) -> None:
             assert abs(decode_float(p.data)) <= spec[p.device_id].max_velocity, p
 
 
+
+
+def _rot(axis, angle):
+    """Rotation matrix about a unit ``axis`` by ``angle`` [rad] (Rodrigues)."""
+    import numpy as np
+
+    k = np.asarray(axis, dtype=float)
+    K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    return np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * K @ K
+
+
+def _rpy(rpy):
+    """URDF roll-pitch-yaw: R = Rz(yaw) Ry(pitch) Rx(roll)."""
+    r, p, y = rpy
+    return _rot((0, 0, 1), y) @ _rot((0, 1, 0), p) @ _rot((1, 0, 0), r)
+
+
+def urdf_link_frames(q):
+    """Independent numpy FK of the Bravo 7 URDF (docs/theory.md §1.3 table): the 4×4 frame of
+    each link G…B after its joint, then the tool frame, in the base frame [m]."""
+    import numpy as np
+
+    from uvms_jax import bravo7
+
+    T = np.eye(4)
+    frames = []
+    for joint, angle in zip(bravo7.ARM_JOINTS, q):
+        origin = np.eye(4)
+        origin[:3, :3], origin[:3, 3] = _rpy(joint.rpy), joint.xyz
+        motion = np.eye(4)
+        motion[:3, :3] = _rot(joint.axis, angle)
+        T = T @ origin @ motion
+        frames.append(T)
+    tool = np.eye(4)
+    tool[:3, :3], tool[:3, 3] = _rpy(bravo7.TOOL_RPY), bravo7.TOOL_XYZ
+    frames.append(T @ tool)
+    return frames
+
+
+def ypr_matrix(yaw, pitch, roll):
+    """Rotation of ZYX Euler angles: Rz(yaw) Ry(pitch) Rx(roll)."""
+    return _rpy((roll, pitch, yaw))

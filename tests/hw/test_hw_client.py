@@ -101,13 +101,41 @@ def test_heartbeat_streams_without_requests():
     run = SimRun()
     c = run.client
     c.set_heartbeat([PacketID.POSITION], 20)
-    n = sum(c.poll(0.05) for _ in range(20))  # ~1 s of simulated time
-    assert n >= 7 * 15
+    sent = len(run.transport.sent)
+    n = 0
+    while run.clock.now() < 1.0:  # ~1 s of simulated time
+        n += c.poll(0.05)
+    assert 7 * 19 <= n <= 7 * 21  # 20 Hz × 7 devices, one packet per datagram
+    assert len(run.transport.sent) == sent  # nothing was asked for
     assert (DeviceID.E, PacketID.POSITION) in c.latest
     c.set_heartbeat([PacketID.POSITION], 0)
-    for _ in range(3):
-        c.poll(0.05)
+    while c.poll(0.0):  # what was already under way
+        pass
+    run.clock.sleep(0.5)
     assert sum(c.poll(0.05) for _ in range(5)) == 0
+
+
+def test_stream_state_replaces_polling():
+    """A 50 Hz state stream: one fresh state per tick, and no request sent per tick."""
+    run = SimRun()
+    c = run.client
+    c.start_stream(50)
+    sent = len(run.transport.sent)
+    since, states = -1.0, []
+    for _ in range(25):
+        run.clock.sleep(0.02)
+        s = c.stream_state(since=since, timeout=0.05)
+        assert s.t > since
+        since = s.t
+        states.append(s)
+    assert len(run.transport.sent) == sent
+    assert states[-1].positions == pytest.approx(Q0 + [0.0], abs=1e-5)
+    assert c.stop_stream()
+    while c.poll(0.0):
+        pass
+    run.clock.sleep(0.1)
+    with pytest.raises(LinkError, match="stream: nothing new"):
+        c.stream_state(since=run.clock.now(), timeout=0.1)
 
 
 def test_udp_round_trip_with_server():

@@ -14,7 +14,7 @@ from uvms_jax.hw import (BRAVO7, JAWS, Bravo7, DeviceID, HwConfig, HwRun, PlanEr
                          UdpTransport, plan_to_dict, parse_plan, run_plan, run_report, sim_spec, write_run)
 
 REPORT_KEYS = {"ok", "reason", "gates", "max_gate_error_rad", "max_gate_error_mm", "grips", "duration_s",
-               "abort_after_s", "ticks", "link_timeouts", "wall_s", "link"}
+               "abort_after_s", "ticks", "link_timeouts", "rejected_states", "wall_s", "link"}
 
 
 def test_loopback_run_is_the_executor_run():
@@ -106,4 +106,4 @@ def test_sim_model_geometry_is_the_bravo7_module():
     jaws = model.body("jaws")
     np.testing.assert_allclose(jaws.pos, np.add(bravo7.TOOL_XYZ, bravo7.JAWS.xyz), atol=1e-12)
     assert model.jnt_range[model.joint("A").id][1] == pytest.approx(bravo7.JAWS.upper)
-    assert model.nu == len(bravo7.JOINTS) and math.isclose(model.opt.timestep, 0.002)
+    assert model.nu == 2 * len(bravo7.JOINTS) and math.isclose(model.opt.timestep, 0.002)  # velocity + integral

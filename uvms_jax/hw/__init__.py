@@ -3,19 +3,22 @@
 Layers, from the wire up (impurity — sockets, ports, clocks, files — stays in the transports,
 the simulator server, the executor loop, :func:`write_run` and the CLI):
 
-* protocol: :func:`encode_packet`, :class:`PacketReader` (streaming, never raises),
-  :func:`crc8`, float helpers, typed ids :class:`PacketID`, :class:`Mode`,
-  :class:`DeviceID`, :class:`HardwareStatus`;
-* joints: :data:`BRAVO7` limits (G…B rad, jaws A mm; from :mod:`uvms_jax.bravo7`) and
-  :class:`LimitError`;
+* protocol: :func:`encode_packet`, :class:`PacketReader` (streaming, never raises; one
+  datagram at a time with any number of packets), :func:`crc8`, float helpers, typed ids
+  :class:`PacketID`, :class:`Mode`, :class:`DeviceID`, :class:`HardwareStatus` (4 bytes);
+  what each request is answered with: :data:`ANSWER_FORMATS`, :func:`decode_answer`;
+* joints: :data:`BRAVO7` limits (G…B rad, jaws A mm; from :mod:`uvms_jax.bravo7`),
+  :class:`LimitError`, and the float32 that goes on the wire (:func:`wire_position`);
 * transports: :class:`UdpTransport`, :class:`SerialTransport` (timeouts; :class:`LinkError`);
 * client: :class:`Bravo7` — modes, position/velocity demands behind a send guard that raises
-  on anything outside the limits, requests, heartbeat, hardware status and limits;
+  on anything outside the limits (checked on the float32 sent), requests and decoded reads,
+  heartbeat streaming of the state, hardware status and limits;
 * plans: ``plan.json`` (:mod:`uvms_jax.planfile` documents the format), :func:`load_plan`,
   :func:`check_plan` (the dry run);
 * execution: :func:`synchronised_move`, :class:`Executor` (reached-gate, hold on any fault),
   :class:`RunLog` (CSV + PNG);
-* simulation: :class:`SimArm` (MuJoCo, :func:`sim_spec`), :class:`SimServer` (UDP),
+* simulation: :class:`SimArm` (MuJoCo, :func:`sim_spec`; answers every request of the
+  protocol listing, one packet per datagram), :class:`SimServer` (UDP),
   :class:`LoopbackTransport` on a :class:`VirtualClock`, with fault injection
   (:class:`SimConfig`);
 * the stage: :func:`run_plan` (dry run, then execution on a simulated or real link) →
@@ -32,6 +35,9 @@ from uvms_jax.planfile import load_plan
 from uvms_jax.planfile import parse_plan
 from uvms_jax.planfile import plan_to_dict
 
+from ._answers import ANSWER_FORMATS
+from ._answers import AnswerFormat
+from ._answers import decode_answer
 from ._check import PlanSummary
 from ._check import check_plan
 from ._client import Bravo7
@@ -55,6 +61,8 @@ from ._executor import AbortRun
 from ._executor import Executor
 from ._executor import GateRecord
 from ._executor import RunResult
+from ._ids import BASE_COMPUTER
+from ._ids import BASE_ROUTER
 from ._ids import BROADCAST
 from ._ids import DeviceID
 from ._ids import HardwareStatus
@@ -65,6 +73,8 @@ from ._joints import BRAVO7
 from ._joints import JAWS
 from ._joints import JointSpec
 from ._joints import LimitError
+from ._joints import wire_position
+from ._joints import wire_velocity
 from ._run import SIM_LINKS
 from ._run import HwRun
 from ._run import SimCounts
@@ -85,7 +95,10 @@ from ._transport import UdpTransport
 from ._transport import parse_host_port
 
 __all__ = [
+    "ANSWER_FORMATS",
     "ARM_JOINTS",
+    "BASE_COMPUTER",
+    "BASE_ROUTER",
     "BRAVO7",
     "BROADCAST",
     "CRC8_CONFIG",
@@ -93,6 +106,7 @@ __all__ = [
     "MAX_PACKET_LEN",
     "SIM_LINKS",
     "AbortRun",
+    "AnswerFormat",
     "Bravo7",
     "DeviceID",
     "Executor",
@@ -130,6 +144,7 @@ __all__ = [
     "check_plan",
     "config_from_mapping",
     "crc8",
+    "decode_answer",
     "decode_float",
     "decode_floats",
     "decode_frame",
@@ -143,5 +158,7 @@ __all__ = [
     "run_report",
     "sim_spec",
     "synchronised_move",
+    "wire_position",
+    "wire_velocity",
     "write_run",
 ]

@@ -3,7 +3,10 @@
 Every outgoing packet goes through :meth:`Bravo7.send`, the lowest send layer, which refuses
 (raises :class:`LimitError`, never clips) a POSITION demand outside the joint's limits, a
 VELOCITY demand above its speed limit, a broadcast motion demand, and any packet id other than
-the few the runner needs (no limit writes, no open-loop or current drive).
+the few the runner needs (no limit writes, no open-loop or current drive). It checks the
+float32 that goes on the wire, exactly: a demand of 6.3 rad, which float32 rounds up past the
+limit, is sent as the float32 just inside it (:meth:`Bravo7.set_positions`), and raw bytes
+holding the float32 above it are refused.
 """
 
 from __future__ import annotations
@@ -12,9 +15,11 @@ import dataclasses
 import time
 from collections.abc import Callable, Iterable, Sequence
 
-from ._codec import PacketReader, decode_float, decode_floats, encode_floats, encode_packet
+from ._answers import decode_answer
+from ._codec import Packet, PacketReader, decode_float, decode_floats, encode_floats, encode_packet
 from ._ids import BROADCAST, HardwareStatus, Mode, PacketID
-from ._joints import BRAVO7, JointSpec, LimitError, check_position, check_velocity, spec_for_device
+from ._joints import (BRAVO7, JointSpec, LimitError, check_position, check_velocity, spec_for_device, wire_position,
+                      wire_velocity)
 from ._transport import LinkError, Transport
 
 __all__ = ["Bravo7", "JointState", "SENDABLE"]
@@ -112,12 +117,23 @@ class Bravo7:
         self.send((d, PacketID.MODE, bytes((Mode(mode),))) for d in devices)
 
     def set_positions(self, demands: Iterable[tuple[int, float]]) -> None:
-        """Send POSITION demands ``(device_id, value [rad or mm])`` in one write."""
-        self.send((d, PacketID.POSITION, encode_floats(v)) for d, v in demands)
+        """Send POSITION demands ``(device_id, value [rad or mm])`` in one write, each as the
+        nearest float32 inside the joint's limits (:func:`~uvms_jax.hw._joints.wire_position`).
+
+        Raises:
+          LimitError: a value outside the limits, or a device without limits (nothing sent).
+        """
+        self.send([(d, PacketID.POSITION, encode_floats(wire_position(self._spec(d), v))) for d, v in demands])
 
     def set_velocities(self, demands: Iterable[tuple[int, float]]) -> None:
-        """Send VELOCITY demands ``(device_id, value [rad/s or mm/s])`` in one write."""
-        self.send((d, PacketID.VELOCITY, encode_floats(v)) for d, v in demands)
+        """Send VELOCITY demands ``(device_id, value [rad/s or mm/s])`` in one write (float32
+        inside the speed limit, as for positions)."""
+        self.send([(d, PacketID.VELOCITY, encode_floats(wire_velocity(self._spec(d), v))) for d, v in demands])
+
+    def _spec(self, device_id: int) -> JointSpec:
+        if device_id == BROADCAST:
+            raise LimitError("broadcast motion demands are refused: limits are per joint")
+        return spec_for_device(device_id, self.joints)
 
     def hold(self, repeats: int = 3) -> bool:
         """Zero velocity on every known device, sent ``repeats`` times for lossy links.
@@ -145,14 +161,29 @@ class Bravo7:
         ])
 
     # -- receiving -------------------------------------------------------------------------
+    def _feed(self, chunk: bytes) -> list[Packet]:
+        """Packets of one read: a datagram transport's read is decoded on its own, any number
+        of packets in it; a byte stream's reads are joined."""
+        if getattr(self.transport, "datagrams", False):
+            return self.reader.feed_datagram(chunk)
+        return self.reader.feed(chunk)
+
     def poll(self, timeout: float = 0.0) -> int:
-        """Read what arrives within ``timeout`` [s] into :attr:`latest`; returns packet count."""
-        chunk = self.transport.recv(timeout)
-        pkts = self.reader.feed(chunk) if chunk else []
+        """Read what arrives within ``timeout`` [s] (one transport read) into :attr:`latest`;
+        returns the packet count."""
+        return self._take(self.transport.recv(timeout))
+
+    def _take(self, chunk: bytes) -> int:
+        pkts = self._feed(chunk) if chunk else []
         now = self.clock()
         for p in pkts:
             self.latest[(p.device_id, p.packet_id)] = (p.data, now)
         return len(pkts)
+
+    def _drain(self) -> None:
+        """Read everything already received, without waiting."""
+        while chunk := self.transport.recv(0.0):
+            self._take(chunk)
 
     def request(
         self,
@@ -185,7 +216,7 @@ class Bravo7:
                 if not chunk:
                     continue
                 now = self.clock()
-                for p in self.reader.feed(chunk):
+                for p in self._feed(chunk):
                     key = (p.device_id, p.packet_id)
                     self.latest[key] = (p.data, now)
                     if key in wanted:
@@ -212,8 +243,84 @@ class Bravo7:
         """Hardware-status flags per device (0 = healthy)."""
         devices = tuple(j.device_id for j in self.joints) if devices is None else tuple(devices)
         got = self.request((PacketID.HARDWARE_STATUS,), devices, **kw)
-        return {d: HardwareStatus(int.from_bytes(got[(d, PacketID.HARDWARE_STATUS)][:1] or b"\0", "little"))
+        # Bytes A–D little-endian; a shorter answer (older firmware) is read as far as it goes.
+        return {d: HardwareStatus(int.from_bytes(got[(d, PacketID.HARDWARE_STATUS)][:4], "little"))
                 for d in devices}
+
+    def recent_hardware_status(self, devices: Sequence[int], *, since: float) -> dict[int, HardwareStatus]:
+        """Hardware status of those ``devices`` whose last status answer arrived after ``since``
+        [s] (sends nothing; devices without one are left out)."""
+        out = {}
+        for d in devices:
+            data, t = self.latest.get((d, PacketID.HARDWARE_STATUS), (b"", -float("inf")))
+            if t > since:
+                out[d] = HardwareStatus(int.from_bytes(data[:4], "little"))
+        return out
+
+    def read(self, packet_ids: Sequence[int], devices: Sequence[int], **kw) -> dict[tuple[int, int], tuple]:
+        """Request ``packet_ids`` from ``devices`` and decode the answers (:func:`decode_answer`).
+
+        Returns:
+          ``{(device_id, packet_id): values}``, e.g. ``{(0x0E, KM_END_POS): (x, y, z, yaw, pitch, roll)}``.
+
+        Raises:
+          LinkError: an answer missing, or of the wrong size for its id.
+        """
+        got = self.request(packet_ids, devices, **kw)
+        try:
+            return {k: decode_answer(k[1], v) for k, v in got.items()}
+        except ValueError as e:
+            raise LinkError(f"malformed answer: {e}") from e
+
+    # -- streaming (heartbeat) -------------------------------------------------------------
+    def start_stream(self, frequency_hz: int, packet_ids: Sequence[int] = (PacketID.POSITION, PacketID.VELOCITY),
+                     device: int = BROADCAST) -> None:
+        """Have ``device`` (default: every joint) stream ``packet_ids`` at ``frequency_hz``, so
+        that :meth:`stream_state` reads the state without a request per tick."""
+        if not 1 <= frequency_hz <= 255:
+            raise ValueError(f"stream frequency {frequency_hz} Hz outside 1..255")
+        self.set_heartbeat(packet_ids, frequency_hz, device)
+
+    def stop_stream(self, device: int = BROADCAST) -> bool:
+        """Stop the heartbeat of ``device``; best effort (never raises), returns whether it went out."""
+        try:
+            self.set_heartbeat((), 0, device)
+        except Exception:  # noqa: BLE001 - called while stopping, like hold()
+            return False
+        return True
+
+    def stream_state(self, devices: Sequence[int] | None = None, *, since: float,
+                     timeout: float | None = None) -> JointState:
+        """The state of ``devices`` from streamed packets that arrived after ``since`` [s].
+
+        Reads everything already received, then waits up to ``timeout`` [s] for what is
+        still missing; sends nothing.
+
+        Raises:
+          LinkError: some device's POSITION or VELOCITY did not arrive in time, or is malformed.
+        """
+        devices = tuple(j.device_id for j in self.joints) if devices is None else tuple(devices)
+        timeout = self.request_timeout if timeout is None else timeout
+        keys = [(d, p) for d in devices for p in (PacketID.POSITION, PacketID.VELOCITY)]
+        deadline = self.clock() + timeout
+        self._drain()
+        while True:
+            fresh = [k for k in keys if k in self.latest and self.latest[k][1] > since]
+            if len(fresh) == len(keys):
+                break
+            remaining = deadline - self.clock()
+            if remaining <= 0:
+                missing = sorted(set(keys) - set(fresh))
+                names = ", ".join(f"{PacketID(p).name}@0x{d:02X}" for d, p in missing[:6])
+                raise LinkError(f"stream: nothing new within {timeout * 1e3:.0f} ms from {names}"
+                                + (" …" if len(missing) > 6 else ""))
+            self.poll(remaining)
+        try:
+            pos = tuple(decode_float(self.latest[(d, PacketID.POSITION)][0]) for d in devices)
+            vel = tuple(decode_float(self.latest[(d, PacketID.VELOCITY)][0]) for d in devices)
+        except ValueError as e:
+            raise LinkError(f"malformed state packet: {e}") from e
+        return JointState(devices, pos, vel, self.clock())
 
     def read_position_limits(self, devices: Sequence[int] | None = None, **kw) -> dict[int, tuple[float, float]]:
         """Position limits stored in each device, as (lower, upper) [rad or mm]."""

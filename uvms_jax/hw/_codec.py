@@ -99,11 +99,12 @@ class ReaderStats:
     length_errors: int = 0
     crc_errors: int = 0
     overflows: int = 0
+    unterminated: int = 0
 
     @property
     def rejected(self) -> int:
         """All frames skipped for any reason."""
-        return self.cobs_errors + self.length_errors + self.crc_errors + self.overflows
+        return self.cobs_errors + self.length_errors + self.crc_errors + self.overflows + self.unterminated
 
 
 def decode_frame(frame: bytes) -> Packet:
@@ -163,6 +164,16 @@ class PacketReader:
                 continue
             stats.packets += 1
             out.append(Packet(raw[-3], raw[-4], raw[:-4]))
+        return out
+
+    def feed_datagram(self, datagram: bytes) -> list[Packet]:
+        """Decode one whole datagram: any number of packets, and no frame runs on into the next
+        datagram (an unterminated tail is counted in ``stats.unterminated`` and dropped)."""
+        self._buf = b""
+        out = self.feed(datagram)
+        if self._buf:
+            self.stats.unterminated += 1
+            self._buf = b""
         return out
 
     def reset(self) -> None:

@@ -45,6 +45,15 @@ class HwConfig:
       grip_settle_s: a closing jaws step also passes its gate when the jaws stop short of the
         goal on an object: their position changed by less than ``gate_threshold_mm`` for this
         long after the profile ended [s]. Later gates then expect the jaws at that opening.
+      stream_hz: 0: read the state by a request every tick; otherwise the joints stream
+        POSITION and VELOCITY at this rate [Hz] (heartbeat, 1..255) and the executor reads
+        the stream, sending no request per tick.
+      max_state_age_s: when some answers to a state or status request are lost (each device
+        answers in its own datagram), the newest answers up to this old complete it [s].
+      plausible_speed_factor: a measured state is trusted only if no joint moved more than
+        this factor × its speed limit × the time since the last trusted state (at least one
+        tick), plus the gate threshold, and no measured speed exceeds this factor × its limit;
+        anything else is a corrupted frame that passed the 8-bit CRC, and is skipped.
     """
 
     rate_hz: float = 50.0
@@ -63,12 +72,15 @@ class HwConfig:
     limit_margin_rad: float = 0.05
     limit_margin_mm: float = 1.0
     grip_settle_s: float = 0.3
+    stream_hz: int = 0
+    max_state_age_s: float = 0.1
+    plausible_speed_factor: float = 2.0
 
     def __post_init__(self) -> None:
         positive = ("rate_hz", "gate_threshold_rad", "gate_threshold_mm", "gate_timeout_s",
                     "tracking_error_rad", "link_timeout_s", "request_timeout_s", "status_period_s",
                     "continuity_tol_rad", "start_tolerance_rad", "limit_margin_rad", "limit_margin_mm",
-                    "grip_settle_s")
+                    "grip_settle_s", "max_state_age_s")
         for name in positive:
             if not getattr(self, name) > 0:
                 raise ValueError(f"HwConfig.{name} must be positive, got {getattr(self, name)!r}")
@@ -76,6 +88,10 @@ class HwConfig:
             raise ValueError(f"HwConfig.speed_scale must be in (0, 1], got {self.speed_scale!r}")
         if self.connect_retries < 1:
             raise ValueError("HwConfig.connect_retries must be at least 1")
+        if not 0 <= self.stream_hz <= 255:
+            raise ValueError(f"HwConfig.stream_hz must be 0 (request) or 1..255 Hz, got {self.stream_hz!r}")
+        if not self.plausible_speed_factor >= 1:
+            raise ValueError(f"HwConfig.plausible_speed_factor must be at least 1, got {self.plausible_speed_factor!r}")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -91,10 +107,17 @@ class SimConfig:
       latency_s: delay added to every response [s].
       stuck_joint: letter of a joint that does not move ("" = none).
       fault_joint: letter of a joint that reports ``fault_bits`` ("" = none).
-      fault_bits: hardware-status bits reported by ``fault_joint``.
+      fault_bits: hardware-status bits reported by ``fault_joint`` (bytes A–D little-endian,
+        :class:`~uvms_jax.hw.HardwareStatus`).
       fault_after_s: simulated time after which the fault appears [s].
       object_width_mm: an object between the jaws: closing jaws stop at this opening, as a
         real gripper stalls on what it grasps [mm] (0 = nothing to grasp).
+      dynamics: the links carry the manufacturer's masses and inertias under gravity (base
+        z up) and buoyancy, so the arm sags under load and its currents show it; False:
+        weightless links.
+      water_density: density of the water around the arm for buoyancy [kg/m³] (0: in air).
+      coalesce: send all answers to one datagram in one datagram (a byte stream's view)
+        instead of one packet per datagram, as the arm does over UDP.
       seed: seed of the fault-injection random generator.
     """
 
@@ -108,21 +131,24 @@ class SimConfig:
     fault_bits: int = 0
     fault_after_s: float = 0.0
     object_width_mm: float = 0.0
+    dynamics: bool = True
+    water_density: float = 1000.0
+    coalesce: bool = False
     seed: int = 0
 
     def __post_init__(self) -> None:
         for name in ("drop", "corrupt"):
             if not 0 <= getattr(self, name) <= 1:
                 raise ValueError(f"SimConfig.{name} must be a probability, got {getattr(self, name)!r}")
-        if self.latency_s < 0 or self.fault_after_s < 0 or self.object_width_mm < 0:
-            raise ValueError("SimConfig latency_s, fault_after_s and object_width_mm must be non-negative")
+        if self.latency_s < 0 or self.fault_after_s < 0 or self.object_width_mm < 0 or self.water_density < 0:
+            raise ValueError("SimConfig latency_s, fault_after_s, object_width_mm and water_density must be non-negative")
         if not (self.physics_dt > 0 and self.servo_gain > 0):
             raise ValueError("SimConfig physics_dt and servo_gain must be positive")
         for name in ("stuck_joint", "fault_joint"):
             if getattr(self, name) not in ("", "A", "B", "C", "D", "E", "F", "G"):
                 raise ValueError(f"SimConfig.{name} must be a joint letter A..G or empty")
-        if not 0 <= self.fault_bits <= 0xFF:
-            raise ValueError("SimConfig.fault_bits must fit in one byte")
+        if not 0 <= self.fault_bits <= 0xFFFFFFFF:
+            raise ValueError("SimConfig.fault_bits must fit in the 4 status bytes")
 
 
 @dataclasses.dataclass(frozen=True)

@@ -8,8 +8,13 @@ next move start. A closing jaws step that stalls on an object (still for ``grip_
 short of its goal) has gripped it: its gate passes, and later gates expect the jaws at the
 opening where they stopped, so a dropped object stops the run.
 
+The state comes from a request every tick, or from the joints' heartbeat stream
+(``HwConfig.stream_hz``); answers lost on the way are made up from ones under
+``max_state_age_s`` old. A state that implies a joint moved faster than it can
+(``plausible_speed_factor``) is a corrupted frame that passed the CRC: it is skipped and counted.
+
 Safety: the plan is dry-run checked before anything is sent (:class:`PlanError`); every demand
-passes the client's send guard. A lost link (no state for ``link_timeout_s``), a non-zero
+passes the client's send guard. A lost link (no trusted state for ``link_timeout_s``), a non-zero
 hardware status, a measured angle outside the limits, a tracking error above
 ``tracking_error_rad``, a gate not reached within ``gate_timeout_s``, or a refused demand aborts
 the run: zero velocity is sent to every joint (hold) and the result says why (``ok=False``).
@@ -28,7 +33,7 @@ from uvms_jax.motion import Move, synchronised_move
 from uvms_jax.planfile import Plan
 
 from ._check import PlanSummary, check_plan
-from ._client import Bravo7
+from ._client import Bravo7, JointState
 from ._config import HwConfig
 from ._ids import HardwareStatus, Mode
 from ._joints import ARM_JOINTS, JAWS, JointSpec, LimitError
@@ -77,6 +82,8 @@ class RunResult:
       link_timeouts: state requests that went unanswered.
       abort_after_s: time from the start of the failing move to the abort [s] (NaN if ok).
       summary: the dry-run summary.
+      rejected_states: received states skipped as implausible (a jump no joint can make:
+        a corrupted frame that passed the CRC).
     """
 
     ok: bool
@@ -88,6 +95,7 @@ class RunResult:
     link_timeouts: int
     abort_after_s: float
     summary: PlanSummary
+    rejected_states: int = 0
 
     @property
     def max_gate_error_mm(self) -> float:
@@ -147,7 +155,11 @@ class Executor:
         self._cmd = np.full(n, math.nan)
         self._goal = np.full(n, math.nan)
         self._expected = np.full(n, math.nan)  # what the encoders read at a gate (jaws: on the object)
-        self._ticks = self._timeouts = 0
+        self._ticks = self._timeouts = self._rejected = 0
+        # Plausibility reference: the last trusted positions and when they arrived.
+        self._vlimit = np.array([j.max_velocity for j in self.joints]) * config.plausible_speed_factor
+        self._trusted = np.full(n, math.nan)
+        self._trusted_t = -math.inf
         self._last_state_t = -math.inf
         self._next_status_t = -math.inf
         self._move_start = math.nan
@@ -188,18 +200,18 @@ class Executor:
         except BaseException:
             self.client.hold()
             raise
+        finally:
+            if self.config.stream_hz:
+                self.client.stop_stream()
         errs = [g.error_rad for g in gates]
         return RunResult(ok, reason, tuple(gates), max(errs) if errs else math.nan,
-                         self.clock() - t0, self._ticks, self._timeouts, after, summary)
+                         self.clock() - t0, self._ticks, self._timeouts, after, summary, self._rejected)
 
     # -- steps -----------------------------------------------------------------------------
     def _connect(self, plan: Plan) -> None:
         cfg = self.config
-        state = self.client.read_state(self.devices, timeout=cfg.request_timeout_s * 5,
-                                       retries=cfg.connect_retries)
-        self._last_state_t = self.clock()
+        meas = self._start_state()
         self._check_status(force=True)
-        meas = np.asarray(state.positions)
         self._check_measured(meas)
         q_start = np.asarray(plan.segments[0].q[0]) if plan.segments[0].q else None
         if q_start is None:  # first segment is gripper-only: start at the first waypoint found
@@ -213,6 +225,26 @@ class Executor:
         self._expected = meas.copy()
         self._cmd = meas.copy()
         self.client.set_mode(Mode.POSITION)
+        if cfg.stream_hz:
+            self.client.start_stream(cfg.stream_hz)
+
+    def _start_state(self) -> np.ndarray:
+        """The arm's positions at connect: two consecutive states that agree, so that a
+        corrupted frame cannot become the reference the later states are judged against."""
+        cfg = self.config
+        prev = None
+        for _ in range(cfg.connect_retries):
+            state = self.client.read_state(self.devices, timeout=cfg.request_timeout_s * 5,
+                                           retries=cfg.connect_retries)
+            now = self.clock()
+            pos, vel = np.asarray(state.positions), np.asarray(state.velocities)
+            if prev is not None and self._plausible(pos, vel, *prev):
+                self._trusted, self._trusted_t = pos, now
+                self._last_state_t = now
+                return pos
+            prev = (pos, now)
+        raise AbortRun(f"no two consecutive start states agree within {cfg.connect_retries} reads: "
+                       "the link corrupts what it carries")
 
     def _execute(self, goal: np.ndarray, min_duration: float, seg: int, wp: int) -> GateRecord:
         """Stream one synchronised move from the current goal to ``goal``, then gate."""
@@ -277,29 +309,78 @@ class Executor:
                 k = int((self.clock() - start) / dt)  # behind schedule: do not try to catch up
 
     def _measure(self) -> np.ndarray | None:
-        """Measured positions (n,) or None if this tick's state did not arrive."""
-        cfg = self.config
+        """Measured positions (n,) or None if this tick's state did not arrive or is implausible."""
         try:
             self._check_status()
-            state = self.client.read_state(self.devices, timeout=cfg.request_timeout_s)
+            state = self._read_state()
         except LinkError as e:
             self._timeouts += 1
-            silent = self.clock() - self._last_state_t
-            if silent > cfg.link_timeout_s:
-                raise LinkError(f"lost link: no state for {silent:.2f} s (limit {cfg.link_timeout_s} s); "
-                                f"last error: {e}") from e
+            self._check_silence(f"last error: {e}")
             return None
-        self._last_state_t = self.clock()
-        return np.asarray(state.positions)
+        now = self.clock()
+        self._last_state_t = now
+        pos, vel = np.asarray(state.positions), np.asarray(state.velocities)
+        if not self._plausible(pos, vel, self._trusted, self._trusted_t):
+            self._rejected += 1
+            self._check_silence(f"{self._rejected} implausible states skipped")
+            return None
+        self._trusted, self._trusted_t = pos, now
+        return pos
+
+    def _read_state(self) -> JointState:
+        """This tick's state: requested, or the streamed packets that arrived since the last
+        state. When some were lost (each device answers in its own datagram, so 14 answers
+        rarely all arrive on a lossy link), it is completed from those under
+        ``max_state_age_s`` old."""
+        cfg = self.config
+        try:
+            if cfg.stream_hz:
+                return self.client.stream_state(self.devices, since=self._last_state_t,
+                                                timeout=max(cfg.request_timeout_s, 1.5 / cfg.stream_hz))
+            return self.client.read_state(self.devices, timeout=cfg.request_timeout_s)
+        except LinkError as e:
+            try:
+                return self.client.stream_state(self.devices, since=self.clock() - cfg.max_state_age_s, timeout=0.0)
+            except LinkError:
+                raise e from None
+
+    def _check_silence(self, detail: str) -> None:
+        """Abort when no trusted state has arrived for ``link_timeout_s``."""
+        silent = self.clock() - self._trusted_t
+        if silent > self.config.link_timeout_s:
+            raise LinkError(f"lost link: no state for {silent:.2f} s (limit {self.config.link_timeout_s} s); {detail}")
+
+    def _plausible(self, pos: np.ndarray, vel: np.ndarray, ref: np.ndarray, ref_t: float) -> bool:
+        """Whether a state could follow ``ref`` (positions at time ``ref_t``): no joint moved or
+        moves faster than ``plausible_speed_factor`` × its limit (see :class:`HwConfig`)."""
+        if not (np.all(np.isfinite(pos)) and np.all(np.isfinite(vel))):
+            return False
+        if np.any(np.abs(vel) > self._vlimit):
+            return False
+        dt = max(self.clock() - ref_t, 1.0 / self.config.rate_hz)
+        return bool(np.all(np.abs(pos - ref) <= self._vlimit * dt + self._gate))
 
     def _check_status(self, force: bool = False) -> None:
+        """Abort on any non-zero hardware status. Answers lost on the way are asked again at the
+        next tick; a device whose status has not arrived for ``link_timeout_s`` is a lost link."""
+        cfg = self.config
         now = self.clock()
         if not force and now < self._next_status_t:
             return
-        status = self.client.read_hardware_status(
-            self.devices, timeout=self.config.request_timeout_s * (5 if force else 1),
-            retries=self.config.connect_retries if force else 1)
-        self._next_status_t = now + self.config.status_period_s
+        try:
+            status = self.client.read_hardware_status(
+                self.devices, timeout=cfg.request_timeout_s * (5 if force else 1),
+                retries=cfg.connect_retries if force else 1)
+            self._next_status_t = now + cfg.status_period_s
+        except LinkError:
+            if force:
+                raise
+            status = self.client.recent_hardware_status(self.devices, since=now - cfg.link_timeout_s)
+            missing = [d for d in self.devices if d not in status]
+            if missing:
+                names = {j.device_id: j.name for j in self.joints}
+                raise LinkError(f"lost link: no hardware status from joint(s) "
+                                f"{', '.join(names[d] for d in missing)} for {cfg.link_timeout_s} s") from None
         bad = {d: s for d, s in status.items() if s != HardwareStatus.OK}
         if bad:
             names = {j.device_id: j.name for j in self.joints}

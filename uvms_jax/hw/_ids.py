@@ -10,7 +10,7 @@ import enum
 
 from uvms_jax import bravo7
 
-__all__ = ["PacketID", "Mode", "DeviceID", "HardwareStatus", "BROADCAST"]
+__all__ = ["BASE_COMPUTER", "BASE_ROUTER", "BROADCAST", "DeviceID", "HardwareStatus", "Mode", "PacketID"]
 
 
 class PacketID(enum.IntEnum):
@@ -31,8 +31,9 @@ class PacketID(enum.IntEnum):
     SERIAL_NUMBER = 0x61
     MODEL_NUMBER = 0x62
     DEVICE_ID = 0x64
+    HUMIDITY = 0x65
     TEMPERATURE = 0x66
-    DEVICE_TYPE = 0x67
+    PRESSURE = 0x67  # the older SDK calls 0x67 DEVICE_TYPE; the protocol listing says pressure
     HARDWARE_STATUS = 0x68
     SOFTWARE_VERSION = 0x6C
     VOLTAGE = 0x90
@@ -59,14 +60,23 @@ DeviceID = enum.IntEnum("DeviceID", [(j.name, j.device_id) for j in sorted(bravo
                         + [("BROADCAST", 0xFF)], module=__name__)
 DeviceID.__doc__ = "Bravo 7 device ids: A = jaws (0x01) … G = base rotate (0x07); 0xFF = broadcast."
 
+# The base's two devices; the base computer answers the end-effector pose and velocity.
+BASE_ROUTER = 0x0D
+BASE_COMPUTER = 0x0E
+
 
 BROADCAST = DeviceID.BROADCAST
 
 
 class HardwareStatus(enum.IntFlag):
-    """Hardware-status bits; any set bit is a fault the executor aborts on."""
+    """Hardware-status bits; any set bit is a fault the executor aborts on.
+
+    On the wire the status is 4 bytes A, B, C, D; read little-endian as one integer, byte A is
+    bits 0–7, byte B bits 8–15 and byte C bits 16–23 (byte D carries no flag).
+    """
 
     OK = 0
+    # byte A
     ENCODER_NOT_DETECTED = 1 << 0
     ENCODER_POSITION_ERROR = 1 << 1
     MOTOR_DRIVER_FAULT = 1 << 2
@@ -75,3 +85,15 @@ class HardwareStatus(enum.IntFlag):
     OVER_TEMPERATURE = 1 << 5
     OVER_HUMIDITY = 1 << 6
     FLASH_READ_FAILED = 1 << 7
+    # byte B
+    DRIVER_OVER_TEMPERATURE = 1 << 8
+    DRIVER_OVER_CURRENT_UNDER_VOLTAGE = 1 << 9
+    OVER_PRESSURE = 1 << 10
+    DEVICE_ID_CONFLICT = 1 << 11
+    INPUT_ENCODER_POSITION_ERROR = 1 << 12
+    MOTOR_OVER_CURRENT = 1 << 13
+    MOTOR_NOT_CONNECTED = 1 << 14
+    DEVICE_AXIS_CONFLICT = 1 << 15
+    # byte C
+    ENCODER_FAULT = 1 << 17
+    JOINT_SERVICE_DUE = 1 << 19

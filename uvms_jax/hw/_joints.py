@@ -12,6 +12,8 @@ import dataclasses
 import math
 import struct
 
+import numpy as np
+
 from uvms_jax import bravo7
 
 from ._ids import DeviceID
@@ -27,6 +29,8 @@ __all__ = [
     "check_velocity",
     "spec_for_device",
     "to_f32",
+    "wire_position",
+    "wire_velocity",
 ]
 
 
@@ -63,12 +67,12 @@ class JointSpec:
             raise ValueError(f"joint {self.name}: velocity/acceleration limits must be positive")
 
     def contains(self, value: float) -> bool:
-        """Whether ``value`` as sent on the wire (float32) lies within the float32 limits.
+        """Whether ``value`` lies in [lower, upper], compared exactly (NaN never does).
 
-        Rounding to float32 is monotonic, so any float64 value in [lower, upper] passes and
-        the device, which sees float32, agrees with this check. NaN never passes.
+        For a value read off the wire this is the float32 value itself: a limit such as 6.3
+        rad, which float32 cannot represent, is not passed by the float32 just above it.
         """
-        return to_f32(self.lower) <= to_f32(value) <= to_f32(self.upper)
+        return self.lower <= value <= self.upper
 
 
 MM_PER_M = 1e3  # the jaws travel in metres in the URDF, in millimetres on the wire
@@ -95,6 +99,40 @@ def to_f32(value: float) -> float:
         return struct.unpack("<f", struct.pack("<f", value))[0]
     except OverflowError:
         return math.copysign(math.inf, value)
+
+
+def _f32_inside(value: float, low: float, high: float) -> float:
+    """``value`` (inside [low, high]) rounded to the nearest float32 that is also inside.
+
+    Round-to-nearest can land up to half a float32 step outside a limit that float32 cannot
+    represent (6.3 → 6.300000190734863); then the neighbouring float32 towards the inside is
+    taken instead, at most one step (~5e-7 at 6.3) from ``value``.
+    """
+    f = to_f32(value)
+    if f > high:  # compared in float64, exactly
+        return float(np.nextafter(np.float32(f), np.float32(-np.inf)))
+    if f < low:
+        return float(np.nextafter(np.float32(f), np.float32(np.inf)))
+    return f
+
+
+def wire_position(spec: JointSpec, value: float) -> float:
+    """The float32 POSITION demand that goes on the wire for ``value`` [rad or mm]: the nearest
+    float32 inside the limits (:func:`_f32_inside`).
+
+    Raises:
+      LimitError: ``value`` outside the limits or NaN (never clipped).
+    """
+    return _f32_inside(check_position(spec, value), spec.lower, spec.upper)
+
+
+def wire_velocity(spec: JointSpec, value: float) -> float:
+    """The float32 VELOCITY demand that goes on the wire for ``value``, inside ±max_velocity.
+
+    Raises:
+      LimitError: ``|value|`` above the speed limit or NaN (never clipped).
+    """
+    return _f32_inside(check_velocity(spec, value), -spec.max_velocity, spec.max_velocity)
 
 
 def spec_for_device(device_id: int, joints: tuple[JointSpec, ...] = BRAVO7) -> JointSpec:

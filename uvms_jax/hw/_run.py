@@ -155,7 +155,7 @@ def run_report(run: HwRun, out: Path | str | None = None, plan_path: Path | str 
     Keys: ``ok``, ``reason``, ``gates``, ``max_gate_error_rad`` [rad], ``max_gate_error_mm`` [mm]
     (None without gates), ``grips``, ``duration_s`` (on the link's clock, virtual for
     ``loopback``) [s], ``abort_after_s`` [s] (None if ok), ``ticks``, ``link_timeouts``,
-    ``wall_s`` [s], ``link``, then ``plan`` and ``out`` (paths, when given) and, on a simulated
+    ``rejected_states`` (implausible states skipped), ``wall_s`` [s], ``link``, then ``plan`` and ``out`` (paths, when given) and, on a simulated
     arm, ``sim``: ``{limit_violations, dropped, corrupted}``.
     """
     r = run.result
@@ -170,6 +170,7 @@ def run_report(run: HwRun, out: Path | str | None = None, plan_path: Path | str 
         "abort_after_s": _finite(r.abort_after_s, 3),
         "ticks": r.ticks,
         "link_timeouts": r.link_timeouts,
+        "rejected_states": r.rejected_states,
         "wall_s": round(run.wall_s, 3),
         "link": run.link,
     }

@@ -52,17 +52,17 @@ class RunLog:
         path.parent.mkdir(parents=True, exist_ok=True)
         n = len(self.joint_names)
         t = [r[0] for r in self.rows]
-        fig, axes = plt.subplots(n, 1, figsize=(9, 1.6 * n + 1), sharex=True, squeeze=False)
+        fig, axes = plt.subplots(n, 1, figsize=(9, 1.6 * n + 1.2), sharex=True, squeeze=False, layout="constrained")
         for j, name in enumerate(self.joint_names):
             ax = axes[j, 0]
             ax.plot(t, [r[4 + j] for r in self.rows], "k--", lw=1, label="commanded")
             ax.plot(t, [r[4 + n + j] for r in self.rows], "C0", lw=1, label="measured")
             ax.set_ylabel(f"{name} [{'mm' if name == 'A' else 'rad'}]")
             ax.grid(alpha=0.3)
-        axes[0, 0].legend(loc="upper right", fontsize=8)
         axes[-1, 0].set_xlabel("time [s]")
         fig.suptitle(title)
-        fig.tight_layout()
+        # one legend for all panels, above them: never over the data
+        fig.legend(*axes[0, 0].get_legend_handles_labels(), loc="outside upper right", ncols=2, fontsize=8)
         fig.savefig(path, dpi=100)
         plt.close(fig)
         return path

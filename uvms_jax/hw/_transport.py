@@ -18,7 +18,8 @@ class LinkError(RuntimeError):
 
 
 class Transport(Protocol):
-    """What the client needs from a link (the transports here also have a ``name`` for logs)."""
+    """What the client needs from a link (the transports here also have a ``name`` for logs,
+    and ``datagrams = True`` where each ``recv`` is one whole datagram, as on UDP)."""
 
     def send(self, data: bytes) -> None:
         """Send raw bytes (one datagram for UDP)."""
@@ -41,9 +42,11 @@ def parse_host_port(text: str) -> tuple[str, int]:
 class UdpTransport:
     """UDP link to ``(host, port)`` (Bravo 7 factory default 192.168.2.3:6789).
 
-    Only datagrams from the arm's address are accepted.
+    Only datagrams from the arm's address are accepted. Each ``recv`` returns one datagram,
+    which may hold any number of packets.
     """
 
+    datagrams = True  # each recv is one whole datagram: frames never span two
     def __init__(self, host: str, port: int, *, bind: tuple[str, int] = ("", 0)) -> None:
         self.address = (socket.gethostbyname(host), int(port))
         self.name = f"udp {self.address[0]}:{self.address[1]}"

@@ -2,9 +2,9 @@
 
     uvms-hw run PLAN [--sim | --udp HOST:PORT | --serial DEV] [--dry-run] [--speed-scale S]
                      [--drop P] [--corrupt P] [--latency S] [--stuck-joint X]
-                     [--hw-fault X:BITS[@T]] [--config hw.yaml] [--out DIR] ...
+                     [--hw-fault X:BITS[@T]] [--stream HZ] [--config hw.yaml] [--out DIR] ...
     uvms-hw export PLAN --ros OUT.yaml [--jaws-start MM]
-    uvms-hw sim [--port 6789] [--drop P] ...
+    uvms-hw sim [--port 6789] [--drop P] [--coalesce] ...
     uvms-hw --version
 
 PLAN is a ``plan.json`` or a ``trajectory_msgs/JointTrajectory``-shaped file, YAML or JSON by
@@ -92,6 +92,8 @@ def _sim_args(p: argparse.ArgumentParser) -> None:
     g.add_argument("--stuck-joint", metavar="X", help="joint letter that does not move")
     g.add_argument("--hw-fault", type=_parse_fault, metavar="X:BITS[@T]",
                    help="joint X reports hardware-status BITS from simulated time T")
+    g.add_argument("--coalesce", action="store_true", default=None,
+                   help="answer a datagram with one datagram (default: one packet per datagram, as the arm)")
     g.add_argument("--seed", type=int, help="fault-injection seed")
 
 
@@ -123,6 +125,8 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--speed-scale", type=_speed_scale, metavar="S",
                    help=f"fraction (0, 1] of the joints' velocity and acceleration limits {_hw_default('speed_scale')}")
     r.add_argument("--approach", action="store_true", help="move to the plan start first")
+    r.add_argument("--stream", type=int, metavar="HZ",
+                   help=f"have the joints stream their state at HZ instead of a request per tick {_hw_default('stream_hz')}")
     r.add_argument("--no-plot", action="store_true", help="skip the PNG")
     _sim_args(r)
 
@@ -152,11 +156,13 @@ def _configs(args: argparse.Namespace) -> tuple[HwConfig, SimConfig]:
         "gate_timeout_s": getattr(args, "gate_timeout", None),
         "link_timeout_s": getattr(args, "link_timeout", None),
         "speed_scale": getattr(args, "speed_scale", None),
+        "stream_hz": getattr(args, "stream", None),
         "approach": True if getattr(args, "approach", False) else None}.items() if v is not None}
     hw = dataclasses.replace(hw, **over)
     sim_over = {k: v for k, v in {
         "drop": args.drop, "corrupt": args.corrupt, "latency_s": args.latency,
-        "stuck_joint": args.stuck_joint.upper() if args.stuck_joint else None, "seed": args.seed}.items()
+        "stuck_joint": args.stuck_joint.upper() if args.stuck_joint else None, "seed": args.seed,
+        "coalesce": args.coalesce}.items()
         if v is not None}
     sim_over.update(args.hw_fault or {})
     return hw, dataclasses.replace(sim, **sim_over)
@@ -197,7 +203,7 @@ def _run(args: argparse.Namespace) -> int:
     if not (args.sim or args.udp or args.serial):
         print("uvms-hw: choose a link: --sim, --udp HOST:PORT or --serial DEV", file=sys.stderr)
         return EXIT_REFUSED
-    fault_flags = (args.drop, args.corrupt, args.latency, args.stuck_joint, args.hw_fault)
+    fault_flags = (args.drop, args.corrupt, args.latency, args.stuck_joint, args.hw_fault, args.coalesce)
     if not args.sim and any(f is not None for f in fault_flags):
         print("uvms-hw: fault injection flags need --sim", file=sys.stderr)
         return EXIT_REFUSED
