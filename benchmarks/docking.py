@@ -4,9 +4,13 @@
   python benchmarks/docking.py --population 100000 --runs 1 \\
       --grid 464,464,58,8 --chunk 1048576                         # GPU: pop 1e5, grid 1e8
 
+  python benchmarks/docking.py --scene bravo7_panel --ga bravo7 --eval-chunk none \
+      --grid 11,11,11,12 --chunk 8192 --cma-runs 0                # Bravo 7, numerical IK (GPU)
+
 Every optimiser is called once to compile and then timed ``--repeat`` times (best and
-median reported). The scene and GA settings come from configs/docking/scene/paper.yaml and
-configs/ga/paper.yaml, so the benchmark runs the same problem as the experiment.
+median reported). The scene and GA settings are composed from configs/docking.yaml with
+``--scene`` (configs/docking/scene/*.yaml) and ``--ga`` (configs/ga/*.yaml), so the
+benchmark runs the same problem as the experiment.
 """
 
 from __future__ import annotations
@@ -22,6 +26,7 @@ from pathlib import Path
 
 import jax
 import numpy as np
+from hydra import compose, initialize_config_dir
 from omegaconf import OmegaConf
 
 from uvms_jax import evo
@@ -59,17 +64,23 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--dtype", default="float32")
     ap.add_argument("--skip", default="", help="comma list of parts to skip: ga,grid,cmaes")
+    ap.add_argument("--scene", default="paper", help="configs/docking/scene/<name>.yaml")
+    ap.add_argument("--ga", default="paper", help="configs/ga/<name>.yaml")
     args = ap.parse_args()
     skip = set(filter(None, args.skip.split(",")))
 
-    scene = from_mapping(evo.SceneSettings, OmegaConf.to_container(OmegaConf.load(ROOT / "configs/docking/scene/paper.yaml")))
-    g = from_mapping(evo.GASettings, OmegaConf.to_container(OmegaConf.load(ROOT / "configs/ga/paper.yaml")))
+    with initialize_config_dir(config_dir=str(ROOT / "configs"), version_base="1.3"):
+        cfg = compose("docking", overrides=[f"docking/scene@scene={args.scene}", f"ga={args.ga}"])
+    settings = from_mapping(evo.DockingSettings, OmegaConf.to_container(cfg, resolve=True))
+    scene, g = settings.scene, settings.ga
     eval_chunk = (None if args.eval_chunk in ("none", "None") else int(args.eval_chunk)) if args.eval_chunk else g.eval_chunk
     g = dataclasses.replace(g, population_size=args.population or g.population_size,
                             max_generations=args.max_generations or g.max_generations, eval_chunk=eval_chunk)
     problem = evo.docking_problem(scene, args.dtype)
     codec, ga, params = evo.make_ga(g, problem)
-    n_points = int(problem.p_control.shape[0])
+    arm = isinstance(problem, evo.ArmDockingProblem)
+    # IK targets per evaluation: control points (closed form), or tool poses × seeds (numerical).
+    n_points = int(problem.T_world_tool.shape[0] * problem.seeds.shape[0]) if arm else int(problem.p_control.shape[0])
     report = {
         "device": str(jax.devices()[0]),
         "device_kind": jax.devices()[0].device_kind,
@@ -78,7 +89,9 @@ def main() -> None:
         "affinity_cpus": len(os.sched_getaffinity(0)),
         "jax": jax.__version__,
         "dtype": args.dtype,
-        "control_points": n_points,
+        "scene": args.scene,
+        "ik_targets_per_evaluation": n_points,
+        **({"ik_iterations": problem.iterations} if arm else {}),
         "load_average_start": os.getloadavg(),
     }
 
@@ -103,7 +116,7 @@ def main() -> None:
     if "grid" not in skip:
         counts = tuple(int(c) for c in args.grid.split(","))
         low, high = problem.pose_low, problem.pose_high
-        periodic = (False, False, False, True)
+        periodic = evo.grid_periodicity(problem)
         # The compiled search does not depend on the grid size: compile on a tiny grid, then
         # time the full one once (it is long on a CPU).
         t0 = time.perf_counter()
@@ -125,7 +138,7 @@ def main() -> None:
             "ik_targets_per_s": n * n_points / t["best_s"],
         }
 
-    if "cmaes" not in skip:
+    if "cmaes" not in skip and args.cma_runs > 0:
         ckeys = jax.random.split(jax.random.key(1), args.cma_runs)
         res, t = _time(
             lambda: evo.run_cmaes(ckeys, problem, problem.pose_low, problem.pose_high,

@@ -8,10 +8,14 @@ A thin entry point: config → :class:`uvms_jax.evo.DockingSettings` → :func:`
   wmax.json           zero-w area fraction of the task area for the best and the ill-placed pose
   wmax_best.png, wmax_ill_placed.png   w_max heat maps (eq. 16)
   convergence.png     best fitness per generation of every GA and CMA-ES run
-  summary.json        acceptance figures (GA vs grid, batch time, quarter/facing checks)
+  summary.json        acceptance figures (GA vs grid, batch time, evaluations/s, quarter/facing checks)
+For an arm scene (docking/scene@scene=bravo7_panel, bravo7_tables) best_pose.json (IK solution
+and w per target) and docked_top_view.png replace the w_max files.
 
-  python experiments/docking.py                       # full
-  python experiments/docking.py docking/preset=fast   # ~1 minute demo
+  python experiments/docking.py                              # full (the paper's arm)
+  python experiments/docking.py docking/preset=fast          # ~1 minute demo
+  python experiments/docking.py docking/preset=bravo7        # Bravo 7 beside a panel (GPU)
+  python experiments/docking.py docking/preset=bravo7_fast   # the same at test size
 """
 
 from __future__ import annotations
@@ -42,9 +46,10 @@ def main(cfg: DictConfig) -> dict:
         jax.config.update("jax_enable_x64", True)
     run = evo.run_docking(settings)
     summary = evo.write_docking(run, out)
-    log.info("GA/grid ratios %s (refined grid: %s); zero-w best %.3f, ill-placed %.3f; outputs in %s",
-             summary["ga_ratio_to_grid"], summary["ga_ratio_to_refined_grid"],
-             run.wmax_best.zero_fraction, run.wmax_ill_placed.zero_fraction, out)
+    log.info("GA/grid ratios %s (refined grid: %s); %.0f GA evaluations/s; outputs in %s",
+             summary["ga_ratio_to_grid"], summary["ga_ratio_to_refined_grid"], summary["ga_evaluations_per_s"], out)
+    if run.wmax_best is not None:
+        log.info("zero-w best %.3f, ill-placed %.3f", run.wmax_best.zero_fraction, run.wmax_ill_placed.zero_fraction)
     return summary
 
 

@@ -3,11 +3,24 @@
 The docking problem (area manipulability M_a, eq. 1; distance D, eq. 3; fitness eq. 15 over
 the search set Wd, eq. 14), the paper's binary GA (Table 2) as pure ``init/ask/tell``
 functions with whole runs in one jitted loop, a chunked dense grid search and CMA-ES
-(evosax) as baselines, and the ``w_max`` map of eq. 16. :func:`run_docking` is the whole
-docking experiment as one stage (settings in, :class:`DockingRun` out) and
+(evosax) as baselines, and the ``w_max`` map of eq. 16. The same optimisers dock any arm
+under a vehicle (:class:`ArmDockingProblem`: targets as tool poses, batched multi-seed
+numerical IK checked for limits and collisions; docs/docking.md). :func:`run_docking` is the
+whole docking experiment as one stage (settings in, :class:`DockingRun` out) and
 :func:`write_docking` writes its files and figures.
 """
 
+from uvms_jax.evo._arm import ArmDockingProblem
+from uvms_jax.evo._arm import ArmReport
+from uvms_jax.evo._arm import arm_report
+from uvms_jax.evo._arm import arm_solutions
+from uvms_jax.evo._arm import arm_solutions_jit
+from uvms_jax.evo._arm import dls_ik
+from uvms_jax.evo._arm import evaluate_arm
+from uvms_jax.evo._arm import evaluate_arm_traced
+from uvms_jax.evo._arm import make_arm_docking_problem
+from uvms_jax.evo._arm import target_w
+from uvms_jax.evo._arm import vehicle_clear
 from uvms_jax.evo._binary import BinaryCodec
 from uvms_jax.evo._binary import make_codec
 from uvms_jax.evo._cmaes import CMAESResult
@@ -17,6 +30,8 @@ from uvms_jax.evo._docking import DockingRun
 from uvms_jax.evo._docking import GridOptimum
 from uvms_jax.evo._docking import PoseMap
 from uvms_jax.evo._docking import docking_problem
+from uvms_jax.evo._docking import evaluate_any
+from uvms_jax.evo._docking import grid_periodicity
 from uvms_jax.evo._docking import make_ga
 from uvms_jax.evo._docking import pose_checks
 from uvms_jax.evo._docking import run_docking
@@ -33,17 +48,25 @@ from uvms_jax.evo._grid import refine_grid_search
 from uvms_jax.evo._problem import DockingEval
 from uvms_jax.evo._problem import DockingProblem
 from uvms_jax.evo._problem import base_transform
+from uvms_jax.evo._problem import docking_fitness
 from uvms_jax.evo._problem import docking_point
 from uvms_jax.evo._problem import evaluate
 from uvms_jax.evo._problem import evaluate_traced
 from uvms_jax.evo._problem import in_search_set
 from uvms_jax.evo._problem import make_docking_problem
+from uvms_jax.evo._scenes import ARMS
+from uvms_jax.evo._scenes import arm_docking_problem
+from uvms_jax.evo._scenes import panel_targets
+from uvms_jax.evo._scenes import scenario_targets
 from uvms_jax.evo._settings import FIELDS
+from uvms_jax.evo._settings import ArmSceneSettings
+from uvms_jax.evo._settings import BoxSettings
 from uvms_jax.evo._settings import CMAESSettings
 from uvms_jax.evo._settings import DockingSettings
 from uvms_jax.evo._settings import FieldBits
 from uvms_jax.evo._settings import GASettings
 from uvms_jax.evo._settings import GridSettings
+from uvms_jax.evo._settings import PanelSettings
 from uvms_jax.evo._settings import SceneSettings
 from uvms_jax.evo._settings import WmaxSettings
 from uvms_jax.evo._shard import ShardedProblem

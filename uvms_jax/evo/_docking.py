@@ -19,21 +19,39 @@ from uvms_jax.evo._binary import BinaryCodec, make_codec
 from uvms_jax.evo._cmaes import run_cmaes
 from uvms_jax.evo._ga import BinaryGA, GAParams, run_ga, run_ga_batch
 from uvms_jax.evo._grid import grid_search, refine_grid_search
+from uvms_jax.evo._arm import ArmDockingProblem, ArmReport, arm_report, evaluate_arm
 from uvms_jax.evo._problem import DockingProblem, docking_point, evaluate, make_docking_problem
-from uvms_jax.evo._settings import FIELDS, DockingSettings, GASettings, SceneSettings
+from uvms_jax.evo._scenes import arm_docking_problem
+from uvms_jax.evo._settings import FIELDS, ArmSceneSettings, DockingSettings, GASettings, SceneSettings
 from uvms_jax.evo._wmax import WmaxMap, wmax_map
 
 log = logging.getLogger(__name__)
 
 PERIODIC = (False, False, False, True)  # ψ wraps: the grid does not sample −π and π twice
 
+Problem = DockingProblem | ArmDockingProblem
 
-def docking_problem(scene: SceneSettings, dtype: str = "float32") -> DockingProblem:
-    """:func:`make_docking_problem` from :class:`SceneSettings`."""
+
+def docking_problem(scene: SceneSettings | ArmSceneSettings, dtype: str = "float32") -> Problem:
+    """The problem of a scene: :func:`make_docking_problem` for the paper's
+    :class:`SceneSettings`, :func:`arm_docking_problem` for an :class:`ArmSceneSettings`."""
+    if isinstance(scene, ArmSceneSettings):
+        return arm_docking_problem(scene, jnp.dtype(dtype))
     return make_docking_problem(**dataclasses.asdict(scene), dtype=jnp.dtype(dtype))
 
 
-def make_ga(settings: GASettings, problem: DockingProblem) -> tuple[BinaryCodec, BinaryGA, GAParams]:
+def evaluate_any(problem: Problem, pose):
+    """:func:`evaluate` or :func:`evaluate_arm`, by the problem's kind."""
+    return evaluate_arm(problem, pose) if isinstance(problem, ArmDockingProblem) else evaluate(problem, pose)
+
+
+def grid_periodicity(problem: Problem) -> tuple[bool, ...]:
+    """Grid periodicity: ψ wraps when its range is a full turn."""
+    full = bool(np.isclose(float(problem.pose_high[3] - problem.pose_low[3]), 2 * np.pi, atol=1e-5))
+    return (False, False, False, full)
+
+
+def make_ga(settings: GASettings, problem: Problem) -> tuple[BinaryCodec, BinaryGA, GAParams]:
     """Codec over the problem's box, static GA sizes and hyperparameters from the settings."""
     s = settings
     codec = make_codec(problem.pose_low, problem.pose_high, [getattr(s.bits, f) for f in FIELDS], gray=s.gray)
@@ -118,8 +136,12 @@ class DockingRun:
       grid, refined_grid: the dense grid's optimum and its polish by zoom stages.
       refine_stage_fitness: best fitness after each zoom stage.
       cmaes: the CMA-ES baseline, or None when disabled.
-      wmax_best, wmax_ill_placed: w_max maps of the best GA pose and the ill-placed pose.
-      pose_checks: per GA run, where its pose lies (see :func:`pose_checks`).
+      wmax_best, wmax_ill_placed: w_max maps of the best GA pose and the ill-placed pose
+        (paper scene; None for an arm scene).
+      pose_checks: per GA run, where its pose lies (see :func:`pose_checks`; paper scene,
+        empty for an arm scene).
+      best_ik: for an arm scene, the best IK solution per demanded tool pose at the best GA
+        pose (:class:`~uvms_jax.evo.ArmReport` of that pose); None for the paper scene.
       load_average, device: machine state at the end of the run.
     """
 
@@ -137,9 +159,10 @@ class DockingRun:
     refined_grid: GridOptimum
     refine_stage_fitness: tuple[float, ...]
     cmaes: CMAESRuns | None
-    wmax_best: PoseMap
-    wmax_ill_placed: PoseMap
+    wmax_best: PoseMap | None
+    wmax_ill_placed: PoseMap | None
     pose_checks: tuple[dict, ...]
+    best_ik: ArmReport | None
     load_average: tuple[float, float, float]
     device: str
 
@@ -151,6 +174,11 @@ class DockingRun:
     @property
     def ga_ratio_to_refined_grid(self) -> np.ndarray:
         return self.fitness / self.refined_grid.fitness
+
+    @property
+    def ga_evaluations_per_second(self) -> float:
+        """Fitness evaluations of all GA runs per second of the batch."""
+        return float(np.sum(self.evaluations)) / self.ga_batch_seconds
 
     @property
     def all_face_task_area(self) -> bool:
@@ -183,9 +211,9 @@ def pose_checks(problem: DockingProblem, pose, p_init, tol: float) -> dict:
     }
 
 
-def _grid_optimum(problem: DockingProblem, x, fitness, candidates: int, seconds: float) -> GridOptimum:
-    e = evaluate(problem, x)
-    return GridOptimum(np.asarray(x), float(fitness), float(e.M_a), float(e.D), int(candidates), seconds)
+def _grid_optimum(x, fitness, terms, i: int, candidates: int, seconds: float) -> GridOptimum:
+    """The grid optimum ``x`` with its terms, row ``i`` of ``terms``."""
+    return GridOptimum(np.asarray(x), float(fitness), float(terms.M_a[i]), float(terms.D[i]), int(candidates), seconds)
 
 
 def _pose_map(problem: DockingProblem, pose, n_per_side: int) -> PoseMap:
@@ -219,14 +247,20 @@ def run_docking(settings: DockingSettings) -> DockingRun:
     # Grid reference: a global grid (compiled once for any size), then zoom stages.
     g = s.grid
     low, high = problem.pose_low, problem.pose_high
-    grid_search(problem, low, high, (2, 2, 2, 2), PERIODIC, g.chunk_size)  # compile
-    grid, t_grid = _timed(grid_search, problem, low, high, g.counts, PERIODIC, g.chunk_size)
+    per = grid_periodicity(problem)
+    grid_search(problem, low, high, (2, 2, 2, 2), per, g.chunk_size)  # compile
+    grid, t_grid = _timed(grid_search, problem, low, high, g.counts, per, g.chunk_size)
     stages, t_refine = _timed(
         refine_grid_search, problem, grid, g.refine_counts, g.refine_stages, g.refine_shrink, g.chunk_size
     )
     ref = stages[-1] if stages else grid
-    grid_opt = _grid_optimum(problem, grid.x, grid.fitness, grid.n_candidates, t_grid)
-    refined = _grid_optimum(problem, ref.x, ref.fitness, sum(st.n_candidates for st in stages), t_refine)
+    # Objective terms of the GA bests and the two grid optima in one call (one compilation).
+    scored = jnp.concatenate([res.best_x, grid.x[None], ref.x[None]])
+    report = arm_report(problem, scored) if isinstance(problem, ArmDockingProblem) else None
+    terms = report.terms if report is not None else evaluate(problem, scored)
+    R = s.n_runs
+    grid_opt = _grid_optimum(grid.x, grid.fitness, terms, R, grid.n_candidates, t_grid)
+    refined = _grid_optimum(ref.x, ref.fitness, terms, R + 1, sum(st.n_candidates for st in stages), t_refine)
     log.info("grid: %d candidates in %.1f s, optimum %.4f; refined (%d more) %.4f",
              grid.n_candidates, t_grid, grid_opt.fitness, refined.candidates, refined.fitness)
 
@@ -244,12 +278,13 @@ def run_docking(settings: DockingSettings) -> DockingRun:
     poses, fitness = np.asarray(res.best_x), np.asarray(res.best_fitness)
     generations = np.asarray(res.generations)
     best_pose = poses[int(np.argmax(fitness))]
+    paper = isinstance(problem, DockingProblem)
     tol = float(np.max(np.asarray(codec.resolution)[:2]))  # x = 0 / y = 0 is not on the lattice
     return DockingRun(
         settings=s,
         poses=poses,
         fitness=fitness,
-        M_a=np.asarray(evaluate(problem, res.best_x).M_a),
+        M_a=np.asarray(terms.M_a[:R]),
         generations=generations,
         evaluations=np.asarray(res.evaluations),
         histories=tuple(np.asarray(h)[: int(n)] for h, n in zip(res.history, generations)),
@@ -260,9 +295,10 @@ def run_docking(settings: DockingSettings) -> DockingRun:
         refined_grid=refined,
         refine_stage_fitness=tuple(float(st.fitness) for st in stages),
         cmaes=cmaes,
-        wmax_best=_pose_map(problem, best_pose, s.wmax.n_per_side),
-        wmax_ill_placed=_pose_map(problem, list(s.ill_placed_pose), s.wmax.n_per_side),
-        pose_checks=tuple(pose_checks(problem, x, s.scene.p_init, tol) for x in poses),
+        wmax_best=_pose_map(problem, best_pose, s.wmax.n_per_side) if paper else None,
+        wmax_ill_placed=_pose_map(problem, list(s.ill_placed_pose), s.wmax.n_per_side) if paper else None,
+        pose_checks=tuple(pose_checks(problem, x, s.scene.p_init, tol) for x in poses) if paper else (),
+        best_ik=None if paper else jax.tree_util.tree_map(lambda a: a[int(np.argmax(fitness))], report),
         load_average=os.getloadavg(),
         device=str(jax.devices()[0]),
     )

@@ -202,6 +202,11 @@ class DockingEval(NamedTuple):
     feasible: Array
 
 
+def docking_fitness(M_a: Array, D: Array, feasible: Array, a: Array, b: Array) -> Array:
+    """Eq. 8 and 15: ``a·M_a − b·D`` inside the search set Wd, 0 outside (any docking problem)."""
+    return jnp.where(feasible, a * M_a - b * D, 0.0)
+
+
 def _area_inputs(problem: DockingProblem, pose: Array) -> tuple[Array, Array]:
     """Arguments of :func:`uvms_jax.indices.area_manipulability` for base poses ``(..., 4)``:
     ``T_G_B (..., 4, 4)`` and the demanded tool orientation ``(..., 1, 3, 3)`` in G."""
@@ -212,8 +217,7 @@ def _terms(problem: DockingProblem, pose: Array, M_a: Array) -> DockingEval:
     """Objective terms of base poses ``(..., 4)`` from their area manipulability ``M_a (...)``."""
     D = jnp.linalg.norm(docking_point(pose, problem.p_bp) - problem.p_i, axis=-1)  # eq. 3
     feasible = in_search_set(problem, pose)  # eq. 14
-    fitness = jnp.where(feasible, problem.a * M_a - problem.b * D, 0.0)  # eq. 8, 15
-    return DockingEval(fitness=fitness, M_a=M_a, D=D, feasible=feasible)
+    return DockingEval(fitness=docking_fitness(M_a, D, feasible, problem.a, problem.b), M_a=M_a, D=D, feasible=feasible)
 
 
 def evaluate_traced(problem: DockingProblem, pose: Array) -> DockingEval:

@@ -8,6 +8,10 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Mapping
+from typing import Any
+
+from uvms_jax.settings import from_mapping
 
 FIELDS = ("x", "y", "z", "psi")  # the variables of a docking pose, in chromosome order
 
@@ -29,6 +33,82 @@ class SceneSettings:
     yaw_mode: str = "heading"
     tool_yaw: float = 0.0
     arm_lengths: tuple[float, float, float] = (0.1, 0.4, 0.4)
+
+
+@dataclasses.dataclass(frozen=True)
+class BoxSettings:
+    """A box: centre ``pos`` [m], full ``size`` [m], orientation ``rpy`` [rad] (fixed x-y-z axes)."""
+
+    name: str = "box"
+    pos: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    size: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    rpy: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+
+@dataclasses.dataclass(frozen=True)
+class PanelSettings:
+    """Control points on a vertical task panel (:func:`uvms_jax.evo.panel_targets`).
+
+    Attributes:
+      center: centre of the task area on the panel face, in W [m].
+      approach_yaw: heading of the approach direction (into the panel, horizontal) in W [rad].
+      size: width (horizontal) and height of the task area [m].
+      points_per_side: 2 = the four corners, n > 2 = an n × n grid.
+      standoff: tool frame distance from the face, along the approach [m].
+      roll: tool rotation about the approach axis [rad]; 0 = tool x axis up.
+    """
+
+    center: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    approach_yaw: float = 0.0
+    size: tuple[float, float] = (0.3, 0.3)
+    points_per_side: int = 3
+    standoff: float = 0.1
+    roll: float = 0.0
+
+
+@dataclasses.dataclass(frozen=True)
+class ArmSceneSettings:
+    """Docking scene of any arm under a vehicle (``configs/docking/scene/bravo7_*.yaml``);
+    see :func:`uvms_jax.evo.arm_docking_problem`.
+
+    Attributes:
+      arm: arm model, one of ``uvms_jax.evo.ARMS``.
+      mount_xyz, mount_rpy: arm base in the vehicle frame V [m, rad].
+      link_radius: link capsule radius [m]; None = the arm's own (Bravo 7: ``LINK_RADIUS``).
+      vehicle_boxes: the vehicle body, boxes in V.
+      scene_boxes: obstacles in W (panel, seabed, tables).
+      panel: targets on a task panel, or None.
+      scenario: a pick-and-place scenario (``configs/scenario/*.yaml``), or None: its tables
+        join the scene boxes and its grasp and place tool poses become the targets (the
+        symmetric grasps of an object are alternatives of one target).
+      pose_low, pose_high: box of vehicle poses ``[x, y, z, ψ]`` [m, rad] (holds Wd).
+      p_dock: docking point in V [m]; p_init: its initial position in W [m] (D of eq. 3).
+      a, b: weights of eq. 8.
+      ik_seeds, ik_iterations, ik_damping, ik_seed: numerical IK (seeds fixed for the run).
+    """
+
+    arm: str = "bravo7"
+    mount_xyz: tuple[float, float, float] = (0.35, 0.0, -0.2)
+    mount_rpy: tuple[float, float, float] = (math.pi, 0.0, 0.0)
+    link_radius: float | None = None
+    vehicle_boxes: tuple[BoxSettings, ...] = (BoxSettings("hull", (0.0, 0.0, 0.0), (0.9, 0.7, 0.4)),)
+    scene_boxes: tuple[BoxSettings, ...] = ()
+    panel: PanelSettings | None = None
+    scenario: dict | None = None
+    pose_low: tuple[float, float, float, float] = (-1.6, -0.8, -0.4, -math.pi)
+    pose_high: tuple[float, float, float, float] = (-0.4, 0.8, 0.8, math.pi)
+    p_dock: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    p_init: tuple[float, float, float] = (-2.5, -1.5, 1.0)
+    a: float = 300.0
+    b: float = 0.5
+    ik_seeds: int = 32
+    ik_iterations: int = 40
+    ik_damping: float = 0.5
+    ik_seed: int = 0
+
+    def __post_init__(self):
+        if (self.panel is None) == (self.scenario is None):
+            raise ValueError("an arm scene needs exactly one target source: panel or scenario")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -101,8 +181,11 @@ class DockingSettings:
       n_runs: independent GA runs.
       dtype: ``"float32"`` or ``"float64"`` (the latter needs ``jax_enable_x64``).
       time_single_runs: also time each GA run alone (else each run gets the batch time).
-      ill_placed_pose: ``[x, y, z, ψ]`` [m, rad] of the paper's ill-placed pose (Fig. 10).
+      ill_placed_pose: ``[x, y, z, ψ]`` [m, rad] of the paper's ill-placed pose (Fig. 10);
+        used with the paper's scene only.
       accept_ratio: a GA best ≥ ``accept_ratio`` × grid optimum counts as found.
+      scene: the paper's scene (:class:`SceneSettings`) or an arm under a vehicle
+        (:class:`ArmSceneSettings`).
     """
 
     seed: int = 0
@@ -111,8 +194,18 @@ class DockingSettings:
     time_single_runs: bool = True
     ill_placed_pose: tuple[float, float, float, float] = (-0.491, -0.464, 0.213, 0.83)
     accept_ratio: float = 0.99
-    scene: SceneSettings = SceneSettings()
+    # SceneSettings | ArmSceneSettings; a mapping is converted in __post_init__, by its keys.
+    scene: Any = SceneSettings()
     ga: GASettings = GASettings()
     grid: GridSettings = GridSettings()
     cmaes: CMAESSettings = CMAESSettings()
     wmax: WmaxSettings = WmaxSettings()
+
+    def __post_init__(self):
+        # A mapping with an ``arm`` key is an arm scene; converting here (not by trying both
+        # types) lets a wrong key be reported against the scene type it belongs to.
+        if isinstance(self.scene, Mapping):
+            kind = ArmSceneSettings if "arm" in self.scene else SceneSettings
+            object.__setattr__(self, "scene", from_mapping(kind, self.scene, "scene"))
+        if not isinstance(self.scene, (SceneSettings, ArmSceneSettings)):
+            raise ValueError(f"scene must be SceneSettings or ArmSceneSettings, got {type(self.scene).__name__}")

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from uvms_jax.evo._docking import DockingRun, GridOptimum
-from uvms_jax.evo._plots import plot_convergence, plot_wmax
+from uvms_jax.evo._plots import plot_convergence, plot_docked_top_view, plot_wmax
 from uvms_jax.evo._settings import FIELDS
 
 
@@ -27,7 +27,7 @@ def docking_summary(run: DockingRun) -> dict:
     references = {"grid": run.grid.fitness, "refined_grid": run.refined_grid.fitness}
     f_ga = run.fitness
     checks = list(run.pose_checks)
-    return {
+    summary = {
         "ga_fitness": f_ga.tolist(),
         **{f"ga_ratio_to_{k}": (f_ga / v).round(5).tolist() for k, v in references.items()},
         **{f"ga_runs_within_{s.accept_ratio}_of_{k}": int(np.sum(f_ga >= s.accept_ratio * v)) for k, v in references.items()},
@@ -35,14 +35,48 @@ def docking_summary(run: DockingRun) -> dict:
         "ga_compile_and_first_batch_seconds": run.ga_compile_seconds,
         "ga_generations": run.generations.tolist(),
         "ga_evaluations": run.evaluations.tolist(),
-        "best_pose_checks": checks,
-        "all_bases_in_near_quarter": all(c["base_in_near_quarter"] for c in checks),
-        "all_docking_points_in_near_quarter": all(c["docking_point_in_near_quarter"] for c in checks),
-        "all_face_task_area": run.all_face_task_area,
-        "zero_w_fraction": {"best": run.wmax_best.zero_fraction, "ill_placed": run.wmax_ill_placed.zero_fraction},
+        "ga_evaluations_per_s": run.ga_evaluations_per_second,
+        "grid_candidates_per_s": run.grid.candidates / run.grid.seconds,
         "load_average": run.load_average,
         "device": run.device,
     }
+    if run.wmax_best is not None:  # the paper's scene: where the poses lie, w_max maps
+        summary |= {
+            "best_pose_checks": checks,
+            "all_bases_in_near_quarter": all(c["base_in_near_quarter"] for c in checks),
+            "all_docking_points_in_near_quarter": all(c["docking_point_in_near_quarter"] for c in checks),
+            "all_face_task_area": run.all_face_task_area,
+            "zero_w_fraction": {"best": run.wmax_best.zero_fraction, "ill_placed": run.wmax_ill_placed.zero_fraction},
+        }
+    return summary
+
+
+def _write_wmax(run: DockingRun, out: Path) -> None:
+    maps = {"best": run.wmax_best, "ill_placed": run.wmax_ill_placed}
+    vmax = max(float(m.map.w_max.max()) for m in maps.values())
+    for name, m in maps.items():
+        label = ", ".join(f"{float(v):.3f}" for v in m.pose)
+        plot_wmax(m.map, f"{name.replace('_', '-')} pose [{label}]", out / f"wmax_{name}.png", vmax)
+    (out / "wmax.json").write_text(json.dumps({
+        name: {"pose": _pose(m.pose), "zero_w_fraction": m.zero_fraction, "Ma": m.M_a,
+               "w_max_mean": m.w_max_mean, "n_per_side": run.settings.wmax.n_per_side}
+        for name, m in maps.items()
+    }, indent=2))
+
+
+def _write_arm_pose(run: DockingRun, out: Path) -> None:
+    """The best GA pose of an arm scene: joint solution and w per target, and a top view."""
+    from uvms_jax.evo._docking import docking_problem
+
+    pose = run.poses[int(np.argmax(run.fitness))]
+    ik = run.best_ik
+    (out / "best_pose.json").write_text(json.dumps({
+        "pose": _pose(pose), "fitness": float(np.max(run.fitness)), "Ma": float(ik.terms.M_a),
+        "targets": [{"reached": bool(o), "w": float(wi), "q": None if not o else qi.round(5).tolist()}
+                    for qi, o, wi in zip(ik.q, ik.valid, ik.w)],
+    }, indent=2))
+    problem = docking_problem(run.settings.scene, run.settings.dtype)  # geometry for the figure
+    plot_docked_top_view(problem, pose, ik.q, ik.valid, ik.w, out / "docked_top_view.png")
 
 
 def write_docking(run: DockingRun, out: Path) -> dict:
@@ -51,7 +85,9 @@ def write_docking(run: DockingRun, out: Path) -> dict:
     Files: runs.csv (one row per GA run: x, y, z, psi, fitness, Ma, generations, seconds),
     grid_optimum.json (grid optimum and its zoom refinement), cmaes.json (when CMA-ES ran),
     wmax.json (zero-w fraction, M_a and mean w_max of the best and the ill-placed pose),
-    wmax_best.png, wmax_ill_placed.png (eq. 16 maps), convergence.png, summary.json.
+    wmax_best.png, wmax_ill_placed.png (eq. 16 maps) for the paper's scene, or
+    best_pose.json (IK solution and w per target) and docked_top_view.png for an arm scene,
+    convergence.png, summary.json.
     """
     out = Path(out)
     s = run.settings
@@ -78,16 +114,10 @@ def write_docking(run: DockingRun, out: Path) -> dict:
             w.writerow([*run.poses[r].round(6).tolist(), round(float(run.fitness[r]), 6), round(float(run.M_a[r]), 6),
                         int(run.generations[r]), round(run.run_seconds[r], 4)])
 
-    maps = {"best": run.wmax_best, "ill_placed": run.wmax_ill_placed}
-    vmax = max(float(m.map.w_max.max()) for m in maps.values())
-    for name, m in maps.items():
-        label = ", ".join(f"{float(v):.3f}" for v in m.pose)
-        plot_wmax(m.map, f"{name.replace('_', '-')} pose [{label}]", out / f"wmax_{name}.png", vmax)
-    (out / "wmax.json").write_text(json.dumps({
-        name: {"pose": _pose(m.pose), "zero_w_fraction": m.zero_fraction, "Ma": m.M_a,
-               "w_max_mean": m.w_max_mean, "n_per_side": s.wmax.n_per_side}
-        for name, m in maps.items()
-    }, indent=2))
+    if run.wmax_best is not None:
+        _write_wmax(run, out)
+    else:
+        _write_arm_pose(run, out)
 
     plot_convergence(list(run.histories), [] if run.cmaes is None else run.cmaes.history,
                      {"grid optimum": run.grid.fitness, "refined grid": run.refined_grid.fitness},

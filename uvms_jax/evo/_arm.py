@@ -1,0 +1,346 @@
+"""Docking for any arm: area manipulability by batched multi-seed numerical IK (docs/docking.md).
+
+The docking paper's problem (docs/theory.md §3) generalised: the arm hangs from a vehicle
+through a fixed mount ``T_vehicle_base``; the free vehicle DOFs are ``[x, y, z, ψ]`` (the
+vehicle frame V in the world W, yaw ψ about z of W); the task is data, a set of demanded
+tool poses ``T_world_tool (k, 4, 4)``, grouped into ``g`` targets (the poses of one group
+are alternatives, e.g. the symmetric grasps of an object). For a vehicle pose:
+
+- every pose of every target is solved by damped least squares from the same ``S`` fixed
+  seeds (one jitted call over poses × targets × seeds, a fixed number of iterations);
+- a seed's solution counts when FK reaches the demanded pose, every joint lies within its
+  limits (revolute angles are only shifted by multiples of 2π, never clipped) and the arm's
+  link capsules clear the vehicle and the scene boxes;
+- ``w`` of a target is the best manipulability over its valid solutions (0 if none), and
+  ``M_a = min over targets`` (the paper's eq. 1 aggregation);
+- the fitness is the paper's eq. 15 (:func:`uvms_jax.evo._problem.docking_fitness`), with
+  ``D`` the distance of the vehicle's docking point from its initial position and the search
+  set Wd = the pose box, minus poses where the vehicle body meets the scene.
+
+The same seeds for every pose make the fitness a deterministic function of the pose (the
+GA's fitness cache and the grid comparison rely on it).
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from flax import struct
+from jax import Array
+
+from uvms_jax import indices, kin
+from uvms_jax.evo._collide import boxes_overlap, capsules_hit_boxes, link_points
+from uvms_jax.evo._problem import DockingEval, base_transform, docking_fitness
+from uvms_jax.kin import Chain
+
+
+@struct.dataclass
+class ArmDockingProblem:
+    """Immutable docking scene and objective for any serial arm (module docstring).
+
+    Attributes:
+      chain: the arm (tool frame = the frame the targets demand).
+      T_vehicle_base: ``(4, 4)`` arm base in the vehicle frame V (the mount) [m].
+      T_world_tool: ``(k, 4, 4)`` demanded tool poses in the world W [m].
+      group: ``(k,)`` target index of each pose, ``0 … n_groups − 1``.
+      seeds: ``(S, n)`` IK seeds inside the joint limits [rad or m].
+      low, high: ``(4,)`` box of vehicle poses ``[x, y, z, ψ]`` [m, rad].
+      p_dock: ``(3,)`` docking point of the vehicle in V [m] (D of eq. 3 is measured there).
+      p_i: ``(3,)`` initial position of the docking point in W [m].
+      a, b: weights of eq. 8.
+      link_radius: capsule radius of the arm's links [m].
+      T_vehicle_box, vehicle_half: ``(mv, 4, 4), (mv, 3)`` vehicle body boxes in V [m].
+      T_world_box, scene_half: ``(ms, 4, 4), (ms, 3)`` scene boxes (panel, tables) in W [m].
+      damping: DLS damping; λ² = damping² (‖e‖² + 10⁻⁶).
+      n_groups: number of targets g (static).
+      iterations: DLS iterations per seed (static).
+    """
+
+    chain: Chain
+    T_vehicle_base: Array
+    T_world_tool: Array
+    group: Array
+    seeds: Array
+    low: Array
+    high: Array
+    p_dock: Array
+    p_i: Array
+    a: Array
+    b: Array
+    link_radius: Array
+    T_vehicle_box: Array
+    vehicle_half: Array
+    T_world_box: Array
+    scene_half: Array
+    damping: Array
+    n_groups: int = struct.field(pytree_node=False)
+    iterations: int = struct.field(pytree_node=False)
+
+    @property
+    def pose_low(self) -> Array:
+        return self.low
+
+    @property
+    def pose_high(self) -> Array:
+        return self.high
+
+    def fitness(self, pose: Array) -> Array:
+        """Fitness of eq. 15 for ``(..., 4)`` vehicle poses (traceable)."""
+        return evaluate_arm_traced(self, pose).fitness
+
+
+def make_arm_docking_problem(
+    *,
+    chain: Chain,
+    T_vehicle_base,
+    T_world_tool,
+    group=None,
+    low,
+    high,
+    p_dock,
+    p_i,
+    a: float,
+    b: float,
+    link_radius: float,
+    vehicle_boxes=((), ()),
+    scene_boxes=((), ()),
+    n_seeds: int = 16,
+    iterations: int = 40,
+    damping: float = 1.0,
+    seed: int = 0,
+    dtype=None,
+) -> ArmDockingProblem:
+    """Build and check an :class:`ArmDockingProblem` from plain arrays.
+
+    Args:
+      chain: the arm.
+      T_vehicle_base: ``(4, 4)`` mount: arm base in the vehicle frame [m].
+      T_world_tool: ``(k, 4, 4)`` demanded tool poses in the world [m].
+      group: ``(k,)`` target of each pose (default: each pose its own target).
+      low, high: ``(4,)`` box of vehicle poses ``[x, y, z, ψ]`` [m, rad].
+      p_dock: ``(3,)`` docking point in the vehicle frame [m]; p_i: its initial world position.
+      a, b: weights of eq. 8.
+      link_radius: capsule radius of the links [m].
+      vehicle_boxes: ``(T_vehicle_box (mv, 4, 4), half (mv, 3))`` in the vehicle frame.
+      scene_boxes: ``(T_world_box (ms, 4, 4), half (ms, 3))`` in the world.
+      n_seeds, iterations, damping: numerical IK (seeds uniform in the limits, from ``seed``).
+      dtype: float dtype (default: JAX's default float).
+
+    Raises:
+      ValueError: on wrong shapes, an empty box, a bad grouping or non-positive sizes.
+    """
+    dtype = dtype or jnp.zeros(()).dtype
+    arr = lambda x: jnp.asarray(np.asarray(x, dtype=np.float64), dtype=dtype)
+    T_tool = np.asarray(T_world_tool, dtype=np.float64)
+    if T_tool.ndim != 3 or T_tool.shape[1:] != (4, 4) or T_tool.shape[0] < 1:
+        raise ValueError(f"T_world_tool must have shape (k, 4, 4) with k >= 1, got {T_tool.shape}")
+    if not np.all(np.isfinite(T_tool)):
+        raise ValueError("T_world_tool contains NaN or infinite values")
+    k = T_tool.shape[0]
+    group = np.arange(k) if group is None else np.asarray(group)
+    if group.shape != (k,) or not np.issubdtype(group.dtype, np.integer) or group.min() != 0 \
+            or set(np.unique(group)) != set(range(int(group.max()) + 1)):
+        raise ValueError(f"group must be ({k},) integers covering 0 … g − 1, got {group}")
+    mount = np.asarray(T_vehicle_base, dtype=np.float64)
+    if mount.shape != (4, 4):
+        raise ValueError(f"T_vehicle_base must have shape (4, 4), got {mount.shape}")
+    low, high = np.asarray(low, dtype=np.float64), np.asarray(high, dtype=np.float64)
+    if low.shape != (4,) or high.shape != (4,) or np.any(low > high):
+        raise ValueError(f"pose box must be two (4,) corners with low <= high, got {low} and {high}")
+    if link_radius <= 0 or n_seeds < 1 or iterations < 1 or damping <= 0:
+        raise ValueError(f"need link_radius > 0, n_seeds >= 1, iterations >= 1, damping > 0, got "
+                         f"{link_radius}, {n_seeds}, {iterations}, {damping}")
+    boxes = []
+    for label, (T_box, half) in (("vehicle_boxes", vehicle_boxes), ("scene_boxes", scene_boxes)):
+        T_box = np.asarray(T_box, dtype=np.float64).reshape(-1, 4, 4)
+        half = np.asarray(half, dtype=np.float64).reshape(-1, 3)
+        if T_box.shape[0] != half.shape[0] or np.any(half <= 0):
+            raise ValueError(f"{label}: need as many poses as positive half sizes, got {T_box.shape[0]} and {half}")
+        boxes.append((arr(T_box), arr(half)))
+    lo, up = np.asarray(chain.lower, dtype=np.float64), np.asarray(chain.upper, dtype=np.float64)
+    u = np.asarray(jax.random.uniform(jax.random.key(seed), (n_seeds, chain.n_joints), dtype=jnp.float32))
+    return ArmDockingProblem(
+        chain=kin.with_dtype(chain, dtype),
+        T_vehicle_base=arr(mount),
+        T_world_tool=arr(T_tool),
+        group=jnp.asarray(group, dtype=jnp.int32),
+        seeds=arr(lo + u * (up - lo)),
+        low=arr(low),
+        high=arr(high),
+        p_dock=arr(p_dock),
+        p_i=arr(p_i),
+        a=arr(a),
+        b=arr(b),
+        link_radius=arr(link_radius),
+        T_vehicle_box=boxes[0][0],
+        vehicle_half=boxes[0][1],
+        T_world_box=boxes[1][0],
+        scene_half=boxes[1][1],
+        damping=arr(damping),
+        n_groups=int(group.max()) + 1,
+        iterations=int(iterations),
+    )
+
+
+def _inverse(T: Array) -> Array:
+    R, p = T[..., :3, :3], T[..., :3, 3]
+    Rt = jnp.swapaxes(R, -1, -2)
+    top = jnp.concatenate([Rt, -jnp.einsum("...ij,...j->...i", Rt, p)[..., None]], axis=-1)
+    return jnp.concatenate([top, jnp.broadcast_to(jnp.eye(4, dtype=T.dtype)[3:], T.shape[:-2] + (1, 4))], axis=-2)
+
+
+def _pose_error(T_target: Array, T: Array) -> Array:
+    """``(..., 6)`` [position error, orientation error ½ Σ rᵢ × r_target,i] in the base frame."""
+    e_p = T_target[..., :3, 3] - T[..., :3, 3]
+    e_o = 0.5 * jnp.sum(jnp.cross(T[..., :3, :3], T_target[..., :3, :3], axis=-2), axis=-1)
+    return jnp.concatenate([e_p, e_o], axis=-1)
+
+
+def _wrap(chain: Chain, q: Array) -> Array:
+    """Revolute angles shifted by multiples of 2π to ``[lower, lower + 2π)`` (the same pose)."""
+    revolute = jnp.array([kind == "revolute" for kind in chain.kinds])
+    return jnp.where(revolute, chain.lower + jnp.mod(q - chain.lower, 2.0 * jnp.pi), q)
+
+
+def dls_ik(chain: Chain, T_base_tool: Array, q0: Array, iterations: int, damping: Array) -> Array:
+    """Damped least squares from seeds ``q0 (..., n)`` towards ``T_base_tool (..., 4, 4)``
+    (broadcast together), a fixed number of ``iterations``; returns ``q (..., n)`` with
+    revolute angles wrapped into ``[lower, lower + 2π)``. Unconstrained otherwise: the caller
+    checks limits and reach."""
+    hi = jax.lax.Precision.HIGHEST  # full float32 products on GPUs too (TF32 breaks the reach check)
+    shape = jnp.broadcast_shapes(T_base_tool.shape[:-2], q0.shape[:-1])
+    q = jnp.broadcast_to(q0, shape + q0.shape[-1:])
+    eye = jnp.eye(6, dtype=q.dtype)
+
+    def step(_, q):
+        K = kin.kinematics(chain, q)
+        e = _pose_error(T_base_tool, K.T_base_tool)
+        v, w = K.twists[..., :3], K.twists[..., 3:]  # spatial twists (..., n, 3)
+        J = jnp.swapaxes(jnp.concatenate([v + jnp.cross(w, K.T_base_tool[..., None, :3, 3]), w], axis=-1), -1, -2)
+        # Error-scaled damping (Levenberg–Marquardt flavour): robust far away, fast near the target.
+        lam2 = damping**2 * (jnp.sum(e * e, axis=-1) + 1e-6)
+        JJt = jnp.einsum("...ik,...jk->...ij", J, J, precision=hi) + lam2[..., None, None] * eye
+        dq = jnp.einsum("...ji,...j->...i", J, jnp.linalg.solve(JJt, e[..., None])[..., 0], precision=hi)
+        return _wrap(chain, q + dq)
+
+    return jax.lax.fori_loop(0, iterations, step, _wrap(chain, q))
+
+
+def arm_solutions(problem: ArmDockingProblem, pose: Array) -> tuple[Array, Array, Array]:
+    """All seeds' IK solutions for vehicle poses ``(..., 4)`` (traceable; jitted as
+    :func:`arm_solutions_jit`).
+
+    Returns:
+      ``q (..., k, S, n)``, ``valid (..., k, S)`` (reached, within limits, collision-free) and
+      ``w (..., k, S)`` manipulability (0 where not valid).
+    """
+    p = problem
+    T_world_vehicle = base_transform(pose)  # (..., 4, 4)
+    T_world_base = T_world_vehicle @ p.T_vehicle_base
+    T_base_tool = _inverse(T_world_base)[..., None, :, :] @ p.T_world_tool  # (..., k, 4, 4)
+    q = dls_ik(p.chain, T_base_tool[..., None, :, :], p.seeds, p.iterations, p.damping)  # (..., k, S, n)
+    K = kin.kinematics(p.chain, q)
+    reached = kin.reaches(T_base_tool[..., None, :, :], K.T_base_tool)
+    within = jnp.all((q >= p.chain.lower) & (q <= p.chain.upper), axis=-1)
+    points = link_points(T_world_base[..., None, None, :, :], K.T_base_joint, K.T_base_tool)  # (..., k, S, n + 2, 3)
+    n_caps = points.shape[-2] - 1
+    T_vb = T_world_vehicle[..., None, :, :] @ p.T_vehicle_box  # (..., mv, 4, 4)
+    T_vb = T_vb[..., None, None, None, :, :, :]  # (..., 1, 1, 1, mv, 4, 4): against every target, seed, capsule
+    # The first capsule (base → first joint) is fixed on the vehicle: it is not tested against it.
+    skip_vehicle = jnp.zeros((n_caps, p.vehicle_half.shape[0]), bool).at[0].set(True)
+    hit_vehicle = capsules_hit_boxes(points, p.link_radius, T_vb, p.vehicle_half, skip_vehicle)
+    hit_scene = capsules_hit_boxes(points, p.link_radius, p.T_world_box, p.scene_half,
+                                   jnp.zeros((n_caps, p.scene_half.shape[0]), bool))
+    valid = reached & within & ~hit_vehicle & ~hit_scene
+    w = jnp.where(valid, indices.manipulability_of(p.chain, q), 0.0)
+    return q, valid, w
+
+
+arm_solutions_jit = jax.jit(arm_solutions)
+
+
+def vehicle_clear(problem: ArmDockingProblem, pose: Array) -> Array:
+    """``(...)`` True where no vehicle box overlaps a scene box."""
+    T_vb = base_transform(pose)[..., None, None, :, :] @ problem.T_vehicle_box[:, None]  # (..., mv, 1, 4, 4)
+    hit = boxes_overlap(T_vb, problem.vehicle_half[:, None], problem.T_world_box, problem.scene_half)
+    return ~jnp.any(hit, axis=(-1, -2))
+
+
+def target_w(problem: ArmDockingProblem, w: Array) -> Array:
+    """``(..., g)`` best w per target from per-pose, per-seed ``w (..., k, S)``."""
+    w_pose = jnp.max(w, axis=-1)  # (..., k)
+    w_t = jnp.moveaxis(w_pose, -1, 0)
+    best = jax.ops.segment_max(w_t, problem.group, num_segments=problem.n_groups, indices_are_sorted=False)
+    return jnp.moveaxis(best, 0, -1)
+
+
+def _terms(problem: ArmDockingProblem, pose: Array, w: Array) -> DockingEval:
+    """Objective terms of vehicle poses ``(..., 4)`` from their per-seed ``w (..., k, S)``."""
+    p = problem
+    M_a = jnp.min(target_w(p, w), axis=-1)  # eq. 1
+    p_d = jnp.einsum("...ij,j->...i", base_transform(pose)[..., :3, :3], p.p_dock) + pose[..., :3]
+    D = jnp.linalg.norm(p_d - p.p_i, axis=-1)  # eq. 3
+    inside = jnp.all((pose >= p.low) & (pose <= p.high), axis=-1)
+    feasible = inside & vehicle_clear(p, pose)  # eq. 14: Wd
+    return DockingEval(fitness=docking_fitness(M_a, D, feasible, p.a, p.b), M_a=M_a, D=D, feasible=feasible)
+
+
+def evaluate_arm_traced(problem: ArmDockingProblem, pose: Array) -> DockingEval:
+    """Objective terms of vehicle poses ``(..., 4)`` (eq. 1, 3, 14, 15), for use inside ``jit``."""
+    return _terms(problem, pose, arm_solutions(problem, pose)[2])
+
+
+_evaluate_arm_jit = jax.jit(evaluate_arm_traced)
+
+
+def _check_poses(problem: ArmDockingProblem, pose) -> Array:
+    pose = jnp.asarray(pose, dtype=problem.a.dtype)
+    if pose.ndim == 0 or pose.shape[-1] != 4:
+        raise ValueError(f"pose must have shape (..., 4) = [x, y, z, psi], got {pose.shape}")
+    if bool(jnp.isnan(pose).any()):
+        raise ValueError("pose contains NaN")
+    return pose
+
+
+def evaluate_arm(problem: ArmDockingProblem, pose) -> DockingEval:
+    """Objective terms of vehicle poses ``(..., 4) = [x, y, z, ψ]`` [m, rad] (eager, checked).
+
+    Returns:
+      :class:`~uvms_jax.evo.DockingEval` with fields of shape ``(...)``.
+    """
+    return _evaluate_arm_jit(problem, _check_poses(problem, pose))
+
+
+class ArmReport(NamedTuple):
+    """Objective terms and the best IK solution per demanded tool pose of vehicle poses.
+
+    Attributes:
+      terms: :class:`~uvms_jax.evo.DockingEval`, fields ``(...)``.
+      q: ``(..., k, n)`` best valid solution of each demanded tool pose (NaN where none).
+      valid: ``(..., k)`` some seed's solution is valid.
+      w: ``(..., k)`` its manipulability (0 where none).
+    """
+
+    terms: DockingEval
+    q: Array
+    valid: Array
+    w: Array
+
+
+@jax.jit
+def _report(problem: ArmDockingProblem, pose: Array) -> ArmReport:
+    q, valid, w = arm_solutions(problem, pose)
+    best = jnp.argmax(w, axis=-1)  # (..., k)
+    q_best = jnp.take_along_axis(q, best[..., None, None], axis=-2)[..., 0, :]
+    ok = jnp.any(valid, axis=-1)
+    return ArmReport(_terms(problem, pose, w), jnp.where(ok[..., None], q_best, jnp.nan), ok, jnp.max(w, axis=-1))
+
+
+def arm_report(problem: ArmDockingProblem, pose) -> ArmReport:
+    """:func:`evaluate_arm` plus the best valid IK solution of every demanded tool pose, for
+    vehicle poses ``(..., 4)`` [m, rad], in one compiled call (arrays are NumPy)."""
+    out = _report(problem, _check_poses(problem, pose))
+    return jax.tree_util.tree_map(np.asarray, out)
