@@ -1,7 +1,14 @@
-"""Planning benchmark (uvms_jax.plan): planning time per edge per planner over the thesis task
-graph, and validity checks per second — single calls, the OMPL callback, and batched calls.
+"""Planning benchmark (uvms_jax.plan): the thesis task graph planned with every planner, side by
+side with the two motion checkers in one process — MuJoCo state by state (OMPL's own motion
+checks) and the compiled sphere checker (one call per motion, MuJoCo confirming rejections) —
+plus validity checks per second.
 
-Prints one JSON object. ``.venv/bin/python benchmarks/plan.py [--planners RRTConnect PRM]``
+Per checker and planner: planning time per edge (median, mean, max), edges planned and
+re-checked (every path is re-checked with MuJoCo at margin 0 either way), and the wall time of
+the whole graph (planning, time parameterisation, re-check, metrics). Compilation (Numba, XLA)
+is done in a warm-up before any timing and reported apart. Prints one JSON object.
+
+    .venv/bin/python benchmarks/plan.py [--planners RRTConnect PRM] [--checkers spheres]
 """
 
 from __future__ import annotations
@@ -16,6 +23,7 @@ import jax
 import numpy as np
 import yaml
 
+from uvms_jax import kin
 from uvms_jax import plan as P
 
 SCENARIO = Path(__file__).parents[1] / "configs" / "scenario" / "thesis_cage.yaml"
@@ -27,47 +35,81 @@ def _rate(fn, n: int) -> float:
     return n / (time.perf_counter() - t)
 
 
+def _graph(scene, checker, fast, targets, edges, planner, settings, chain) -> dict:
+    """Plan every edge with one planner; per-edge planning times and the graph's wall time."""
+    times, ok, reval = {}, 0, 0
+    t0 = time.perf_counter()
+    for src, dst in edges:
+        r = P.plan_edge(scene, checker, targets, src, dst, planner, budget_s=settings.budget_s,
+                        resolution=settings.resolution, recheck_resolution=settings.recheck_resolution,
+                        clearance_resolution=settings.clearance_resolution, simplify_s=settings.simplify_s,
+                        max_velocity=settings.max_velocity, max_acceleration=settings.max_acceleration,
+                        chain=chain, fast=fast)
+        times[f"{src}->{dst}"] = round(r.plan.planning_time_s * 1e3, 3)
+        ok += r.success
+        reval += r.revalidated
+    wall = time.perf_counter() - t0
+    t = np.array(list(times.values()))
+    return {"success": ok, "revalidated": reval, "edges": len(edges), "median_ms": float(np.median(t)),
+            "mean_ms": float(t.mean()), "max_ms": float(t.max()), "graph_wall_s": round(wall, 3), "per_edge_ms": times}
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--planners", nargs="+", default=list(P.PLANNERS))
+    ap.add_argument("--checkers", nargs="+", default=list(P.CHECKERS), choices=P.CHECKERS)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--checks", type=int, default=20000)
     args = ap.parse_args()
     jax.config.update("jax_enable_x64", True)
     P.seed_ompl(args.seed)
+    settings = P.PlanSettings(planners=tuple(args.planners))
     scene = P.build_scene(yaml.safe_load(SCENARIO.read_text()))
-    checker = P.CollisionChecker(scene)
+    checker = P.CollisionChecker(scene, margin=settings.margin, clearance_max=settings.clearance_max)
     t0 = time.perf_counter()
-    targets = P.pick_place_targets(jax.random.PRNGKey(args.seed), scene, checker, n_seeds=P.IkSettings().n_seeds)
+    fast = P.SphereChecker(checker)
+    fast.spheres_free(np.asarray(scene.spec.start_q)[None])  # Numba: compile or load its cache
+    numba_s = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    targets = P.pick_place_targets(jax.random.PRNGKey(args.seed), scene, checker, n_seeds=settings.ik.n_seeds)
     ik_s = time.perf_counter() - t0
+    chain = kin.bravo7()
+    edges = P.task_edges(scene)
+    t0 = time.perf_counter()
+    for planner in args.planners:  # warm-up: XLA compiles of the metrics, first OMPL calls
+        for f in (None, fast):
+            for src, dst in edges[:: max(1, len(edges) // 6)]:
+                P.plan_edge(scene, checker, targets, src, dst, planner, chain=chain, fast=f)
+    warmup_s = time.perf_counter() - t0
 
     Q = np.random.default_rng(args.seed).uniform(checker.lower, checker.upper, (args.checks, 6))
+    checker.set_context(P.Context())
     valid = checker.state_validator()
     checks = {
-        "single_is_valid_per_s": _rate(lambda: [checker.is_valid(q) for q in Q], len(Q)),
-        "ompl_callback_per_s": _rate(lambda: [valid(q) for q in Q], len(Q)),
-        "batched_is_valid_per_s": _rate(lambda: checker.is_valid_batch(Q), len(Q)),
-        "batched_clearance_per_s": _rate(lambda: checker.clearance_batch(Q), len(Q)),
+        "mujoco_single_is_valid_per_s": _rate(lambda: [checker.is_valid(q) for q in Q], len(Q)),
+        "mujoco_ompl_callback_per_s": _rate(lambda: [valid(q) for q in Q], len(Q)),
+        "mujoco_batched_is_valid_per_s": _rate(lambda: checker.is_valid_batch(Q), len(Q)),
+        "spheres_one_call_per_state_per_s": _rate(lambda: fast.spheres_free(Q), len(Q)),
         "valid_fraction_uniform": float(checker.is_valid_batch(Q).mean()),
     }
-    edges = P.task_edges(scene)
-    per_planner = {}
-    for planner in args.planners:
-        times, ok, reval = {}, 0, 0
-        for src, dst in edges:
-            r = P.plan_edge(scene, checker, targets, src, dst, planner)
-            times[f"{src}->{dst}"] = round(r.plan.planning_time_s, 5)
-            ok += r.success
-            reval += r.revalidated
-        t = np.array(list(times.values()))
-        per_planner[planner] = {"success": ok, "revalidated": reval, "edges": len(edges),
-                                "median_s": float(np.median(t)), "mean_s": float(t.mean()), "max_s": float(t.max()),
-                                "per_edge_s": times}
+    per_checker = {}
+    for name in args.checkers:
+        f = fast if name == "spheres" else None
+        n0 = (fast.n_motions, fast.n_states, fast.n_confirmed)
+        t0 = time.perf_counter()
+        runs = {planner: _graph(scene, checker, f, targets, edges, planner, settings, chain) for planner in args.planners}
+        per_checker[name] = {"graph_all_planners_wall_s": round(time.perf_counter() - t0, 3), "planners": runs}
+        if f is not None:
+            per_checker[name]["motions"] = fast.n_motions - n0[0]
+            per_checker[name]["samples_checked"] = fast.n_states - n0[1]
+            per_checker[name]["rejections_confirmed_by_mujoco"] = fast.n_confirmed - n0[2]
     print(json.dumps({
         "device": f"{platform.machine()} CPU, Python {platform.python_version()}",
         "ik_targets_s_incl_compile": round(ik_s, 2),
+        "numba_compile_or_cache_load_s": round(numba_s, 2),
+        "warmup_s": round(warmup_s, 2),
         "validity_checks": {k: round(v, 3) if isinstance(v, float) else v for k, v in checks.items()},
-        "planning": per_planner,
+        "checkers": per_checker,
     }, indent=1))
 
 

@@ -7,6 +7,10 @@ of ``uvms_jax.planfile``), ``summary.json`` and PNGs (end-effector paths in the 
 curves, rendered frames where offscreen rendering works).
 
     .venv/bin/python experiments/plan.py plan.planners=[RRTConnect] plan.budget_s=2
+    .venv/bin/python experiments/plan.py scenario=cage_obstacles             # another scene preset
+    .venv/bin/python experiments/plan.py 'scenario.arm.mount_rpy=[3.1416,0,0.3]'   # the arm's base pose
+    .venv/bin/python experiments/plan.py 'plan.planners=[RRTstar]' +plan.planner_params.RRTstar.range=1.0
+    .venv/bin/python experiments/plan.py plan.checker=mujoco                  # OMPL's state-by-state checks
 """
 
 from __future__ import annotations

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 from scipy.spatial.transform import Rotation
 
@@ -61,14 +63,13 @@ def scenario_targets(scenario: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray
       target index; the scenario's tables as boxes ``(T (m, 4, 4), half (m, 3))``; the node
       names, one per target.
     """
-    from uvms_jax import plan
-    from uvms_jax.plan._targets import tool_poses
+    from uvms_jax import plan  # only this preset needs the planning scene (MuJoCo, OMPL)
 
     scene = plan.build_scene(scenario)
     nodes = sorted(scene.objects) + sorted(scene.bases)
     poses, group, names = [], [], []
     for i, node in enumerate(nodes):
-        _, at, _ = tool_poses(scene, node)
+        _, at, _ = plan.tool_poses(scene, node)
         poses.append(at)
         group += [i] * len(at)
         names.append((scene.objects.get(node) or scene.bases[node]).name)
@@ -77,15 +78,42 @@ def scenario_targets(scenario: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray
     return np.concatenate(poses), np.asarray(group), T_box, half, names
 
 
+def load_arm(arm: str, tip: str | None = None) -> tuple[kin.Chain, float | None]:
+    """An arm by name (:data:`ARMS`) or from a robot description file.
+
+    Args:
+      arm: a name in :data:`ARMS`, or a path to a URDF (``.urdf``) or MJCF (``.xml``) file.
+      tip: the tool frame in the file: a link of a URDF, a body of an MJCF model (default: the
+        file's only leaf); must be None for a named arm.
+
+    Returns:
+      ``(chain, link radius [m])``; the radius is None for a file (it holds no capsule size).
+
+    Raises:
+      ValueError: unknown name or file type (and the importers' errors for a bad file).
+    """
+    if arm in ARMS:
+        if tip is not None:
+            raise ValueError(f"arm_tip is for arms from files; {arm!r} has its own tool frame")
+        make_chain, radius = ARMS[arm]
+        return make_chain(), radius
+    path = Path(arm)
+    if path.suffix == ".urdf":
+        return kin.from_urdf(path, tip_link=tip), None
+    if path.suffix == ".xml":
+        return kin.from_mjcf(path, tip_body=tip), None
+    raise ValueError(f"unknown arm {arm!r}: a name in {sorted(ARMS)} or a .urdf / .xml (MJCF) file")
+
+
 def arm_docking_problem(scene: ArmSceneSettings, dtype=None) -> ArmDockingProblem:
     """The :class:`ArmDockingProblem` of an arm scene's settings.
 
     Raises:
       ValueError: unknown arm, or bad geometry (see :func:`make_arm_docking_problem`).
     """
-    if scene.arm not in ARMS:
-        raise ValueError(f"unknown arm {scene.arm!r}; known: {sorted(ARMS)}")
-    make_chain, radius = ARMS[scene.arm]
+    chain, radius = load_arm(scene.arm, scene.arm_tip)
+    if scene.link_radius is None and radius is None:
+        raise ValueError(f"arm {scene.arm!r} comes from a file: set link_radius (its links' capsule radius [m])")
     T_box, half = boxes(scene.scene_boxes)
     group = None
     if scene.panel is not None:
@@ -94,7 +122,7 @@ def arm_docking_problem(scene: ArmSceneSettings, dtype=None) -> ArmDockingProble
         T_tool, group, T_tables, half_tables, _ = scenario_targets(scene.scenario)
         T_box, half = np.concatenate([T_box, T_tables]), np.concatenate([half, half_tables])
     return make_arm_docking_problem(
-        chain=make_chain(),
+        chain=chain,
         T_vehicle_base=pose_matrix(scene.mount_xyz, scene.mount_rpy),
         T_world_tool=T_tool,
         group=group,

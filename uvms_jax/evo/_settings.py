@@ -72,9 +72,11 @@ class ArmSceneSettings:
     see :func:`uvms_jax.evo.arm_docking_problem`.
 
     Attributes:
-      arm: arm model, one of ``uvms_jax.evo.ARMS``.
+      arm: a model of ``uvms_jax.evo.ARMS`` or a URDF (``.urdf``) / MJCF (``.xml``) file.
+      arm_tip: tool frame in that file (a URDF link, an MJCF body); None: the file's only leaf.
       mount_xyz, mount_rpy: arm base in the vehicle frame V [m, rad].
-      link_radius: link capsule radius [m]; None = the arm's own (Bravo 7: ``LINK_RADIUS``).
+      link_radius: link capsule radius [m]; None = the arm's own (Bravo 7: ``LINK_RADIUS``;
+        required for an arm from a file).
       vehicle_boxes: the vehicle body, boxes in V.
       scene_boxes: obstacles in W (panel, seabed, tables).
       panel: targets on a task panel, or None.
@@ -88,6 +90,7 @@ class ArmSceneSettings:
     """
 
     arm: str = "bravo7"
+    arm_tip: str | None = None
     mount_xyz: tuple[float, float, float] = (0.35, 0.0, -0.2)
     mount_rpy: tuple[float, float, float] = (math.pi, 0.0, 0.0)
     link_radius: float | None = None

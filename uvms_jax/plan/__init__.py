@@ -7,13 +7,16 @@
   figures: :func:`plot_ee_paths`, :func:`plot_plan_joints`, :func:`render_frames`;
   video of an executed run: :func:`render_run_video` → :class:`VideoInfo` (MP4, offscreen
   MuJoCo, camera :func:`scene_camera`);
-* scene: :class:`SceneSpec` (from ``configs/scenario/*.yaml``), :func:`build_scene` →
-  :class:`Scene` (MuJoCo model, object and base poses, grasp), :class:`Context`;
-* collision: :class:`CollisionChecker` — ``is_valid``, ``clearance``, their batched versions,
-  ``path_is_valid``; :func:`densify`;
+* scene: :class:`SceneSpec` (from ``configs/scenario/*.yaml``; extra :class:`Obstacle` s —
+  box, cylinder, sphere, capsule, mesh file), :func:`build_scene` → :class:`Scene` (MuJoCo
+  model, object and base poses, grasp; the arm's base pose a parameter), :class:`Context`;
+* collision: :class:`CollisionChecker` (MuJoCo, the reference) — ``is_valid``, ``clearance``,
+  their batched versions, ``path_is_valid``; :func:`densify`; :class:`SphereChecker` (the arm
+  as spheres, compiled; whole motions per call, conservative, MuJoCo confirms rejections);
 * targets: :func:`pick_place_targets` (batched numerical IK of the eight pick-and-place steps),
   :class:`NodeTarget`, :data:`STEPS`;
-* planning: :func:`plan_motion` (OMPL RRTConnect / BKPIECE1 / PRM + simplification + re-check),
+* planning: :func:`plan_motion` (any OMPL geometric planner by name, :func:`ompl_planners`,
+  with its parameters, :func:`planner_parameters`; simplification; MuJoCo re-check),
   :func:`time_parameterize`, :class:`Trajectory`, :func:`check_trajectory`, :func:`seed_ompl`;
 * metrics: :func:`trajectory_metrics`, :class:`EdgeMetrics` (fields: ``uvms_jax.sched.METRICS``);
 * task graph: :func:`task_edges`, :func:`plan_edge`, :func:`metric_tensor` (the input of
@@ -27,6 +30,9 @@ from uvms_jax.plan._collision import CollisionChecker
 from uvms_jax.plan._collision import densify
 from uvms_jax.plan._metrics import EdgeMetrics
 from uvms_jax.plan._metrics import trajectory_metrics
+from uvms_jax.plan._planners import ompl_planners
+from uvms_jax.plan._planners import planner_parameters
+from uvms_jax.plan._planning import PARTIAL_MOTIONS
 from uvms_jax.plan._planning import PLANNERS
 from uvms_jax.plan._planning import PlanResult
 from uvms_jax.plan._planning import Trajectory
@@ -40,16 +46,20 @@ from uvms_jax.plan._plots import render_frames
 from uvms_jax.plan._scene import Box
 from uvms_jax.plan._scene import Context
 from uvms_jax.plan._scene import Item
+from uvms_jax.plan._scene import Obstacle
 from uvms_jax.plan._scene import Scene
 from uvms_jax.plan._scene import SceneSpec
 from uvms_jax.plan._scene import build_scene
+from uvms_jax.plan._settings import CHECKERS
 from uvms_jax.plan._settings import IkSettings
 from uvms_jax.plan._settings import PlanJsonSettings
 from uvms_jax.plan._settings import PlanSettings
+from uvms_jax.plan._spheres import SphereChecker
 from uvms_jax.plan._targets import STEPS
 from uvms_jax.plan._targets import NodeTarget
 from uvms_jax.plan._targets import node_contexts
 from uvms_jax.plan._targets import pick_place_targets
+from uvms_jax.plan._targets import tool_poses
 from uvms_jax.plan._taskgraph import PlannerSummary
 from uvms_jax.plan._taskgraph import TaskGraphPlan
 from uvms_jax.plan._taskgraph import plan_for_schedule

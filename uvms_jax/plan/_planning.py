@@ -1,19 +1,25 @@
-"""OMPL planning over the six arm joints with the MuJoCo validity checker, and trajectories.
+"""OMPL planning over the six arm joints, and trajectories.
 
-A plan is: ``solve`` (RRTConnect, BKPIECE1 or PRM) within a time budget, ``simplifySolution``,
-then a check of the simplified path at ``resolution`` [rad] with the true geometry (margin 0)
-— the planner itself works with the checker's safety margin, so the re-check passes unless
-the planner's own motion checks skipped a thin obstacle. A path that fails the re-check is
-re-planned while budget is left. Time parameterisation follows the arm's controller (thesis
-4.6, :func:`uvms_jax.motion.synchronised_move`): rest to rest between consecutive waypoints, all
+A plan is: ``solve`` (RRTConnect, BKPIECE1, PRM or any other OMPL geometric planner, with its
+parameters) within a time budget; the straight segment if it is free, else
+``simplifySolution``; then a check of the path at ``recheck_resolution`` [rad] with MuJoCo and
+the true geometry (margin 0). States are checked with MuJoCo; motions either by OMPL state by
+state (MuJoCo, ``resolution``) or by one :class:`~uvms_jax.plan.SphereChecker` call each,
+sampled like the re-check. The planner works with the checker's safety margin, so the re-check
+passes unless OMPL's own motion checks skipped a thin obstacle (with the sphere checker it
+passes by construction, for planners outside ``PARTIAL_MOTIONS``). A path that fails the
+re-check is re-planned while budget is left.
+Time parameterisation follows the arm's controller (thesis 4.6,
+:func:`uvms_jax.motion.synchronised_move`): rest to rest between consecutive waypoints, all
 joints arriving together, within the velocity and acceleration limits.
 """
-
 from __future__ import annotations
 
 import dataclasses
 import logging
 import time
+from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 from ompl import base as ob
@@ -22,10 +28,16 @@ from ompl import util as ou
 
 from uvms_jax.motion import synchronised_move
 from uvms_jax.plan._collision import CollisionChecker, densify
+from uvms_jax.plan._planners import check_parameters, make_planner
+from uvms_jax.plan._spheres import SphereChecker
 
 __all__ = ["PLANNERS", "PlanResult", "Trajectory", "plan_motion", "seed_ompl", "time_parameterize"]
 
-PLANNERS = ("RRTConnect", "BKPIECE1", "PRM")
+PLANNERS = ("RRTConnect", "BKPIECE1", "PRM")  # the thesis's three (any of ompl_planners() works)
+# Planners that grow trees from the valid part of a rejected motion (OMPL's checkMotion with
+# ``lastValid``). The Python bindings never fill ``lastValid`` from a Python motion validator,
+# so these keep OMPL's state-by-state motion checks (with the fast state checker).
+PARTIAL_MOTIONS = ("KPIECE1", "BKPIECE1", "LBKPIECE1")
 log = logging.getLogger(__name__)
 _ompl_seed: int | None = None  # the seed OMPL's process-wide RNG took, None before seed_ompl
 
@@ -120,11 +132,16 @@ def time_parameterize(path, max_velocity, max_acceleration) -> Trajectory:
     return Trajectory(np.array(t), path, v, a)
 
 
-def _make_planner(name: str, si):
-    try:
-        return {"RRTConnect": og.RRTConnect, "BKPIECE1": og.BKPIECE1, "PRM": og.PRM}[name](si)
-    except KeyError:
-        raise ValueError(f"unknown planner {name!r} (choose from {PLANNERS})") from None
+class _SegmentValidator(ob.MotionValidator):
+    """OMPL motion validator checking a whole segment in one :class:`SphereChecker` call."""
+
+    def __init__(self, si, fast: SphereChecker, resolution: float, n: int):
+        super().__init__(si)
+        self._fast, self._resolution, self._n = fast, resolution, n
+
+    def checkMotion(self, s1, s2) -> bool:  # noqa: N802 — OMPL's name
+        n = self._n
+        return self._fast.motion_is_valid(s1[0:n], s2[0:n], self._resolution)
 
 
 def plan_motion(
@@ -136,23 +153,33 @@ def plan_motion(
     resolution: float = 0.02,
     recheck_resolution: float = 0.01,
     simplify_s: float = 0.2,
+    fast: SphereChecker | None = None,
+    params: Mapping[str, Any] | None = None,
 ) -> PlanResult:
     """Plan a collision-free joint path from ``q_start`` to ``q_goal`` in the checker's context.
 
     Args:
       checker: collision checker, already in the right :class:`~uvms_jax.plan.Context`.
       q_start, q_goal: ``(6,)`` joint angles [rad]; both must be valid.
-      planner: ``RRTConnect``, ``BKPIECE1`` or ``PRM``.
+      planner: any OMPL geometric planner (:func:`ompl_planners`), e.g. the thesis's
+        ``RRTConnect``, ``BKPIECE1`` or ``PRM``.
       budget_s: total planning time allowed for this query, all attempts together [s].
       resolution: planner's motion-check step [rad] (converted to OMPL's fraction of the
         space's extent).
       recheck_resolution: joint step of the re-check of the result [rad].
       simplify_s: time given to path simplification per attempt [s].
+      fast: a :class:`SphereChecker` on ``checker``: it checks whole motions (MuJoCo confirms
+        its rejections), sampled at ``recheck_resolution`` like the re-check; planners of
+        :data:`PARTIAL_MOTIONS` use it only to simplify (a re-plan after a failed re-check
+        keeps it). None: OMPL checks motions state by state with MuJoCo at ``resolution``.
+      params: the planner's parameters (:func:`planner_parameters`), e.g. ``{"range": 1.0}``.
 
     Raises:
-      ValueError: unknown planner, or an invalid start or goal (the contacts are named).
+      ValueError: unknown planner or parameter (the valid ones are listed), or an invalid
+        start or goal (the contacts are named).
     """
     ou.setLogLevel(ou.LogLevel.LOG_WARN)
+    check_parameters(planner, params or {})
     q_start, q_goal = np.asarray(q_start, dtype=float), np.asarray(q_goal, dtype=float)
     for label, q in (("start", q_start), ("goal", q_goal)):
         if not checker.is_valid(q):
@@ -165,10 +192,19 @@ def plan_motion(
         bounds.setHigh(i, float(checker.upper[i]))
     space.setBounds(bounds)
     ss = og.SimpleSetup(space)
-    ss.setStateValidityChecker(checker.state_validator(n))
     si = ss.getSpaceInformation()
+    # States: MuJoCo (one call per state is what it is fastest at). Motions: OMPL's state-by-
+    # state checks, or one SphereChecker call per motion.
+    ss.setStateValidityChecker(checker.state_validator(n))
     si.setStateValidityCheckingResolution(resolution / space.getMaximumExtent())
-    ss.setPlanner(_make_planner(planner, si))
+    validator = None
+    if fast is not None:
+        if fast.reference is not checker:
+            raise ValueError("fast must be a SphereChecker built on the given checker")
+        validator = _SegmentValidator(si, fast, recheck_resolution, n)
+        if planner not in PARTIAL_MOTIONS:
+            si.setMotionValidator(validator)
+    ss.setPlanner(make_planner(planner, si, params))
     start, goal = space.allocState(), space.allocState()
     start[0:n] = q_start.tolist()
     goal[0:n] = q_goal.tolist()
@@ -180,8 +216,15 @@ def plan_motion(
         solved = ss.solve(budget_s - spent)
         exact = bool(solved) and ss.haveExactSolutionPath()
         if exact:
-            ss.simplifySolution(simplify_s)
-            path = np.array([[s[i] for i in range(n)] for s in ss.getSolutionPath().getStates()])
+            if validator is not None:
+                si.setMotionValidator(validator)  # simplification needs no partial motions
+            if ss.getSolutionPath().getStateCount() > 2 and si.checkMotion(start, goal):
+                # Simplification ends at the straight segment whenever it is free; one motion
+                # check finds that without the rounds of shortcutting.
+                path = np.stack([q_start, q_goal])
+            else:
+                ss.simplifySolution(simplify_s)
+                path = np.array([[s[i] for i in range(n)] for s in ss.getSolutionPath().getStates()])
         spent += time.perf_counter() - t0
         attempts += 1
         if not exact:
@@ -192,22 +235,39 @@ def plan_motion(
         if ok:
             break
         ss.clear()
-    del ss
+    del ss, si, validator
     return dataclasses.replace(result, planning_time_s=spent, attempts=attempts)
 
 
-def check_trajectory(checker: CollisionChecker, traj: Trajectory, resolution: float = 0.01) -> dict[str, bool | float]:
+def check_trajectory(checker: CollisionChecker, traj: Trajectory, resolution: float = 0.01,
+                     collision_free: bool | None = None) -> dict[str, bool | float]:
     """Re-check a trajectory: every point of a ``resolution`` [rad] interpolation is
-    collision-free (margin 0) and inside the joint limits, and the sampled joint speeds stay
-    within the velocity limits.
+    collision-free (margin 0) and inside the joint limits, and no joint exceeds its velocity
+    limit.
+
+    Args:
+      checker: the reference checker, in the trajectory's context.
+      traj: the trajectory.
+      resolution: joint step of the interpolation [rad].
+      collision_free: the result of that same check when the caller already has it (e.g.
+        :func:`plan_motion`'s re-check of the same waypoints at the same resolution); None
+        runs it.
 
     Returns:
-      ``collision_free``, ``in_limits``, ``within_velocity`` (bools) and ``max_speed_ratio``.
+      ``collision_free``, ``in_limits``, ``within_velocity`` (bools) and ``max_speed_ratio``:
+      the largest joint speed over its limit, at the cruise speed of each leg (the peak of
+      its trapezoidal scaling, ``ṡ = 1/((1 − f)T)``, see :mod:`uvms_jax.motion`).
     """
     dense = densify(traj.q, resolution)
     inside = bool(np.all((dense >= checker.lower) & (dense <= checker.upper)))
-    free = bool(np.all(checker.is_valid_batch(dense, margin=0.0)))
-    _, _, qd = traj.sample(0.02)
-    ratio = float(np.max(np.abs(qd) / traj.max_velocity)) if len(qd) else 0.0
-    return {"collision_free": free, "in_limits": inside, "within_velocity": ratio <= 1.0 + 1e-6,
+    if collision_free is None:
+        collision_free = bool(np.all(checker.is_valid_batch(dense, margin=0.0)))
+    ratio = 0.0
+    for i in range(len(traj.t) - 1):
+        mv = synchronised_move(traj.q[i], traj.q[i + 1], traj.max_velocity, traj.max_acceleration,
+                               traj.t[i + 1] - traj.t[i])
+        if mv.duration > 0:
+            peak = np.abs(mv.q1 - mv.q0) / ((1.0 - mv.accel_fraction) * mv.duration)
+            ratio = max(ratio, float(np.max(peak / traj.max_velocity)))
+    return {"collision_free": bool(collision_free), "in_limits": inside, "within_velocity": ratio <= 1.0 + 1e-6,
             "max_speed_ratio": ratio}

@@ -1,4 +1,7 @@
-"""The thesis's test cage as a MuJoCo model, generated from a scenario config (thesis 5.1).
+"""The thesis's test cage as a MuJoCo model, generated from a scenario config (thesis 5.1),
+with any extra obstacles of the config (:class:`Obstacle`: box, cylinder, sphere, capsule,
+mesh file) and the arm's base at a pose given by the config or by code
+(:meth:`SceneSpec.with_base`, ``build_scene(..., T_world_base=...)``).
 
 World frame: origin at the centre of the cage floor, z up; metres and radians. The arm hangs
 from the top of the cage (its base frame's z points down). Every box of the scene — tables,
@@ -22,6 +25,7 @@ from __future__ import annotations
 import dataclasses
 import xml.etree.ElementTree as ET
 from collections.abc import Mapping, Sequence
+from pathlib import Path
 from typing import Any
 
 import mujoco
@@ -35,6 +39,7 @@ __all__ = [
     "Box",
     "Context",
     "Item",
+    "Obstacle",
     "Scene",
     "SceneSpec",
     "build_scene",
@@ -162,6 +167,82 @@ class Base:
     fits: tuple[int, ...]
 
 
+_OBSTACLE_DIMS = {"box": ("size",), "cylinder": ("radius", "height"), "sphere": ("radius",),
+                  "capsule": ("radius", "length"), "mesh": ()}
+
+
+@dataclasses.dataclass(frozen=True)
+class Obstacle:
+    """A static obstacle of the scenario's ``obstacles`` list (world frame, m, rad).
+
+    Attributes:
+      name: label (unique in the scene; a :class:`Context` can ignore it by this name).
+      shape: ``box`` (``size``: full edges x, y, z), ``cylinder`` (``radius``, ``height``; axis
+        z), ``sphere`` (``radius``), ``capsule`` (``radius``, ``length`` of its axis segment,
+        along z) or ``mesh`` (``file``: an STL or OBJ file that MuJoCo reads, path absolute or
+        relative to the working directory, times ``scale``; MuJoCo collides with its convex
+        hull).
+      pos, rpy: pose of its centre (the mesh file's origin).
+      dims: the numbers of ``shape`` above, in that order.
+    """
+
+    name: str
+    shape: str
+    pos: tuple[float, float, float]
+    rpy: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    dims: tuple[float, ...] = ()
+    file: str = ""
+    scale: float = 1.0
+
+    def __post_init__(self) -> None:
+        if self.shape not in _OBSTACLE_DIMS:
+            raise ValueError(f"obstacle {self.name!r}: unknown shape {self.shape!r} ({', '.join(_OBSTACLE_DIMS)})")
+        n = 3 if self.shape == "box" else len(_OBSTACLE_DIMS[self.shape])
+        if len(self.dims) != n or (n and min(self.dims) <= 0):
+            raise ValueError(f"obstacle {self.name!r}: a {self.shape} needs {n} positive numbers "
+                             f"({', '.join(_OBSTACLE_DIMS[self.shape]) or 'none'}), got {list(self.dims)}")
+        if self.shape == "mesh":
+            if not self.scale > 0:
+                raise ValueError(f"obstacle {self.name!r}: scale must be > 0, got {self.scale}")
+            if not Path(self.file).is_file():
+                raise ValueError(f"obstacle {self.name!r}: cannot read mesh file {self.file!r} (no such file)")
+
+    @staticmethod
+    def from_mapping(m: Mapping[str, Any]) -> "Obstacle":
+        shape = str(m.get("shape"))
+        if shape not in _OBSTACLE_DIMS:
+            raise ValueError(f"obstacle {m.get('name')!r}: unknown shape {shape!r} ({', '.join(_OBSTACLE_DIMS)})")
+        known = {"name", "shape", "pos", "rpy", "file", "scale", *_OBSTACLE_DIMS[shape]}
+        extra = sorted(set(m) - known)
+        if extra:
+            raise ValueError(f"obstacle {m.get('name')!r}: unknown keys {extra} for a {shape} (keys: {sorted(known)})")
+        dims: list[float] = []
+        for key in _OBSTACLE_DIMS[shape]:
+            if key not in m:
+                raise ValueError(f"obstacle {m.get('name')!r}: a {shape} needs {key!r}")
+            v = m[key]
+            dims += [float(x) for x in v] if isinstance(v, (list, tuple)) else [float(v)]
+        return Obstacle(str(m["name"]), shape, tuple(float(x) for x in m["pos"]),
+                        tuple(float(x) for x in m.get("rpy", (0.0, 0.0, 0.0))), tuple(dims),
+                        str(m.get("file", "")), float(m.get("scale", 1.0)))
+
+    @property
+    def T_world(self) -> np.ndarray:
+        return _pose(rpy_to_matrix(self.rpy), self.pos)
+
+    def hull_vertices(self) -> np.ndarray:
+        """``(k, 3)`` vertices of the convex mesh standing for a box or a cylinder, in its frame
+        [m]. A cylinder is the prism *around* it (circumscribed polygon): never smaller."""
+        if self.shape == "box":
+            return _box_vertices(self.dims)
+        if self.shape == "cylinder":
+            r, h = self.dims
+            a = np.arange(_CYLINDER_SIDES) * 2 * np.pi / _CYLINDER_SIDES
+            ring = np.stack([np.cos(a), np.sin(a)], -1) * r / np.cos(np.pi / _CYLINDER_SIDES)
+            return np.concatenate([np.c_[ring, np.full(len(a), -h / 2)], np.c_[ring, np.full(len(a), h / 2)]])
+        raise ValueError(f"obstacle {self.name!r}: a {self.shape} has no vertices here (MuJoCo primitive or file)")
+
+
 @dataclasses.dataclass(frozen=True)
 class SceneSpec:
     """Everything that defines the scene (``configs/scenario/*.yaml``); see that file for units."""
@@ -184,6 +265,34 @@ class SceneSpec:
     grasp_standoff: float = 0.05
     approach: float = 0.08
     self_collision_exclude: tuple[tuple[str, str], ...] = ()
+    obstacles: tuple[Obstacle, ...] = ()
+
+    @property
+    def T_world_base(self) -> np.ndarray:
+        """``(4, 4)`` pose of the arm's base link in the world (``mount_pos``, ``mount_rpy``)."""
+        return _pose(rpy_to_matrix(self.mount_rpy), self.mount_pos)
+
+    def with_base(self, T_world_base) -> "SceneSpec":
+        """The same scene with the arm's base link at ``T_world_base (4, 4)`` (world frame, m).
+
+        The mount plate, the IK targets, the planned motions, the metrics (torques in the base
+        frame) and the video all follow the base, e.g. a docking stage placing the arm under a
+        vehicle. ``start_q`` stays as given (joint angles, so the start pose moves with the arm).
+
+        Raises:
+          ValueError: ``T_world_base`` is not a rigid transform.
+        """
+        T = np.asarray(T_world_base, dtype=float)
+        if T.shape != (4, 4) or not np.all(np.isfinite(T)):
+            raise ValueError(f"T_world_base must be a finite (4, 4) pose, got shape {T.shape}")
+        R = T[:3, :3]
+        if not (np.allclose(R.T @ R, np.eye(3), atol=1e-9) and np.isclose(np.linalg.det(R), 1.0, atol=1e-9)
+                and np.allclose(T[3], (0, 0, 0, 1))):
+            raise ValueError(f"T_world_base must be a rigid transform (rotation block orthonormal, det +1, last row "
+                             f"0 0 0 1), got\n{np.round(T, 6)}")
+        rpy = Rotation.from_matrix(R).as_euler("xyz")
+        return dataclasses.replace(self, mount_pos=tuple(float(v) for v in T[:3, 3]),
+                                   mount_rpy=tuple(float(v) for v in rpy))
 
     @staticmethod
     def from_mapping(m: Mapping[str, Any]) -> "SceneSpec":
@@ -218,6 +327,7 @@ class SceneSpec:
             grasp_standoff=float(grasp.get("standoff", 0.05)),
             approach=float(grasp.get("approach", 0.08)),
             self_collision_exclude=tuple(tuple(p) for p in m["arm"].get("self_collision_exclude", ())),
+            obstacles=tuple(Obstacle.from_mapping(o) for o in m.get("obstacles", ()) or ()),
         )
         spec.validate()
         return spec
@@ -225,6 +335,13 @@ class SceneSpec:
     def validate(self) -> None:
         """Raise ValueError naming the problem for an inconsistent spec."""
         tables = {b.name for b in self.tables}
+        names = [b.name for b in self.tables] + [o.name for o in self.obstacles]
+        reserved = {"ceiling", "mount", "cage"}
+        clash = sorted({n for n in names if names.count(n) > 1 or n in reserved or ":" in n
+                        or (n[:1] == "n" and n[1:].isdigit())})
+        if clash:
+            raise ValueError(f"table/obstacle names must be unique, without ':', not {sorted(reserved)} and not "
+                             f"'n<digits>' (node labels); got {clash}")
         nodes = [o.node for o in self.objects] + [b.node for b in self.bases]
         if len(set(nodes)) != len(nodes) or 0 in nodes:
             raise ValueError(f"object/base node numbers must be unique and not 0, got {nodes}")
@@ -283,7 +400,7 @@ class Scene:
         self.tables = {b.name: b for b in spec.tables}
         self.objects = {o.node: o for o in spec.objects}
         self.bases = {b.node: b for b in spec.bases}
-        self.T_world_base = _pose(rpy_to_matrix(spec.mount_rpy), spec.mount_pos)
+        self.T_world_base = spec.T_world_base
         self.T_base_world = np.linalg.inv(self.T_world_base)
         self.xml, self.finger_length = self._build_xml()
         self.model = mujoco.MjModel.from_xml_string(self.xml)
@@ -390,6 +507,21 @@ class Scene:
         box("mount", mount_T, ms, "0.3 0.3 0.3 1")
         for t in s.tables[1:]:
             box(t.name, t.T_world_box, t.size, "0.75 0.8 0.9 0.6")
+        bits = f'contype="{SCENE_BITS[0]}" conaffinity="{SCENE_BITS[1]}" rgba="0.55 0.6 0.7 0.8"'
+        for o in s.obstacles:
+            T = o.T_world
+            pose = f'pos="{_fmt(T[:3, 3])}" quat="{_fmt(kin.quat_wxyz(T[:3, :3]))}"'
+            if o.shape == "sphere":
+                world.append(f'<geom name="{o.name}" type="sphere" size="{o.dims[0]!r}" {pose} {bits}/>')
+            elif o.shape == "capsule":  # primitive: arm capsule vs capsule is exact in MuJoCo
+                world.append(f'<geom name="{o.name}" type="capsule" size="{o.dims[0]!r} {o.dims[1] / 2!r}" {pose} {bits}/>')
+            elif o.shape == "mesh":  # MuJoCo reads the file and collides with its convex hull
+                mname = f"m_obstacle_{o.name}"
+                assets.append(f'<mesh name="{mname}" file="{Path(o.file).resolve()}" scale="{_fmt([o.scale] * 3)}"/>')
+                world.append(f'<geom name="{o.name}" type="mesh" mesh="{mname}" {pose} {bits}/>')
+            else:  # boxes and cylinders as convex meshes (see the module docstring)
+                mname = mesh(f"m_obstacle_{o.name}", o.hull_vertices())
+                world.append(f'<geom name="{o.name}" type="mesh" mesh="{mname}" {pose} {bits}/>')
         for b in s.bases:
             T = self.T_world_base_top(b.node) @ _pose(p=(0, 0, -b.size[2] / 2))
             box(f"n{b.node}:{b.name}", T, b.size, "0.9 0.3 0.2 1")
@@ -450,6 +582,13 @@ class Scene:
         return xml, finger_length
 
 
-def build_scene(spec: SceneSpec | Mapping[str, Any]) -> Scene:
-    """Build the MuJoCo scene from a :class:`SceneSpec` or a scenario mapping."""
-    return Scene(spec if isinstance(spec, SceneSpec) else SceneSpec.from_mapping(spec))
+def build_scene(spec: SceneSpec | Mapping[str, Any], T_world_base=None) -> Scene:
+    """Build the MuJoCo scene from a :class:`SceneSpec` or a scenario mapping.
+
+    Args:
+      spec: the scene.
+      T_world_base: ``(4, 4)`` pose of the arm's base link in the world [m]; None keeps the
+        scenario's ``arm.mount_pos`` / ``arm.mount_rpy`` (see :meth:`SceneSpec.with_base`).
+    """
+    spec = spec if isinstance(spec, SceneSpec) else SceneSpec.from_mapping(spec)
+    return Scene(spec if T_world_base is None else spec.with_base(T_world_base))

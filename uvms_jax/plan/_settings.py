@@ -9,9 +9,12 @@ from __future__ import annotations
 import dataclasses
 
 from uvms_jax import sched
+from uvms_jax.plan._planners import check_parameters, ompl_planners
 from uvms_jax.plan._planning import PLANNERS
 
-__all__ = ["IkSettings", "PlanJsonSettings", "PlanSettings"]
+__all__ = ["CHECKERS", "IkSettings", "PlanJsonSettings", "PlanSettings"]
+
+CHECKERS = ("spheres", "mujoco")  # see PlanSettings.checker
 
 
 def _require(ok: bool, message: str) -> None:
@@ -59,7 +62,8 @@ class PlanJsonSettings:
     jaws_closed_mm: float = 0.0
 
     def __post_init__(self):
-        _require(self.planner in PLANNERS, f"plan_json.planner {self.planner!r} is not one of {PLANNERS}")
+        _require(self.planner in ompl_planners(),
+                 f"plan_json.planner {self.planner!r} is not an OMPL planner ({', '.join(ompl_planners())})")
         _require(len(self.sequence) >= 2, f"plan_json.sequence needs at least two nodes, got {list(self.sequence)}")
 
 
@@ -70,7 +74,14 @@ class PlanSettings:
     Attributes:
       seed: IK seeds (``jax.random.PRNGKey(seed)`` in the experiments) and OMPL's RNG
         (``seed + 1``; one OMPL seed per process, see :func:`~uvms_jax.plan.seed_ompl`).
-      planners: OMPL planners run over every edge, in this order.
+      planners: OMPL geometric planners run over every edge, in this order (any of
+        :func:`~uvms_jax.plan.ompl_planners`; the thesis's three by default).
+      planner_params: planner → its parameters (:func:`~uvms_jax.plan.planner_parameters`),
+        e.g. ``{"RRTConnect": {"range": 1.0}}``; planners left out keep OMPL's defaults.
+      checker: what the planners check motions with: ``spheres`` (one compiled call per
+        motion, :class:`~uvms_jax.plan.SphereChecker`, MuJoCo confirming its rejections) or
+        ``mujoco`` (OMPL's state-by-state checks with MuJoCo). Every result is re-checked with
+        MuJoCo either way.
       budget_s: planning budget per edge, all attempts together [s].
       resolution: the planner's motion-check step [rad].
       recheck_resolution: joint step of the re-check of every result, of the metrics and of
@@ -90,6 +101,8 @@ class PlanSettings:
 
     seed: int = 0
     planners: tuple[str, ...] = PLANNERS
+    planner_params: dict[str, dict[str, float | int | bool]] = dataclasses.field(default_factory=dict)
+    checker: str = "spheres"
     budget_s: float = 5.0
     resolution: float = 0.02
     recheck_resolution: float = 0.01
@@ -107,9 +120,14 @@ class PlanSettings:
     def __post_init__(self):
         _require(self.seed >= 0, f"seed must be >= 0, got {self.seed}")
         _require(len(self.planners) >= 1, "planners must name at least one planner")
-        unknown = [p for p in self.planners if p not in PLANNERS]
-        _require(not unknown, f"unknown planners {unknown} (choose from {PLANNERS})")
+        unknown = [p for p in self.planners if p not in ompl_planners()]
+        _require(not unknown, f"unknown planners {unknown} (OMPL's geometric planners: {', '.join(ompl_planners())})")
+        for planner, params in self.planner_params.items():
+            _require(planner in self.planners, f"planner_params names {planner!r}, which is not in planners "
+                                               f"{list(self.planners)}")
+            check_parameters(planner, params)
         _require(len(set(self.planners)) == len(self.planners), f"planners repeat: {list(self.planners)}")
+        _require(self.checker in CHECKERS, f"checker {self.checker!r} is not one of {CHECKERS}")
         for name in ("budget_s", "resolution", "recheck_resolution", "clearance_resolution", "simplify_s"):
             _require(getattr(self, name) > 0, f"{name} must be > 0, got {getattr(self, name)}")
         _require(0 <= self.margin < self.clearance_max,

@@ -15,13 +15,14 @@ from collections.abc import Mapping, Sequence
 
 import jax
 import numpy as np
-from tqdm import tqdm
 
 from uvms_jax import kin, planfile, sched
+from uvms_jax import progress as progress_lines
 from uvms_jax.plan._collision import CollisionChecker
 from uvms_jax.plan._planning import seed_ompl
 from uvms_jax.plan._scene import Context, Scene
 from uvms_jax.plan._settings import PlanSettings
+from uvms_jax.plan._spheres import SphereChecker
 from uvms_jax.plan._targets import NodeTarget, pick_place_targets
 from uvms_jax.plan._tasks import EdgeResult, metric_tensor, plan_edge, plan_from_edges, task_edges
 
@@ -125,18 +126,19 @@ def plan_task_graph(key: jax.Array, scene: Scene, settings: PlanSettings = PlanS
     ik_seconds = time.perf_counter() - t0
     log.info("IK targets for %d nodes in %.1f s (compilation included)", len(targets), ik_seconds)
     chain = kin.bravo7()
+    fast = SphereChecker(checker) if settings.checker == "spheres" else None
     edges = task_edges(scene)
     weights = settings.weight_vector()
     by_planner, metrics, costs, summary = {}, {}, {}, {}
     for planner in settings.planners:
         results = []
-        bar = tqdm(edges, desc=f"plan {planner}", unit="edge", leave=False, disable=None if progress else True)
+        bar = progress_lines.bar(edges, desc=f"plan {planner}", unit="edge") if progress else edges
         for src, dst in bar:
             r = plan_edge(scene, checker, targets, src, dst, planner, budget_s=settings.budget_s,
                           resolution=settings.resolution, recheck_resolution=settings.recheck_resolution,
                           clearance_resolution=settings.clearance_resolution, simplify_s=settings.simplify_s,
                           max_velocity=settings.max_velocity, max_acceleration=settings.max_acceleration,
-                          chain=chain)
+                          chain=chain, fast=fast, params=settings.planner_params.get(planner))
             results.append(r)
             log.debug("%s %d->%d success=%s revalidated=%s %.3f s", planner, src, dst, r.success, r.revalidated,
                       r.plan.planning_time_s)

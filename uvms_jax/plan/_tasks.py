@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Mapping, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -26,6 +27,7 @@ from uvms_jax.plan._collision import CollisionChecker, densify
 from uvms_jax.plan._metrics import EdgeMetrics, trajectory_metrics
 from uvms_jax.plan._planning import PlanResult, Trajectory, check_trajectory, plan_motion, time_parameterize
 from uvms_jax.plan._scene import Context, Scene
+from uvms_jax.plan._spheres import SphereChecker
 from uvms_jax.plan._targets import NodeTarget, node_contexts
 
 __all__ = [
@@ -119,20 +121,26 @@ def plan_edge(
     max_velocity=0.5,
     max_acceleration=1.0,
     chain: kin.Chain | None = None,
+    fast: SphereChecker | None = None,
+    params: Mapping[str, Any] | None = None,
 ) -> EdgeResult:
     """Plan one edge, time-parameterise it, re-check it and measure its metrics.
 
     Metrics are measured on the path interpolated at ``recheck_resolution`` (clearance at
     ``clearance_resolution``), torques with the wrench of the held object (edges out of an
-    object) rotated into the arm's base frame.
+    object) rotated into the arm's base frame. With ``fast`` (a
+    :class:`SphereChecker` on ``checker``) the planner checks motions with it; every result is
+    re-checked with MuJoCo.
+    ``params``: the planner's parameters (see :func:`~uvms_jax.plan.plan_motion`).
     """
     q0, q1, ctx = edge_endpoints(scene, targets, src, dst)
-    checker.set_context(ctx)
-    res = plan_motion(checker, q0, q1, planner, budget_s, resolution, recheck_resolution, simplify_s)
+    (fast or checker).set_context(ctx)
+    res = plan_motion(checker, q0, q1, planner, budget_s, resolution, recheck_resolution, simplify_s, fast=fast,
+                      params=params)
     if not res.success:
         return EdgeResult(planner, src, dst, res, None, None, {})
     traj = time_parameterize(res.path, max_velocity, max_acceleration)
-    check = check_trajectory(checker, traj, recheck_resolution)
+    check = check_trajectory(checker, traj, recheck_resolution, collision_free=res.revalidated)
     chain = chain or kin.bravo7()
     force = None
     if ctx.held is not None:

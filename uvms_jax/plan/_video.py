@@ -98,7 +98,7 @@ def render_run_video(scene: Scene, t, q, path: Path | str, *, fps: float = 8.0,
         seconds of the run, each the last state logged before it).
       size: ``(width, height)`` [pixels], both even (yuv420p) and at most the scene's offscreen
         buffer (960 × 720).
-      progress: show a progress bar (tqdm; off when not on a terminal).
+      progress: show progress (:func:`uvms_jax.progress.bar`: a bar on a terminal, lines in a log).
 
     Returns:
       :class:`VideoInfo`.
@@ -110,7 +110,8 @@ def render_run_video(scene: Scene, t, q, path: Path | str, *, fps: float = 8.0,
     """
     import imageio
     import mujoco
-    from tqdm import tqdm
+
+    from uvms_jax import progress as progress_lines
 
     t, q = np.asarray(t, dtype=float), np.asarray(q, dtype=float)
     m0 = scene.model
@@ -154,7 +155,7 @@ def render_run_video(scene: Scene, t, q, path: Path | str, *, fps: float = 8.0,
             # to multiples of 16.
             with imageio.get_writer(path, format="FFMPEG", mode="I", fps=fps, codec="libx264",
                                     pixelformat="yuv420p", macro_block_size=2, ffmpeg_log_level="error") as writer:
-                for i in tqdm(rows, desc="video", unit="frame", leave=False, disable=None if progress else True):
+                for i in (progress_lines.bar(rows, desc="video", unit="frame") if progress else rows):
                     data.qpos[:] = q[i]
                     mujoco.mj_kinematics(model, data)
                     renderer.update_scene(data, cam)

@@ -1,0 +1,131 @@
+"""The compiled sphere checker: exact primitive distances, conservative against MuJoCo in
+every context, motions accepted only where the MuJoCo re-check passes, and planning with it."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from uvms_jax.plan import CollisionChecker, Context, SphereChecker, build_scene, plan_motion, seed_ompl
+from uvms_jax.plan._spheres import _box_distance, _segment_distance, coarse_to_fine
+
+SCENARIO = Path(__file__).parents[2] / "configs" / "scenario" / "thesis_cage.yaml"
+GRID = 400  # dense parameter grid of the brute-force distance oracles
+CONTEXTS = [Context(), Context(held=1), Context(held=3), Context(held=4), Context(ignore=(5, "dest_inclined"))]
+
+
+@pytest.fixture(scope="module")
+def raw():
+    return yaml.safe_load(SCENARIO.read_text())
+
+
+@pytest.fixture(scope="module")
+def checkers(raw):
+    reference = CollisionChecker(build_scene(raw))
+    return reference, SphereChecker(reference)
+
+
+def test_segment_distance_matches_dense_sampling():
+    rng = np.random.default_rng(0)
+    s = np.linspace(0.0, 1.0, GRID)
+    for _ in range(20):
+        p1, q1, p2, q2 = rng.normal(size=(4, 3))
+        if rng.random() < 0.3:
+            q2 = p2 + 0.5 * (q1 - p1)  # parallel segments: the degenerate branch
+        a = p1 + s[:, None] * (q1 - p1)
+        b = p2 + s[:, None] * (q2 - p2)
+        brute = np.min(np.linalg.norm(a[:, None] - b[None], axis=2))
+        d = _segment_distance(p1, q1, p2, q2)
+        # The grid's closest pair is at most one grid step (on each segment) from the true one.
+        step = (np.linalg.norm(q1 - p1) + np.linalg.norm(q2 - p2)) / (GRID - 1)
+        assert d <= brute + 1e-12 and d >= brute - step
+
+
+def test_box_distance_matches_dense_sampling():
+    """Outside: distance to a densely sampled box surface; inside: minus the depth to the nearest face."""
+    rng = np.random.default_rng(1)
+    R = np.linalg.qr(rng.normal(size=(3, 3)))[0]
+    centre, half = np.array([0.1, -0.2, 0.3]), np.array([0.05, 0.2, 0.1])
+    box = np.vstack([[1.0, 0.0, 0.0], centre, (R * half).T])
+    u = np.linspace(-1, 1, 61)
+    faces = []
+    for a in range(3):
+        g = np.stack(np.meshgrid(u, u, indexing="ij"), -1).reshape(-1, 2)
+        for sign in (-1.0, 1.0):
+            local = np.insert(g, a, sign, axis=1)
+            faces.append(centre + (local * half) @ R.T)
+    surface = np.concatenate(faces)
+    for _ in range(30):
+        x = centre + R @ (rng.uniform(-2, 2, 3) * half)
+        local = R.T @ (x - centre)
+        d = _box_distance(x, box)
+        if np.all(np.abs(local) <= half):
+            assert d == pytest.approx(-np.min(half - np.abs(local)), abs=1e-12)
+        else:
+            brute = np.min(np.linalg.norm(surface - x, axis=1))
+            assert d <= brute + 1e-12 and d >= brute - np.linalg.norm(half) * 2 / 60
+
+
+def test_coarse_to_fine_is_a_permutation_ending_first():
+    for n in (1, 2, 7, 64, 100):
+        order = coarse_to_fine(n)
+        assert order[0] == n and sorted(order) == list(range(1, n + 1))
+
+
+@pytest.mark.parametrize("context", CONTEXTS, ids=str)
+def test_spheres_are_conservative(checkers, context):
+    """A configuration the spheres accept has no MuJoCo pair nearer than the margin; and the
+    spheres accept most of what MuJoCo accepts (else the checker would be useless)."""
+    reference, fast = checkers
+    fast.set_context(context)
+    rng = np.random.default_rng(2)
+    Q = rng.uniform(reference.lower, reference.upper, (3000, 6))
+    ok = fast.spheres_free(Q)
+    mj = reference.is_valid_batch(Q)
+    assert not np.any(ok & ~mj), "the spheres accepted a configuration MuJoCo rejects"
+    assert ok.sum() >= 0.8 * mj.sum()
+
+
+@pytest.mark.parametrize("context", CONTEXTS[:3], ids=str)
+def test_accepted_motions_pass_the_mujoco_recheck(checkers, context):
+    reference, fast = checkers
+    fast.set_context(context)
+    rng = np.random.default_rng(3)
+    Q = rng.uniform(reference.lower, reference.upper, (2000, 6))
+    starts = Q[reference.is_valid_batch(Q)][:60]
+    accepted = 0
+    for q0, q1 in zip(starts[:-1], starts[1:]):
+        q1 = q0 + 0.4 * (q1 - q0)
+        ok = fast.motion_is_valid(q0, q1, 0.01)
+        ref = reference.path_is_valid(np.stack([q0, q1]), 0.01)
+        assert ok == ref  # spheres first, MuJoCo on each rejected sample: MuJoCo's answer
+        accepted += ok
+    assert 0 < accepted < len(starts) - 1  # both outcomes were exercised
+
+
+def test_planning_with_spheres(checkers, raw):
+    """Goals the straight joint path cannot reach (it collides): every planner finds a path
+    with the sphere checker, and the path passes MuJoCo's re-check at a finer step."""
+    seed_ompl(0)
+    reference, fast = checkers
+    fast.set_context(Context())
+    q0 = np.asarray(raw["start_q"])
+    rng = np.random.default_rng(4)
+    Q = rng.uniform(reference.lower, reference.upper, (400, 6))
+    goals = [q for q in Q if reference.is_valid(q) and not reference.path_is_valid(np.stack([q0, q]), 0.01)][:2]
+    assert len(goals) == 2
+    n0 = fast.n_motions
+    for planner in ("RRTConnect", "BKPIECE1", "PRM"):
+        for q1 in goals:
+            r = plan_motion(reference, q0, q1, planner, budget_s=5.0, fast=fast)
+            assert r.success and reference.path_is_valid(r.path, 0.005, margin=0.0)
+    assert fast.n_motions > n0
+
+
+def test_fast_must_wrap_the_given_checker(checkers, raw):
+    reference, fast = checkers
+    other = CollisionChecker(build_scene(raw))
+    q = np.asarray(raw["start_q"])
+    with pytest.raises(ValueError, match="SphereChecker built on the given checker"):
+        plan_motion(other, q, q + 0.1, fast=fast)
