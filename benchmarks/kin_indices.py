@@ -3,7 +3,9 @@
 Prints one JSON object. Both sides evaluate the same chain (pytorch-kinematics loads the URDF
 exported by ``uvms_jax.kin.to_urdf``) on the same device, in float32:
   uvms_jax: one jitted call ``manipulability_of(chain, q, task)`` (fused Jacobian + unrolled
-            Cholesky) / ``kci_of(chain, q, task)`` (fused Jacobian + unrolled Jacobi);
+            Cholesky) / ``kci_of(chain, q, task)`` (fused Jacobian + unrolled Jacobi); on a
+            GPU these run as one Pallas kernel, and the XLA fusion they replace is timed too
+            (``uvms_jax_xla_*``);
   peer:     ``chain.jacobian(q)``, the task rows, then ``sqrt(det G)`` of the smaller Gram
             matrix G (J Jᵀ or Jᵀ J) / ``svdvals`` in torch.
 The chain is the 12-DOF UVMS by default, or any arm imported with ``--urdf`` (e.g. a 4-DOF
@@ -27,6 +29,7 @@ import pytorch_kinematics as pk
 import torch
 
 from uvms_jax import indices, kin
+from uvms_jax.indices._indices import _kci_of, _manipulability_of
 
 
 def best_time(fn, repeats: int, budget_s: float = 20.0) -> float:
@@ -76,6 +79,9 @@ def main() -> None:
     hi = np.minimum(np.asarray(chain.upper), 1.0)
     w_fn = jax.jit(lambda q: indices.manipulability_of(chain, q, task))
     kci_fn = jax.jit(lambda q: indices.kci_of(chain, q, task))
+    # On a GPU the two calls above run the Pallas kernel; the XLA fusion they replace, for comparison.
+    rows_ = indices.task_rows(task)
+    xla_fns = {"w": jax.jit(lambda q: _manipulability_of(chain, q, rows_)), "kci": jax.jit(lambda q: _kci_of(chain, q, rows_))}
 
     tdev = torch.device(args.device)
     peer = pk.build_serial_chain_from_urdf(kin.to_urdf(chain), "tool").to(dtype=torch.float32, device=tdev)
@@ -104,6 +110,11 @@ def main() -> None:
         row["uvms_jax_w_per_s"] = n / t
         t = best_time(lambda: kci_fn(q).block_until_ready(), args.repeats)
         row["uvms_jax_kci_per_s"] = n / t
+        if jax.default_backend() == "gpu":
+            for name, fn in xla_fns.items():
+                row[f"uvms_jax_xla_{name}_per_s"] = n / best_time(lambda: fn(q).block_until_ready(), args.repeats)
+            row["kernel_vs_xla_max_abs_diff_w"] = float(jnp.max(jnp.abs(w_fn(q[:100000]) - xla_fns["w"](q[:100000]))))
+            row["kernel_vs_xla_max_abs_diff_kci"] = float(jnp.max(jnp.abs(kci_fn(q[:100000]) - xla_fns["kci"](q[:100000]))))
         if n <= args.peer_max_batch:
             try:
                 row.update(measure_peer(q, check, w_fn, peer_w, peer_kci, tdev, sync, args.repeats))

@@ -24,10 +24,10 @@ import dataclasses
 import json
 import sys
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 
-from uvms_jax import __version__
+from uvms_jax import __version__, progress
 from uvms_jax.planfile import PlanError, load_plan, save_plan
 
 from ._check import check_plan
@@ -168,20 +168,6 @@ def _configs(args: argparse.Namespace) -> tuple[HwConfig, SimConfig]:
     return hw, dataclasses.replace(sim, **sim_over)
 
 
-def _progress_bar(n_segments: int) -> tuple[Callable[[int, int, str], None], Callable[[], None]]:
-    """A tqdm bar on stderr (hidden when not a terminal): ``(progress callback, close)``."""
-    from tqdm import tqdm
-
-    bar = tqdm(total=n_segments, unit="seg", file=sys.stderr, leave=False, disable=None)
-
-    def progress(i: int, n: int, name: str) -> None:
-        bar.n = i
-        bar.set_description(name[:30])
-        bar.refresh()
-
-    return progress, bar.close
-
-
 def _real_transport(args: argparse.Namespace) -> Transport:
     if args.udp:
         return UdpTransport(*parse_host_port(args.udp))
@@ -215,11 +201,13 @@ def _run(args: argparse.Namespace) -> int:
         except (LinkError, ValueError) as e:
             print(f"uvms-hw: {e}", file=sys.stderr)
             return EXIT_REFUSED
-    progress, close_bar = _progress_bar(len(plan.segments))
     try:
-        run = run_plan(plan, link="udp" if client is None else client, config=hw, sim=sim_cfg, progress=progress)
+        with progress.bar(total=len(plan.segments), desc="run", unit="seg") as bar:
+            run = run_plan(plan, link="udp" if client is None else client, config=hw, sim=sim_cfg,
+                           progress=lambda i, n, name: bar.update(i - bar.n))  # i: segments finished
+            if run.ok:
+                bar.update(bar.total - bar.n)
     finally:
-        close_bar()
         if client is not None:
             client.close()
     report = write_run(run, out, plot=not args.no_plot, plan_path=args.plan)

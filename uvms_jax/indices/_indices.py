@@ -21,6 +21,7 @@ import jax
 import jax.numpy as jnp
 from jax import Array
 
+from uvms_jax.indices import _gpu
 from uvms_jax.kin import Chain, check_joint_array, jacobian_rows
 
 ROW_NAMES = ("vx", "vy", "vz", "wx", "wy", "wz")
@@ -151,6 +152,14 @@ def _kci_of(chain: Chain, q: Array, rows: tuple[int, ...]) -> Array:
     return kci_from_rows([J[r] for r in rows])
 
 
+def _index_of(index_from_rows, xla_path, chain: Chain, q, task) -> Array:
+    """An index of ``chain`` at ``q``: one Pallas kernel on a GPU (``_gpu``), XLA elsewhere."""
+    q, rows = check_joint_array(chain, q), task_rows(task)
+    if _gpu.applies(chain, q):
+        return _gpu.index_on_gpu(index_from_rows, xla_path, chain, q, rows)
+    return xla_path(chain, q, rows)
+
+
 def manipulability_of(chain: Chain, q, task="full") -> Array:
     """w of ``chain`` at ``q: (..., n)`` in a task space — equal to
     ``manipulability(jacobian(chain, q), task)``, computed in one fused kernel that never
@@ -161,13 +170,13 @@ def manipulability_of(chain: Chain, q, task="full") -> Array:
       q: ``(..., n)`` joint values [rad | m].
       task: ``"full"``, ``"position"``, ``"orientation"`` or rows (see :func:`task_rows`).
     """
-    return _manipulability_of(chain, check_joint_array(chain, q), task_rows(task))
+    return _index_of(manipulability_from_rows, _manipulability_of, chain, q, task)
 
 
 def kci_of(chain: Chain, q, task="full") -> Array:
     """KCI of ``chain`` at ``q: (..., n)`` in a task space, equal to
     ``kci(jacobian(chain, q), task)``, fused (arguments as :func:`manipulability_of`)."""
-    return _kci_of(chain, check_joint_array(chain, q), task_rows(task))
+    return _index_of(kci_from_rows, _kci_of, chain, q, task)
 
 
 JACOBI_SWEEPS = 8  # cyclic sweeps; quadratic convergence reaches float64 round-off on 6×6 by ~6

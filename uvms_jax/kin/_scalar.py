@@ -17,6 +17,7 @@ from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 from jax import Array
 
 from uvms_jax.kin._chain import Chain
@@ -40,10 +41,20 @@ def compose(R, p, Ri, pi) -> tuple[list, list]:
     )
 
 
+def _entries(a, dtype):
+    """A geometry array as nested scalars: Python floats when its numbers are known (they become
+    constants of the compiled kernel, which the GPU kernel of ``uvms_jax.indices`` needs), 0-d
+    arrays of ``dtype`` when it is traced (the usual case: the chain is a ``jit`` argument)."""
+    if isinstance(a, jax.core.Tracer):
+        a = jnp.asarray(a, dtype)
+        return [[a[i, j] for j in range(a.shape[1])] for i in range(a.shape[0])]
+    return np.asarray(a, np.float64).tolist()
+
+
 def compose_pose(R, p, T) -> tuple[list, list]:
     """``(R, p) ∘ T`` for a constant pose ``T (4, 4)``, cast to the dtype of ``p``."""
-    T = jnp.asarray(T, jnp.result_type(*p))
-    return compose(R, p, [[T[i, j] for j in range(3)] for i in range(3)], [T[i, 3] for i in range(3)])
+    T = _entries(T, jnp.result_type(*p))
+    return compose(R, p, [row[:3] for row in T[:3]], [row[3] for row in T[:3]])
 
 
 class Pass(NamedTuple):
@@ -86,11 +97,11 @@ def forward(chain: Chain, q_cols: list) -> Pass:
       chain: the robot; its geometry is cast to the dtype of the joint values.
       q_cols: n arrays of one batch shape, joint i's values [rad or m].
     """
-    twists = jnp.asarray(chain.twists, q_cols[0].dtype)
+    twists = _entries(chain.twists, q_cols[0].dtype)
     carry = (_IDENTITY, [0.0, 0.0, 0.0])
     columns, products = [], []
     for i in range(chain.n_joints):
-        carry, column = _joint_step(carry, ([twists[i, k] for k in range(6)], q_cols[i]))
+        carry, column = _joint_step(carry, (twists[i], q_cols[i]))
         columns.append(column)
         products.append(carry)
     return Pass(columns, products)
