@@ -2,7 +2,10 @@
 
 Prints one JSON object. All functions are jitted and timed in float32 on the same configurations
 (UVMS-12, paper sampling of Fig. 7), compilation excluded, median of ``--repeats`` runs; batches
-above ``--chunk`` are evaluated in chunks (``lax.map``) by every contender.
+above ``--chunk`` are evaluated in chunks (``lax.map``) by every contender. The analytic index is
+the project's fastest path, one fused kernel that never stores J (``indices.manipulability_of``
+/ ``indices.kci_of``; with ``--jacobian spatial`` the same reductions on the paper's spatial
+Jacobian, eq. 6), so every speed-up is against it.
 
 Networks: ``--networks DIR`` loads ``ffbn_w``, ``ffbn_kci``, ``rbfn_w``, ``rbfn_kci`` saved by
 ``experiments/surrogate.py`` (``<run dir>/networks``); without it, networks of the paper's sizes
@@ -10,6 +13,7 @@ Networks: ``--networks DIR`` loads ``ffbn_w``, ``ffbn_kci``, ``rbfn_w``, ``rbfn_
 the cost of a network does not depend on its weight values.
 
 Usage: python benchmarks/surrogate.py [--device cpu|gpu] [--batches 1e3,1e4,1e5,1e6] [--networks DIR]
+                                     [--jacobian geometric|spatial]
 """
 
 from __future__ import annotations
@@ -29,6 +33,8 @@ def main() -> None:
     parser.add_argument("--chunk", type=float, default=1e5, help="evaluate larger batches in chunks of this size")
     parser.add_argument("--networks", type=Path, default=None, help="directory with saved networks")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--jacobian", choices=("geometric", "spatial"), default="geometric",
+                        help="Jacobian form of the analytic index (spatial: the dexterity paper's eq. 6)")
     args = parser.parse_args()
     os.environ["JAX_PLATFORMS"] = {"gpu": "cuda"}.get(args.device, args.device)
 
@@ -66,7 +72,8 @@ def main() -> None:
                 )
         source = "random weights, paper sizes"
 
-    fns = {f"analytic_{i}": surrogate.analytic_index_fn(chain, i) for i in ("w", "kci")}
+    form = surrogate.IndexForm(args.jacobian)
+    fns = {f"analytic_{i}": surrogate.analytic_index_fn(chain, i, form) for i in ("w", "kci")}
     fns.update({name: net.index_fn for name, net in nets.items()})
     results = {}
     for n in batches:
@@ -83,7 +90,8 @@ def main() -> None:
     print(json.dumps({
         "benchmark": "surrogate", "device": jax.devices()[0].device_kind, "platform": jax.devices()[0].platform,
         "python": platform.python_version(), "jax": jax.__version__, "dtype": "float32", "networks": source,
-        "hidden_units": sizes, "chunk": chunk, "results": results,
+        "hidden_units": sizes, "chunk": chunk, "jacobian": args.jacobian,
+        "analytic": "fused kernel (indices.manipulability_of / kci_of, or the same on spatial rows)", "results": results,
     }))
 
 

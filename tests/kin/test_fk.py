@@ -177,3 +177,11 @@ def test_one_compiled_program_serves_every_geometry():
         T = kin.fk(kin.docking_arm(l1=l1, l2=0.4), q)
         np.testing.assert_allclose(np.asarray(T)[:, 0, 3], l1 + 0.4, atol=ATOL_64)
     assert _fk._fk._cache_size() == size
+
+
+def test_spatial_jacobian_rows_are_the_spatial_jacobian():
+    chain = kin.uvms12()
+    q = np.random.default_rng(3).uniform(-1.0, 1.0, (5, chain.n_joints))
+    rows = kin.spatial_jacobian_rows(chain, q)  # entries broadcast to the batch (constants stay scalars)
+    J = np.stack([np.stack([np.broadcast_to(x, q.shape[:-1]) for x in r], -1) for r in rows], -2)
+    np.testing.assert_allclose(J, kin.spatial_jacobian(chain, q), rtol=1e-12, atol=1e-12)

@@ -76,7 +76,7 @@ def test_gather_usage_error_is_one_line():
     ("schedule.py", ["sched/source: edges_csv, synthetic, thesis_matrix*", "sched/weights: equal*"],
      ["docking/preset", "ga:", "surrogate:"]),
     ("surrogate.py", ["surrogate: paper*, small"], ["sched/weights", "ga:", "docking/preset"]),
-    ("plan.py", ["plan: default*", "scenario: thesis_cage*"], ["sched/weights", "ga:", "surrogate:"]),
+    ("plan.py", ["plan: default*", "scenario: cage_obstacles, thesis_cage*"], ["sched/weights", "ga:", "surrogate:"]),
     ("pipeline.py", ["experiment: full, tiny", "ga: bravo7, paper*", "sched/weights: equal*", "hw: default*"],
      ["docking/preset", "sched/source", "surrogate:"]),
 ])

@@ -9,7 +9,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from uvms_jax.surrogate import fit_rbfn, fit_scaler
+from uvms_jax.surrogate import RBFN, Scaler, fit_rbfn, fit_scaler
 
 from _surrogate_helpers import synthetic_dataset
 
@@ -71,7 +71,22 @@ def test_rbfn_index_fn_and_operation_count(small):
     net, _ = fit_rbfn(small, spread=1.0, max_centres=5)
     np.testing.assert_allclose(np.asarray(net.index_fn(small.q)), np.asarray(net.predict(small.x)), rtol=1e-12)
     assert net.index_fn(small.q.astype(jnp.float32)).dtype == jnp.float32
-    assert net.operation_count == 5 * (3 * 7 + 3) + 7 + 1
+    assert net.operation_count == 5 * 28
+
+
+def test_operation_count_follows_the_papers_convention():
+    # Paper §4.3–4.4: RBFN-w, 149 units of 7 inputs: 1788 additions + 2384 multiplications.
+    # RBFN-KCI: 1704 + 2272 = 3976, which is the same 12 + 16 per unit for 142 units of 11 inputs.
+    assert rbfn_like(149, 7).operation_count == 1788 + 2384
+    assert rbfn_like(142, 11).operation_count == 1704 + 2272
+
+
+def rbfn_like(n_centres: int, d: int) -> RBFN:
+    """An RBFN with ``n_centres`` units of ``d`` inputs (weights irrelevant to the count)."""
+    unit = Scaler(jnp.zeros(()), jnp.ones(()))
+    return RBFN(centres=jnp.zeros((n_centres, d)), weights=jnp.zeros(n_centres), bias=jnp.zeros(()),
+                spread=jnp.ones(()), x_norm=Scaler(jnp.zeros(d), jnp.ones(d)), y_norm=unit, index="w",
+                inputs=tuple(range(12 - d - 1, 11)))
 
 
 def test_rbfn_rejects_bad_arguments(small):

@@ -9,8 +9,10 @@ from uvms_jax.indices._area import max_branch_manipulability
 from uvms_jax.indices._area import tool_targets
 from uvms_jax.indices._indices import joint_torques
 from uvms_jax.indices._indices import kci
+from uvms_jax.indices._indices import kci_from_rows
 from uvms_jax.indices._indices import kci_of
 from uvms_jax.indices._indices import manipulability
+from uvms_jax.indices._indices import manipulability_from_rows
 from uvms_jax.indices._indices import manipulability_of
 from uvms_jax.indices._indices import normalized_jacobian
 from uvms_jax.indices._indices import payload_wrench

@@ -37,6 +37,7 @@ from uvms_jax.kin._fk import jacobian
 from uvms_jax.kin._fk import jacobian_rows
 from uvms_jax.kin._fk import kinematics
 from uvms_jax.kin._fk import spatial_jacobian
+from uvms_jax.kin._fk import spatial_jacobian_rows
 from uvms_jax.kin._ik import IKSolutions
 from uvms_jax.kin._ik import elbow_branches
 from uvms_jax.kin._ik import elbow_ik

@@ -110,6 +110,12 @@ def spatial_jacobian(chain: Chain, q) -> Array:
     return jnp.swapaxes(kinematics(chain, q).twists, -1, -2)
 
 
+def spatial_jacobian_rows(chain: Chain, q: Array) -> list:
+    """Spatial-twist Jacobian at ``q: (..., n)`` as 6 rows × n arrays of shape ``(...)``: the
+    rows of :func:`spatial_jacobian`, for fused kernels as :func:`jacobian_rows`."""
+    return _scalar.spatial_rows(chain, q)
+
+
 def jacobian_rows(chain: Chain, q: Array) -> list:
     """Geometric Jacobian at ``q: (..., n)`` as 6 rows × n arrays of shape ``(...)``.
 

@@ -143,6 +143,13 @@ def geometric_rows(kpass: Pass, p_tool: list) -> Rows:
     return [[col[r] for col in linear] for r in range(3)] + [[col[r] for col in angular] for r in range(3)]
 
 
+def spatial_rows(chain: Chain, q) -> Rows:
+    """Spatial-twist Jacobian of ``chain`` at ``q`` as 6 rows × n scalars (the columns
+    ``ξ'_i`` of the pass, reference point at the base origin)."""
+    columns = forward(chain, columns_of(q)).columns
+    return [[v[r] for v, _ in columns] for r in range(3)] + [[w[r] for _, w in columns] for r in range(3)]
+
+
 def jacobian_rows(chain: Chain, q) -> Rows:
     """Geometric Jacobian of ``chain`` at ``q`` as 6 rows × n scalars of the batch shape.
 

@@ -30,11 +30,13 @@ from uvms_jax.sched._edges import schedule_edges
 from uvms_jax.sched._exact import exact
 from uvms_jax.sched._greedy import greedy
 from uvms_jax.sched._grasp import DEFAULT_ROUNDS as GRASP_ROUNDS
+from uvms_jax.sched._grasp import LOCAL_SEARCHES
 from uvms_jax.sched._grasp import THESIS_ALPHAS
 from uvms_jax.sched._grasp import THESIS_NEIGHBOURHOOD
 from uvms_jax.sched._grasp import GraspBatch
 from uvms_jax.sched._grasp import grasp
 from uvms_jax.sched._grasp import grasp_batch
+from uvms_jax.sched._grasp import thesis_local_search
 from uvms_jax.sched._problem import PAD_NODE
 from uvms_jax.sched._problem import PickPlaceProblem
 from uvms_jax.sched._problem import as_padded_paths
@@ -73,6 +75,7 @@ __all__ = [
     "EDGE_CSV_COLUMNS",
     "GRASP_ROUNDS",
     "HIGHER_IS_BETTER",
+    "LOCAL_SEARCHES",
     "METRICS",
     "PAD_NODE",
     "SOLVERS",
@@ -120,6 +123,7 @@ __all__ = [
     "solve",
     "solve_all",
     "table_rows",
+    "thesis_local_search",
     "thesis_problem",
     "write_schedule",
 ]

@@ -1,12 +1,17 @@
 """GRASP (thesis 4.7.2, Algorithms 2–4): every iteration in parallel, in one jitted call.
 
 Per iteration (written for one iteration, batched with ``vmap``): a randomised greedy
-construction over nodes (``construct``), then a swap local search over its deliveries
-(``local_search``); the best iteration is turned back into a node path (``to_path``).
-Differences from the thesis, all documented where they occur: the local search swaps whole
-deliveries (and bases or objects between them) instead of single nodes, takes the best
-improving swap per round, and re-decides each return to the start; per-step uniforms come
-from a counter-based hash of one threefry seed per iteration.
+construction over nodes (``construct``), then a swap local search, and the best iteration's
+node path. Two local searches (``local_search=``):
+
+- ``"deliveries"`` (default, ``local_search``): swaps whole deliveries (and bases or objects
+  between them) instead of single nodes, takes the best improving swap per round, and
+  re-decides each return to the start;
+- ``"thesis"`` (``thesis_local_search``): the thesis's Algorithm 4 as written — single nodes
+  of the path swapped with each of the next three, a swap kept when the schedule stays valid
+  and gets cheaper (one pass, first improvement).
+
+Per-step uniforms come from a counter-based hash of one threefry seed per iteration.
 """
 
 from __future__ import annotations
@@ -23,6 +28,7 @@ from jax import Array
 from uvms_jax.sched._problem import PAD_NODE, PickPlaceProblem, path_cost
 from uvms_jax.sched._rules import BASE, OBJECT, allowed_next, consumed
 from uvms_jax.sched._schedule import Schedule
+from uvms_jax.sched._score import score
 
 #: Thesis eq. 4.6: the values α is drawn from (uniformly, once per iteration).
 THESIS_ALPHAS = (0.1, 0.2, 0.3, 0.4, 0.6, 0.7, 0.8, 0.9, 1.0)
@@ -32,6 +38,8 @@ THESIS_NEIGHBOURHOOD = 3
 #: brute-force optimum on every tested instance (tests/sched/test_sched_solvers.py, 5 key
 #: sets); with 2, on 95–98 %.
 DEFAULT_ROUNDS = 4
+#: Local searches: ours over deliveries (default) and the thesis's node swaps (Algorithm 4).
+LOCAL_SEARCHES = ("deliveries", "thesis")
 _RCL_EPS = 1e-4  # float32 α·|CL| = 2.9999998 must still give an RCL of 3
 
 
@@ -191,6 +199,40 @@ def local_search(
     return o, b, jnp.where(ok, w.sum() + pk.sum(), cost)  # the cost of ``to_path(o, b)``
 
 
+def thesis_local_search(problem: PickPlaceProblem, path: Array, cost: Array,
+                        neighbourhood: int = THESIS_NEIGHBOURHOOD) -> tuple[Array, Array]:
+    """The thesis's local search (4.7.2.2, Algorithm 4) on one node path.
+
+    Every position ``i`` of the path after the start, in order, is swapped with each of the
+    next ``neighbourhood`` positions; a swap is kept when the new path is a valid schedule
+    (``score``: move rules, occupancy, NaN costs) and cheaper than the current one (the
+    thesis's "if change is valid … if costNewPath < costOriginalPath"). One pass.
+
+    Args:
+      path: ``(L,)`` node path padded with the padding node ``n`` (as ``construct`` gives).
+      cost: its cost (``inf`` = stuck: returned unchanged).
+
+    Returns:
+      ``(path, cost)`` after the pass.
+    """
+    n, L = problem.n_nodes, path.shape[0]
+    pairs = np.array([(i, j) for i in range(1, L) for j in range(i + 1, min(i + neighbourhood, L - 1) + 1)]
+                     or [(0, 0)], np.int32)
+
+    def body(k, pc):
+        p, c = pc
+        i, j = pairs[k, 0], pairs[k, 1]
+        cand = p.at[i].set(p[j]).at[j].set(p[i])
+        new = score(problem, jnp.where(cand >= n, PAD_NODE, cand)).cost
+        better = new < c
+        return jnp.where(better, cand, p), jnp.where(better, new, c)
+
+    if pairs.shape[0] == 1 and pairs[0, 0] == pairs[0, 1]:
+        return path, cost
+    pairs = jnp.asarray(pairs)
+    return jax.lax.fori_loop(0, pairs.shape[0], body, (path, cost))
+
+
 def to_path(problem: PickPlaceProblem, objs: Array, bases: Array) -> Array:
     """Node path ``(L,)`` (padding node ``n``) of a delivery sequence: ``start`` + per
     delivery (``start`` when going through it is cheaper, object, base) + ``goal``."""
@@ -297,6 +339,7 @@ def grasp_batch(
     alphas: Sequence[float] = THESIS_ALPHAS,
     neighbourhood: int = THESIS_NEIGHBOURHOOD,
     rounds: int = DEFAULT_ROUNDS,
+    local_search: str = "deliveries",
 ) -> GraspBatch:
     """Runs ``iterations`` independent GRASP iterations in parallel (``vmap``), jitted.
 
@@ -306,7 +349,9 @@ def grasp_batch(
       problem: the instance.
       iterations: ``I``.
       alphas: α values, thesis eq. 4.6 by default.
-      neighbourhood, rounds: local-search settings, see ``local_search``.
+      neighbourhood, rounds: local-search settings, see ``local_search`` (``rounds`` is
+        used by the delivery search only).
+      local_search: ``"deliveries"`` (ours) or ``"thesis"`` (Algorithm 4), see the module doc.
 
     Returns:
       ``GraspBatch`` of ``I`` schedules.
@@ -314,39 +359,45 @@ def grasp_batch(
     Raises:
       ValueError: bad settings (see ``grasp``).
     """
-    settings = _checked(iterations, alphas, neighbourhood, rounds)
+    settings = _checked(iterations, alphas, neighbourhood, rounds, local_search)
     return _grasp_batch(key, problem, *settings)
 
 
-@partial(jax.jit, static_argnames=("iterations", "alphas", "neighbourhood", "rounds"))
-def _grasp_batch(key, problem, iterations, alphas, neighbourhood, rounds):
-    built, objs, bases, cost = _iterations(key, problem, iterations, alphas, neighbourhood, rounds)
-    paths = jax.vmap(to_path, in_axes=(None, 0, 0))(problem, objs, bases)
+_STATIC = ("iterations", "alphas", "neighbourhood", "rounds", "search")
+
+
+@partial(jax.jit, static_argnames=_STATIC)
+def _grasp_batch(key, problem, iterations, alphas, neighbourhood, rounds, search):
+    built, paths, cost = _iterations(key, problem, iterations, alphas, neighbourhood, rounds, search)
     paths = jnp.where(jnp.isfinite(cost)[:, None], paths, built.path)  # stuck: as constructed
     return GraspBatch(paths, cost, built.cost)
 
 
-def _iterations(key, problem, iterations, alphas, neighbourhood, rounds):
-    """Construction and local search of every iteration: deliveries and costs."""
+def _iterations(key, problem, iterations, alphas, neighbourhood, rounds, search):
+    """Construction and local search of every iteration: constructions, node paths, costs."""
     L = problem.max_path_len
     k_alpha, k_seed = jax.random.split(key)
     alpha = jnp.asarray(alphas, jnp.float32)[jax.random.randint(k_alpha, (iterations,), 0, len(alphas))]
     seeds = jax.random.bits(k_seed, (iterations,), jnp.uint32)
     u = jax.vmap(_uniforms, in_axes=(0, None))(seeds, L - 1)
     built = jax.vmap(construct, in_axes=(None, 0, 0))(problem, alpha, u)
+    if search == "thesis":
+        ls = partial(thesis_local_search, neighbourhood=neighbourhood)
+        paths, cost = jax.vmap(ls, in_axes=(None, 0, 0))(problem, built.path, built.cost)
+        return built, paths, cost
     ls = partial(local_search, neighbourhood=neighbourhood, rounds=rounds)
     objs, bases, cost = jax.vmap(ls, in_axes=(None, 0, 0, 0))(problem, built.objs, built.bases, built.cost)
-    return built, objs, bases, cost
+    return built, jax.vmap(to_path, in_axes=(None, 0, 0))(problem, objs, bases), cost
 
 
-@partial(jax.jit, static_argnames=("iterations", "alphas", "neighbourhood", "rounds"))
-def _grasp_best(key, problem, iterations, alphas, neighbourhood, rounds):
-    _, objs, bases, cost = _iterations(key, problem, iterations, alphas, neighbourhood, rounds)
+@partial(jax.jit, static_argnames=_STATIC)
+def _grasp_best(key, problem, iterations, alphas, neighbourhood, rounds, search):
+    _, paths, cost = _iterations(key, problem, iterations, alphas, neighbourhood, rounds, search)
     i = jnp.argmin(cost)
-    return to_path(problem, objs[i], bases[i]), cost[i]
+    return paths[i], cost[i]
 
 
-def _checked(iterations, alphas, neighbourhood, rounds) -> tuple[int, tuple[float, ...], int, int]:
+def _checked(iterations, alphas, neighbourhood, rounds, search) -> tuple[int, tuple[float, ...], int, int, str]:
     """The GRASP settings as the static arguments of the jitted cores, or ValueError."""
     if isinstance(iterations, bool) or not isinstance(iterations, (int, np.integer)) or iterations < 1:
         raise ValueError(f"GRASP needs at least one iteration; got {iterations!r}")
@@ -356,7 +407,9 @@ def _checked(iterations, alphas, neighbourhood, rounds) -> tuple[int, tuple[floa
         raise ValueError(f"GRASP local-search neighbourhood must be an integer >= 1; got {neighbourhood!r}")
     if isinstance(rounds, bool) or not isinstance(rounds, (int, np.integer)) or rounds < 0:
         raise ValueError(f"GRASP local-search rounds must be an integer >= 0; got {rounds!r}")
-    return int(iterations), tuple(float(a) for a in alphas), int(neighbourhood), int(rounds)
+    if search not in LOCAL_SEARCHES:
+        raise ValueError(f"unknown GRASP local search {search!r}; choose from {LOCAL_SEARCHES}")
+    return int(iterations), tuple(float(a) for a in alphas), int(neighbourhood), int(rounds), search
 
 
 def grasp(
@@ -367,6 +420,7 @@ def grasp(
     alphas: Sequence[float] = THESIS_ALPHAS,
     neighbourhood: int = THESIS_NEIGHBOURHOOD,
     rounds: int = DEFAULT_ROUNDS,
+    local_search: str = "deliveries",
 ) -> Schedule:
     """Best schedule of ``iterations`` GRASP iterations (thesis Algorithm 2).
 
@@ -378,24 +432,25 @@ def grasp(
       key: PRNG key.
       problem: the instance.
       iterations: number of GRASP iterations (thesis: 1000).
-      alphas, neighbourhood, rounds: see ``grasp_batch``.
+      alphas, neighbourhood, rounds, local_search: see ``grasp_batch``.
 
     Returns:
       ``Schedule`` (cost ``inf`` if every iteration got stuck).
 
     Raises:
-      ValueError: ``iterations < 1``, an α outside (0, 1], ``neighbourhood < 1`` or
-        ``rounds < 0``.
+      ValueError: ``iterations < 1``, an α outside (0, 1], ``neighbourhood < 1``,
+        ``rounds < 0`` or an unknown ``local_search``.
     """
-    settings = _checked(iterations, alphas, neighbourhood, rounds)
+    settings = _checked(iterations, alphas, neighbourhood, rounds, local_search)
     t0 = time.perf_counter()
     path, cost = _grasp_best(key, problem, *settings)
     path = np.asarray(path)
     wall = time.perf_counter() - t0
+    info = {"iterations": settings[0], "local_search": settings[4]}
     if not np.isfinite(float(cost)):
-        return Schedule((), float("inf"), wall, "grasp", {"iterations": settings[0]})
+        return Schedule((), float("inf"), wall, "grasp", info)
     nodes = unpad(path, problem.n_nodes)
-    return Schedule(nodes, path_cost(problem, nodes), wall, "grasp", {"iterations": settings[0]})
+    return Schedule(nodes, path_cost(problem, nodes), wall, "grasp", info)
 
 
 def unpad(path: np.ndarray, n_nodes: int) -> tuple[int, ...]:

@@ -16,7 +16,7 @@ def plot_sweep(out: Path, sweep: Sequence, solved: Mapping[str, Schedule]) -> No
     with greedy / A* / exact as horizontal lines. ``sweep``: ``SweepPoint``s."""
     plt = pyplot()
     it = [r.iterations for r in sweep]
-    fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4))
+    fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4.2), layout="constrained")
     a.plot(it, [r.cost_mean for r in sweep], "o-", label="GRASP (mean)")
     a.fill_between(it, [r.cost_min for r in sweep], [r.cost_max for r in sweep], alpha=0.2, label="GRASP (min–max)")
     b.plot(it, [r.time_ms for r in sweep], "o-", label="GRASP")
@@ -26,9 +26,8 @@ def plot_sweep(out: Path, sweep: Sequence, solved: Mapping[str, Schedule]) -> No
             b.axhline(solved[name].wall_time_s * 1e3, color=style[0], ls=style[1:], label=name)
     a.set(xscale="log", xlabel="GRASP iterations", ylabel="schedule cost", title="Cost vs iterations (Figs 5.9–5.10)")
     b.set(xscale="log", yscale="log", xlabel="GRASP iterations", ylabel="wall time [ms]", title="Time vs iterations (Figs 5.11–5.12)")
-    a.legend()
-    b.legend()
-    fig.tight_layout()
+    handles, labels = a.get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncol=len(labels), fontsize=8)
     fig.savefig(out / "grasp_iterations.png", dpi=120)
     plt.close(fig)
 
@@ -43,7 +42,7 @@ def plot_route(out: Path, problem: PickPlaceProblem, schedule: Schedule, greedy:
     for k, b in enumerate(problem.bases):
         pos[b] = (2.0, 1.5 - 3.0 * k / max(problem.n_bases - 1, 1))
     names = THESIS_NODE_NAMES if problem.n_nodes == len(THESIS_NODE_NAMES) else None
-    fig, ax = plt.subplots(figsize=(7, 5))
+    fig, ax = plt.subplots(figsize=(7, 5), layout="constrained")
     for v, (x, y) in pos.items():
         ax.plot(x, y, "o", ms=20, color="lightsteelblue")
         ax.annotate(str(v), (x, y), ha="center", va="center")
@@ -60,6 +59,5 @@ def plot_route(out: Path, problem: PickPlaceProblem, schedule: Schedule, greedy:
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, 0.0), fontsize=8)
     ax.set_axis_off()
     ax.set_title("Chosen route")
-    fig.tight_layout()
-    fig.savefig(out / "route.png", dpi=120)
+    fig.savefig(out / "route.png", dpi=120, bbox_inches="tight")
     plt.close(fig)

@@ -39,12 +39,14 @@ class GraspSettings:
       alphas: α values (``None``: thesis eq. 4.6, ``THESIS_ALPHAS``).
       neighbourhood: local-search neighbourhood (``None``: thesis 4.7.2.2, three).
       rounds: local-search rounds (``None``: ``GRASP_ROUNDS``).
+      local_search: ``"deliveries"`` (ours, default) or ``"thesis"`` (Algorithm 4: node swaps).
     """
 
     iterations: int = 1000
     alphas: tuple[float, ...] | None = None
     neighbourhood: int | None = None
     rounds: int | None = None
+    local_search: str = "deliveries"
 
     def kwargs(self, iterations: int | None = None) -> dict[str, Any]:
         """Keyword arguments of ``grasp`` (``iterations`` overrides the setting)."""
@@ -53,6 +55,7 @@ class GraspSettings:
             "alphas": THESIS_ALPHAS if self.alphas is None else tuple(float(a) for a in self.alphas),
             "neighbourhood": THESIS_NEIGHBOURHOOD if self.neighbourhood is None else int(self.neighbourhood),
             "rounds": DEFAULT_ROUNDS if self.rounds is None else int(self.rounds),
+            "local_search": self.local_search,
         }
 
 

@@ -1,7 +1,7 @@
 """Neural-network surrogates of the dexterity indices w and KCI (dexterity paper; docs/theory.md §4).
 
 Datasets D1 (θ1…θ11 → KCI) and D2 (θ5…θ11 → w) of the 12-DOF UVMS, sampled as in the paper's
-Fig. 7; a feed-forward network (FFBN: tanh hidden layer, linear output) trained by
+Fig. 7, labelled from the geometric Jacobian or the paper's spatial-twist form (:class:`IndexForm`); a feed-forward network (FFBN: tanh hidden layer, linear output) trained by
 Levenberg–Marquardt or Adam; a Gaussian RBF network (RBFN) grown greedily; the paper's design
 loops; save/load. Every network has ``index_fn(q)`` with ``q: (..., 12)`` so it can replace the
 analytic index (``analytic_index_fn``) wherever a batch of configurations is scored.
@@ -40,6 +40,8 @@ from uvms_jax.surrogate._ffbn import padded_width
 from uvms_jax.surrogate._ffbn import trim_hidden
 from uvms_jax.surrogate._ffbn import train_ffbn_adam
 from uvms_jax.surrogate._ffbn import train_ffbn_lm
+from uvms_jax.surrogate._form import JACOBIAN_FORMS
+from uvms_jax.surrogate._form import IndexForm
 from uvms_jax.surrogate._io import load_network
 from uvms_jax.surrogate._io import save_network
 from uvms_jax.surrogate._lm import LevenbergMarquardt

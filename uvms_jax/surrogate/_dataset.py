@@ -1,17 +1,21 @@
 """Training and test datasets for the index surrogates (dexterity paper §3.1, §4.2, Fig. 7).
 
-Two datasets on the 12-DOF UVMS (``kin.uvms12``), both from the geometric Jacobian
-``kin.jacobian`` (rows: tool-point linear velocity, angular velocity; base frame):
+Two datasets on the 12-DOF UVMS (``kin.uvms12``), labelled by the index of a Jacobian
+:class:`IndexForm`: by default the geometric Jacobian (rows: tool-point linear velocity,
+angular velocity; base frame), optionally the paper's spatial-twist form (eq. 6) with the
+normalisation of eq. 7:
 
 - D1 (eq. 11): inputs θ1…θ11 (joint indices 0…10) → ``KCI = σ_min / σ_max``.
 - D2 (eq. 12): inputs θ5…θ11 (joint indices 4…10) → ``w = sqrt(det(J Jᵀ))``.
 
 θ12 never enters J (paper §2.2) and is not an input. A network's ``index_fn(q)`` takes the
 full configuration ``q: (..., 12)`` and reads only its input joints. The other joints do not
-change the index: with this Jacobian the singular values of J, hence w and KCI, are invariant
-to θ12 and to the vehicle translation θ1…θ3 and roll θ4 (base invariance; checked numerically
-to 1e-15). Wherever a configuration is built from the inputs alone, the joints not in the
-input are held at 0.
+change the index: with the geometric Jacobian the singular values of J, hence w and KCI, are
+invariant to θ12 and to the vehicle translation θ1…θ3 and roll θ4 (base invariance; checked
+numerically to 1e-15). With the spatial form w is the same, but KCI depends on θ1…θ4 (it
+falls as the vehicle moves away from the base origin), which is why D1 has them as inputs.
+Wherever a configuration is built from the inputs alone, the joints not in the input are held
+at 0.
 
 Sampling (paper Fig. 7, "paper" mode): a task point TP; the manipulator base MB (the point
 where the first two arm axes meet) lies in the annulus ``r_min ≤ |MB − TP|_xy ≤ r_max`` at the
@@ -45,7 +49,8 @@ import numpy as np
 from flax import struct
 from jax import Array
 
-from uvms_jax import indices, kin
+from uvms_jax import kin
+from uvms_jax.surrogate._form import IndexForm, index_fn, index_of
 
 INDEX_NAMES = ("w", "kci")
 # Joint indices (0-based) of the network inputs, paper eqs. (11)–(12).
@@ -61,19 +66,22 @@ def index_inputs(index: str) -> tuple[int, ...]:
     return INDEX_INPUTS[index]
 
 
-def analytic_index(chain: kin.Chain, q, index: str) -> Array:
-    """Analytic index of ``q: (..., n_joints)`` [m, rad]: w or KCI of ``kin.jacobian``, ``(...)``."""
+def analytic_index(chain: kin.Chain, q, index: str, form: IndexForm = IndexForm()) -> Array:
+    """Analytic index of ``q: (..., n_joints)`` [m, rad]: w or KCI of the Jacobian ``form``, ``(...)``.
+
+    Default form: ``indices.manipulability_of`` / ``indices.kci_of`` (geometric Jacobian, fused).
+    """
     if index not in INDEX_INPUTS:
         raise ValueError(f"unknown index {index!r}; expected one of {INDEX_NAMES}")
-    J = kin.jacobian(chain, q)
-    return indices.manipulability(J) if index == "w" else indices.kci(J)
+    return index_of(chain, q, index, form)
 
 
-def analytic_index_fn(chain: kin.Chain, index: str) -> Callable[[Array], Array]:
-    """``q: (..., n_joints) → (...)`` analytic index, jitted; the reference a surrogate replaces."""
+def analytic_index_fn(chain: kin.Chain, index: str, form: IndexForm = IndexForm()) -> Callable[[Array], Array]:
+    """``q: (..., n_joints) → (...)`` analytic index, jitted: the reference a surrogate replaces,
+    and the project's fastest analytic path (one fused kernel that never stores J)."""
     if index not in INDEX_INPUTS:
         raise ValueError(f"unknown index {index!r}; expected one of {INDEX_NAMES}")
-    return jax.jit(lambda q: analytic_index(chain, q, index))
+    return index_fn(chain, index, form)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -213,6 +221,7 @@ class Dataset:
       index: "w" or "kci" (static).
       inputs: joint indices of ``x`` (static).
       sampling: how ``q`` was drawn (static).
+      form: Jacobian form and normalisation of the index ``y`` (static).
     """
 
     q: Array
@@ -221,6 +230,7 @@ class Dataset:
     index: str = struct.field(pytree_node=False)
     inputs: tuple[int, ...] = struct.field(pytree_node=False)
     sampling: Sampling = struct.field(pytree_node=False)
+    form: IndexForm = struct.field(pytree_node=False, default=IndexForm())
 
     def __len__(self) -> int:
         return int(self.y.shape[0])
@@ -234,16 +244,17 @@ class Dataset:
         return head, tail
 
 
-@partial(jax.jit, static_argnames=("sampling", "n", "index", "dtype"))
-def _make(key, chain, mb0, sampling, n, index, dtype):
+@partial(jax.jit, static_argnames=("sampling", "n", "index", "dtype", "form"))
+def _make(key, chain, mb0, sampling, n, index, dtype, form):
     q = _sample(key, chain, mb0, sampling, n, dtype)
     # Without the barrier XLA fuses the sampler (RNG, sin/cos) into every consumer of q in the
     # unrolled kinematics; compilation then takes minutes instead of seconds.
     q = jax.lax.optimization_barrier(q)
-    return q, analytic_index(chain, q, index)
+    return q, analytic_index(chain, q, index, form)
 
 
-def make_dataset(key: Array, chain: kin.Chain, sampling: Sampling, n: int, index: str, dtype=jnp.float32) -> Dataset:
+def make_dataset(key: Array, chain: kin.Chain, sampling: Sampling, n: int, index: str, dtype=jnp.float32,
+                 form: IndexForm = IndexForm()) -> Dataset:
     """Sample ``n`` configurations and label them with the analytic ``index`` — one jitted call.
 
     Args:
@@ -253,13 +264,16 @@ def make_dataset(key: Array, chain: kin.Chain, sampling: Sampling, n: int, index
       n: number of samples (1000 for the paper's test sets).
       index: "w" (dataset D2) or "kci" (dataset D1).
       dtype: float32 or float64 (float64 needs ``jax_enable_x64``).
+      form: Jacobian form and normalisation of the index (default: geometric, unnormalised;
+        the paper's is ``IndexForm("spatial")`` with its eq. 7 limits, if known).
     """
     inputs = index_inputs(index)
     _check_uvms(chain)
+    form.check_chain(chain)
     if n <= 0:
         raise ValueError(f"n must be positive, got {n}")
-    q, y = _make(key, chain, jnp.asarray(mb_offset(chain)), sampling, int(n), index, jnp.dtype(dtype))
-    return Dataset(q=q, x=q[:, list(inputs)], y=y, index=index, inputs=inputs, sampling=sampling)
+    q, y = _make(key, chain, jnp.asarray(mb_offset(chain)), sampling, int(n), index, jnp.dtype(dtype), form)
+    return Dataset(q=q, x=q[:, list(inputs)], y=y, index=index, inputs=inputs, sampling=sampling, form=form)
 
 
 def save_dataset(path, ds: Dataset, **meta) -> tuple[Path, Path]:
@@ -269,7 +283,7 @@ def save_dataset(path, ds: Dataset, **meta) -> tuple[Path, Path]:
     npz, js = path.with_suffix(".npz"), path.with_suffix(".json")
     np.savez(npz, q=np.asarray(ds.q), x=np.asarray(ds.x), y=np.asarray(ds.y))
     config = {"index": ds.index, "inputs": list(ds.inputs), "n": len(ds), "dtype": str(ds.y.dtype),
-              "sampling": ds.sampling.to_dict(), **meta}
+              "sampling": ds.sampling.to_dict(), "form": ds.form.to_dict(), **meta}
     js.write_text(json.dumps(config, indent=2))
     return npz, js
 
@@ -281,4 +295,6 @@ def load_dataset(path) -> Dataset:
     with np.load(path.with_suffix(".npz")) as data:
         q, x, y = (jnp.asarray(data[k]) for k in ("q", "x", "y"))
     sampling = Sampling(**config["sampling"])
-    return Dataset(q=q, x=x, y=y, index=config["index"], inputs=tuple(config["inputs"]), sampling=sampling)
+    form = IndexForm(**config.get("form", {}))  # files written before forms existed: geometric
+    return Dataset(q=q, x=x, y=y, index=config["index"], inputs=tuple(config["inputs"]), sampling=sampling,
+                   form=form)

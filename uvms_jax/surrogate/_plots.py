@@ -14,13 +14,14 @@ from uvms_jax.surrogate._design import Design
 def plot_ffbn_design(name: str, design: Design, error_goal: float, path: Path) -> None:
     """Max relative test error vs hidden neurons of an FFBN design loop (Figs. 10/14) → PNG."""
     plt = pyplot()
-    fig, ax = plt.subplots(figsize=(5.5, 3.8))
+    from matplotlib.ticker import MaxNLocator  # after pyplot(): matplotlib is imported lazily
+    fig, ax = plt.subplots(figsize=(5.5, 3.8), layout="constrained")
     sizes = [s.size for s in design.steps]
     ax.semilogy(sizes, [s.test_error for s in design.steps], "o-", label="max relative test error")
     ax.axhline(error_goal, color="r", ls="--", label=f"E = {error_goal:g}")
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     ax.set(xlabel="hidden neurons", ylabel="max |(T − S)/T|", title=f"{name.upper()} design process")
-    ax.legend()
-    fig.tight_layout()
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
     fig.savefig(path, dpi=120)
     plt.close(fig)
 
@@ -28,16 +29,18 @@ def plot_ffbn_design(name: str, design: Design, error_goal: float, path: Path) -
 def plot_rbfn_design(name: str, design: Design, error_goal: float, path: Path) -> None:
     """Max relative test error and RBF units vs spread of an RBFN design loop (Figs. 8/12) → PNG."""
     plt = pyplot()
-    fig, ax = plt.subplots(figsize=(5.5, 3.8))
+    from matplotlib.ticker import MaxNLocator  # after pyplot(): matplotlib is imported lazily
+    fig, ax = plt.subplots(figsize=(6.5, 3.8), layout="constrained")
     spreads = [s.spread for s in design.steps]
     ax.semilogy(spreads, [s.test_error for s in design.steps], "o-", label="max relative test error")
     ax.axhline(error_goal, color="r", ls="--", label=f"E = {error_goal:g}")
-    ax.set(xlabel="spread (normalised inputs)", ylabel="max |(T − S)/T|", title=f"{name.upper()} design process")
+    ax.set(xlabel="spread [normalised input units]", ylabel="max |(T − S)/T|", title=f"{name.upper()} design process")
     ax2 = ax.twinx()
-    ax2.plot(spreads, [s.size for s in design.steps], "s:", color="gray", label="units")
+    ax2.plot(spreads, [s.size for s in design.steps], "s:", color="gray", label="RBF units")
     ax2.set_ylabel("RBF units")
-    ax.legend(loc="upper right")
-    fig.tight_layout()
+    ax2.yaxis.set_major_locator(MaxNLocator(integer=True))
+    lines = ax.get_legend_handles_labels()[0] + ax2.get_legend_handles_labels()[0]
+    ax.legend(lines, [h.get_label() for h in lines], loc="upper left", bbox_to_anchor=(1.15, 1.0), fontsize=8)
     fig.savefig(path, dpi=120)
     plt.close(fig)
 
@@ -45,12 +48,13 @@ def plot_rbfn_design(name: str, design: Design, error_goal: float, path: Path) -
 def plot_training(designs: Mapping[str, Design], path: Path) -> None:
     """Training mse [index units²] of each selected network, per epoch or added unit (Figs. 9/11/13/15) → PNG."""
     plt = pyplot()
-    fig, ax = plt.subplots(figsize=(6, 4))
+    from matplotlib.ticker import MaxNLocator  # after pyplot(): matplotlib is imported lazily
+    fig, ax = plt.subplots(figsize=(7, 4), layout="constrained")
     for name, d in designs.items():
         label = "unit" if name.startswith("rbfn") else "epoch"
         ax.semilogy(np.arange(len(d.history)), d.history, label=f"{name} (per {label})")
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     ax.set(xlabel="epoch / added unit", ylabel="training mse [index units²]", title="Training of the selected networks")
-    ax.legend()
-    fig.tight_layout()
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
     fig.savefig(path, dpi=120)
     plt.close(fig)
