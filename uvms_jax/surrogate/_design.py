@@ -27,6 +27,7 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
+from uvms_jax import progress
 from uvms_jax.surrogate._dataset import Dataset
 from uvms_jax.surrogate._ffbn import FFBN, init_ffbn, padded_width, train_ffbn_adam, train_ffbn_lm
 from uvms_jax.surrogate._lm import LMHyperParams
@@ -128,30 +129,33 @@ def design_ffbn(
     t_all = time.perf_counter()
     steps: list[DesignStep] = []
     best = None
-    for hidden in range(hidden_start, max_hidden + 1, hidden_step):
-        key, sub = jax.random.split(key)
-        t0 = time.perf_counter()
-        net = init_ffbn(sub, hidden, train)
-        width = padded_width(hidden)
-        if trainer == "lm":
-            net, state, history = train_ffbn_lm(net, train, max_epochs=max_epochs, target_mse=target_mse,
-                                                hyper=lm_hyper, pad_to=width)
-            mse, epochs = float(state.mse), int(state.epoch)
-        else:
-            net, history = train_ffbn_adam(net, train, steps=adam_steps, learning_rate=adam_learning_rate, pad_to=width)
-            mse, epochs = float(history[-1]), adam_steps
-        err = float(max_relative_error(test.y, net.predict(test.x)))
-        step = DesignStep(hidden, float("nan"), err, mse, epochs, time.perf_counter() - t0)
-        steps.append(step)
-        log.info("FFBN-%s H=%d: max rel test error %.4f, train mse %.3g, %d epochs, %.2f s",
-                 train.index, hidden, err, mse, epochs, step.seconds)
-        if callback is not None:
-            callback(step)
-        history = np.asarray(history)
-        if best is None or err < best[1]:
-            best = (net, err, history[np.isfinite(history)])
-        if err < error_goal:
-            return Design(net, steps, True, time.perf_counter() - t_all, best[2])
+    # The loop stops at the first size that meets the target: the bar's total is the most it can take.
+    with progress.bar(range(hidden_start, max_hidden + 1, hidden_step), desc="FFBN design", unit="size") as bar:
+        for hidden in bar:
+            key, sub = jax.random.split(key)
+            t0 = time.perf_counter()
+            net = init_ffbn(sub, hidden, train)
+            width = padded_width(hidden)
+            if trainer == "lm":
+                net, state, history = train_ffbn_lm(net, train, max_epochs=max_epochs, target_mse=target_mse,
+                                                    hyper=lm_hyper, pad_to=width)
+                mse, epochs = float(state.mse), int(state.epoch)
+            else:
+                net, history = train_ffbn_adam(net, train, steps=adam_steps, learning_rate=adam_learning_rate,
+                                               pad_to=width)
+                mse, epochs = float(history[-1]), adam_steps
+            err = float(max_relative_error(test.y, net.predict(test.x)))
+            step = DesignStep(hidden, float("nan"), err, mse, epochs, time.perf_counter() - t0)
+            steps.append(step)
+            log.info("FFBN-%s H=%d: max rel test error %.4f, train mse %.3g, %d epochs, %.2f s",
+                     train.index, hidden, err, mse, epochs, step.seconds)
+            if callback is not None:
+                callback(step)
+            history = np.asarray(history)
+            if best is None or err < best[1]:
+                best = (net, err, history[np.isfinite(history)])
+            if err < error_goal:
+                return Design(net, steps, True, time.perf_counter() - t_all, best[2])
     return Design(best[0], steps, False, time.perf_counter() - t_all, best[2])
 
 
@@ -186,18 +190,19 @@ def design_rbfn(
     n_spreads = int(np.floor((spread_max - spread_start) / spread_step + 1e-9)) + 1
     steps: list[DesignStep] = []
     best = None
-    for spread in spread_start + spread_step * np.arange(n_spreads):
-        t0 = time.perf_counter()
-        net, history = fit_rbfn(train, spread=float(spread), target_mse=target_mse, max_centres=max_centres)
-        err = float(max_relative_error(test.y, net.predict(test.x)))
-        step = DesignStep(net.n_centres, float(spread), err, float(history[-1]), net.n_centres, time.perf_counter() - t0)
-        steps.append(step)
-        log.info("RBFN-%s spread %.3g: %d units, max rel test error %.4f, train mse %.3g, %.2f s",
-                 train.index, spread, net.n_centres, err, step.train_mse, step.seconds)
-        if callback is not None:
-            callback(step)
-        if best is None or err < best[1]:
-            best = (net, err, np.asarray(history))
-        if err < error_goal:
-            return Design(net, steps, True, time.perf_counter() - t_all, np.asarray(history))
+    with progress.bar(spread_start + spread_step * np.arange(n_spreads), desc="RBFN design", unit="spread") as bar:
+        for spread in bar:
+            t0 = time.perf_counter()
+            net, history = fit_rbfn(train, spread=float(spread), target_mse=target_mse, max_centres=max_centres)
+            err = float(max_relative_error(test.y, net.predict(test.x)))
+            step = DesignStep(net.n_centres, float(spread), err, float(history[-1]), net.n_centres, time.perf_counter() - t0)
+            steps.append(step)
+            log.info("RBFN-%s spread %.3g: %d units, max rel test error %.4f, train mse %.3g, %.2f s",
+                     train.index, spread, net.n_centres, err, step.train_mse, step.seconds)
+            if callback is not None:
+                callback(step)
+            if best is None or err < best[1]:
+                best = (net, err, np.asarray(history))
+            if err < error_goal:
+                return Design(net, steps, True, time.perf_counter() - t_all, np.asarray(history))
     return Design(best[0], steps, False, time.perf_counter() - t_all, best[2])
