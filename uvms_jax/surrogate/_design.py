@@ -130,8 +130,9 @@ def design_ffbn(
     steps: list[DesignStep] = []
     best = None
     # The loop stops at the first size that meets the target: the bar's total is the most it can take.
-    with progress.bar(range(hidden_start, max_hidden + 1, hidden_step), desc="FFBN design", unit="size") as bar:
-        for hidden in bar:
+    sizes = range(hidden_start, max_hidden + 1, hidden_step)
+    with progress.bar(total=len(sizes), desc="FFBN design", unit="size") as bar:
+        for hidden in sizes:
             key, sub = jax.random.split(key)
             t0 = time.perf_counter()
             net = init_ffbn(sub, hidden, train)
@@ -147,6 +148,7 @@ def design_ffbn(
             err = float(max_relative_error(test.y, net.predict(test.x)))
             step = DesignStep(hidden, float("nan"), err, mse, epochs, time.perf_counter() - t0)
             steps.append(step)
+            bar.update()
             log.info("FFBN-%s H=%d: max rel test error %.4f, train mse %.3g, %d epochs, %.2f s",
                      train.index, hidden, err, mse, epochs, step.seconds)
             if callback is not None:
@@ -190,13 +192,14 @@ def design_rbfn(
     n_spreads = int(np.floor((spread_max - spread_start) / spread_step + 1e-9)) + 1
     steps: list[DesignStep] = []
     best = None
-    with progress.bar(spread_start + spread_step * np.arange(n_spreads), desc="RBFN design", unit="spread") as bar:
-        for spread in bar:
+    with progress.bar(total=n_spreads, desc="RBFN design", unit="spread") as bar:
+        for spread in spread_start + spread_step * np.arange(n_spreads):
             t0 = time.perf_counter()
             net, history = fit_rbfn(train, spread=float(spread), target_mse=target_mse, max_centres=max_centres)
             err = float(max_relative_error(test.y, net.predict(test.x)))
             step = DesignStep(net.n_centres, float(spread), err, float(history[-1]), net.n_centres, time.perf_counter() - t0)
             steps.append(step)
+            bar.update()
             log.info("RBFN-%s spread %.3g: %d units, max rel test error %.4f, train mse %.3g, %.2f s",
                      train.index, spread, net.n_centres, err, step.train_mse, step.seconds)
             if callback is not None:
