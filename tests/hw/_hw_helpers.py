@@ -91,3 +91,19 @@ def urdf_link_frames(q):
 def ypr_matrix(yaw, pitch, roll):
     """Rotation of ZYX Euler angles: Rz(yaw) Ry(pitch) Rx(roll)."""
     return _rpy((roll, pitch, yaw))
+
+
+class Recorder:
+    """Transport that keeps what is sent and never answers."""
+
+    def __init__(self):
+        self.sent = []
+
+    def send(self, data):
+        self.sent.append(data)
+
+    def recv(self, timeout):
+        return b""
+
+    def close(self):
+        pass

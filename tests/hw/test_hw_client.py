@@ -10,23 +10,7 @@ from uvms_jax.hw import (BROADCAST, Bravo7, DeviceID, HardwareStatus, LimitError
                          PacketReader, SerialTransport, SimArm, SimConfig, SimServer, UdpTransport, encode_floats,
                          parse_host_port)
 
-from _hw_helpers import Q0, SimRun
-
-
-class Recorder:
-    """Transport that keeps what is sent and never answers."""
-
-    def __init__(self):
-        self.sent = []
-
-    def send(self, data):
-        self.sent.append(data)
-
-    def recv(self, timeout):
-        return b""
-
-    def close(self):
-        pass
+from _hw_helpers import Q0, Recorder, SimRun
 
 
 class Broken(Recorder):

@@ -10,21 +10,7 @@ import pytest
 from uvms_jax.hw import (BRAVO7, Bravo7, DeviceID, LimitError, PacketID, PacketReader, encode_packet,
                          synchronised_move, wire_position)
 
-from _hw_helpers import assert_within_limits
-
-
-class Recorder:
-    def __init__(self):
-        self.sent = []
-
-    def send(self, data):
-        self.sent.append(data)
-
-    def recv(self, timeout):
-        return b""
-
-    def close(self):
-        pass
+from _hw_helpers import Recorder, assert_within_limits
 
 
 LOWER = np.array([j.lower for j in BRAVO7])
