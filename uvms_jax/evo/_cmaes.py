@@ -43,13 +43,16 @@ def _run(key: Array, problem: Any, low: Array, high: Array, std_init: Array, pop
         state, best_u, best_f = carry
         k_ask, k_tell = jax.random.split(k)
         u, state = es.ask(k_ask, state, params)
+        u = u.astype(low.dtype)  # evosax draws in JAX's default float (float64 under x64)
         f = problem.fitness(to_x(u))
         f = jnp.where(jnp.isnan(f), -jnp.inf, f)
         state, _ = es.tell(k_tell, u, -f, state, params)
         i = jnp.argmax(f)
         better = f[i] > best_f
         best_u, best_f = jnp.where(better, u[i], best_u), jnp.where(better, f[i], best_f)
-        return (state, best_u, best_f), best_f
+        # Keep the carry in the problem's dtype whatever evosax computes in.
+        new = (state, best_u, best_f)
+        return jax.tree_util.tree_map(lambda x, ref: x.astype(ref.dtype), new, carry), best_f.astype(low.dtype)
 
     init = (state, jnp.full((m,), 0.5, dtype=low.dtype), jnp.asarray(-jnp.inf, dtype=low.dtype))
     (state, best_u, best_f), history = jax.lax.scan(step, init, jax.random.split(k_loop, generations))

@@ -15,6 +15,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from uvms_jax import progress
 from uvms_jax.evo._binary import BinaryCodec, make_codec
 from uvms_jax.evo._cmaes import run_cmaes
 from uvms_jax.evo._ga import BinaryGA, GAParams, run_ga, run_ga_batch
@@ -233,16 +234,20 @@ def run_docking(settings: DockingSettings) -> DockingRun:
     problem = docking_problem(s.scene, s.dtype)
     codec, ga, params = make_ga(s.ga, problem)
     log.info("load average %s; devices %s", os.getloadavg(), jax.devices())
+    # Each step is one compiled call (the GA batch, the grid, ...): progress counts steps.
+    bar = progress.bar(total=3 + s.time_single_runs + s.cmaes.enabled, desc="docking", unit="step")
 
     # GA: R runs in one call. The first call compiles; the second is timed.
     keys = jax.random.split(jax.random.key(s.seed), s.n_runs)
     _, t_compile = _timed(run_ga_batch, keys, problem, codec, ga, params)
     res, t_batch = _timed(run_ga_batch, keys, problem, codec, ga, params)
     log.info("GA: %d runs in %.3f s after compilation (compile + first run %.1f s)", s.n_runs, t_batch, t_compile)
+    bar.update()
     seconds = [t_batch] * s.n_runs
     if s.time_single_runs:
         run_ga(keys[0], problem, codec, ga, params)  # compile the single-run path
         seconds = [_timed(run_ga, keys[r], problem, codec, ga, params)[1] for r in range(s.n_runs)]
+        bar.update()
 
     # Grid reference: a global grid (compiled once for any size), then zoom stages.
     g = s.grid
@@ -250,10 +255,12 @@ def run_docking(settings: DockingSettings) -> DockingRun:
     per = grid_periodicity(problem)
     grid_search(problem, low, high, (2, 2, 2, 2), per, g.chunk_size)  # compile
     grid, t_grid = _timed(grid_search, problem, low, high, g.counts, per, g.chunk_size)
+    bar.update()
     stages, t_refine = _timed(
         refine_grid_search, problem, grid, g.refine_counts, g.refine_stages, g.refine_shrink, g.chunk_size
     )
     ref = stages[-1] if stages else grid
+    bar.update()
     # Objective terms of the GA bests and the two grid optima in one call (one compilation).
     scored = jnp.concatenate([res.best_x, grid.x[None], ref.x[None]])
     report = arm_report(problem, scored) if isinstance(problem, ArmDockingProblem) else None
@@ -274,6 +281,8 @@ def run_docking(settings: DockingSettings) -> DockingRun:
         cmaes = CMAESRuns(np.asarray(cma.best_x), np.asarray(cma.best_fitness), np.asarray(cma.history),
                           t_cma, c.population_size * c.generations)
         log.info("CMA-ES: %d runs in %.2f s, best %.4f", c.n_runs, t_cma, float(np.max(cmaes.fitness)))
+        bar.update()
+    bar.close()
 
     poses, fitness = np.asarray(res.best_x), np.asarray(res.best_fitness)
     generations = np.asarray(res.generations)
