@@ -81,7 +81,8 @@ def main() -> None:
     kci_fn = jax.jit(lambda q: indices.kci_of(chain, q, task))
     # On a GPU the two calls above run the Pallas kernel; the XLA fusion they replace, for comparison.
     rows_ = indices.task_rows(task)
-    xla_fns = {"w": jax.jit(lambda q: _manipulability_of(chain, q, rows_)), "kci": jax.jit(lambda q: _kci_of(chain, q, rows_))}
+    xla_fns = {"w": jax.jit(lambda q: _manipulability_of(chain, q, rows_)),
+               "kci": jax.jit(lambda q: _kci_of(chain, q, rows_))}
 
     tdev = torch.device(args.device)
     peer = pk.build_serial_chain_from_urdf(kin.to_urdf(chain), "tool").to(dtype=torch.float32, device=tdev)
@@ -113,8 +114,9 @@ def main() -> None:
         if jax.default_backend() == "gpu":
             for name, fn in xla_fns.items():
                 row[f"uvms_jax_xla_{name}_per_s"] = n / best_time(lambda: fn(q).block_until_ready(), args.repeats)
-            row["kernel_vs_xla_max_abs_diff_w"] = float(jnp.max(jnp.abs(w_fn(q[:100000]) - xla_fns["w"](q[:100000]))))
-            row["kernel_vs_xla_max_abs_diff_kci"] = float(jnp.max(jnp.abs(kci_fn(q[:100000]) - xla_fns["kci"](q[:100000]))))
+            head = q[:100000]
+            for name, fn in (("w", w_fn), ("kci", kci_fn)):
+                row[f"kernel_vs_xla_max_abs_diff_{name}"] = float(jnp.max(jnp.abs(fn(head) - xla_fns[name](head))))
         if n <= args.peer_max_batch:
             try:
                 row.update(measure_peer(q, check, w_fn, peer_w, peer_kci, tdev, sync, args.repeats))
