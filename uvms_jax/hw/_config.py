@@ -10,6 +10,8 @@ from a plain dict.
 from __future__ import annotations
 
 import dataclasses
+import math
+import numbers
 from collections.abc import Mapping
 from typing import Any
 
@@ -112,10 +114,14 @@ class SimConfig:
       fault_after_s: simulated time after which the fault appears [s].
       object_width_mm: an object between the jaws: closing jaws stop at this opening, as a
         real gripper stalls on what it grasps [mm] (0 = nothing to grasp).
-      dynamics: the links carry the manufacturer's masses and inertias under gravity (base
-        z up) and buoyancy, so the arm sags under load and its currents show it; False:
-        weightless links.
+      dynamics: the links carry the manufacturer's masses and inertias under gravity and
+        buoyancy (along the world's z, see ``base_rpy``), so the arm sags under load and its
+        currents show it; False: weightless links.
       water_density: density of the water around the arm for buoyancy [kg/m³] (0: in air).
+      base_rpy: orientation of the arm's base frame in the world (whose z is up) as URDF
+        roll, pitch, yaw about the fixed x, y, z axes, R = Rz(yaw) Ry(pitch) Rx(roll) [rad];
+        gravity acts along the world's −z and buoyancy along its +z. (0, 0, 0): base z up;
+        (π, 0, 0): hanging under a vehicle, base z down. Yaw does not change the loads.
       coalesce: send all answers to one datagram in one datagram (a byte stream's view)
         instead of one packet per datagram, as the arm does over UDP.
       seed: seed of the fault-injection random generator.
@@ -133,6 +139,7 @@ class SimConfig:
     object_width_mm: float = 0.0
     dynamics: bool = True
     water_density: float = 1000.0
+    base_rpy: tuple[float, float, float] = (0.0, 0.0, 0.0)
     coalesce: bool = False
     seed: int = 0
 
@@ -149,6 +156,14 @@ class SimConfig:
                 raise ValueError(f"SimConfig.{name} must be a joint letter A..G or empty")
         if not 0 <= self.fault_bits <= 0xFFFFFFFF:
             raise ValueError("SimConfig.fault_bits must fit in the 4 status bytes")
+        try:
+            rpy = tuple(float(v) if isinstance(v, numbers.Real) else math.nan for v in self.base_rpy)
+        except TypeError:  # not a sequence
+            rpy = ()
+        if len(rpy) != 3 or not all(map(math.isfinite, rpy)):
+            raise ValueError(f"SimConfig.base_rpy must be 3 finite angles (roll, pitch, yaw) [rad], "
+                             f"got {self.base_rpy!r}")
+        object.__setattr__(self, "base_rpy", rpy)  # a list or numpy array given: a tuple of floats
 
 
 @dataclasses.dataclass(frozen=True)

@@ -4,6 +4,8 @@ The physics model is deliberately small and private to ``hw`` (it does not depen
 ``uvms_jax.kin``): the six revolute joints of :mod:`uvms_jax.bravo7` (origins, axes and limits
 of the public URDF, docs/theory.md §1.3) with capsule links carrying the manufacturer's masses
 and inertias under gravity and buoyancy (docs/hardware.md §3), and the jaws as one slide joint.
+The physics runs in the arm's base frame; the base's orientation in the world
+(``SimConfig.base_rpy``: upright, or hanging under a vehicle) turns gravity and buoyancy.
 The device firmware is modelled as a servo that turns the demand into a joint speed every
 physics step — POSITION mode ``v = clip(gain·(q* - q), ±v_max)``, VELOCITY mode
 ``v = clip(v*, ±v_max)``, other modes ``v = 0`` — tracked by a MuJoCo velocity actuator plus an
@@ -75,8 +77,26 @@ _HEARTBEAT_SLOTS = 10  # HEARTBEAT_SET carries 10 packet ids; a REQUEST lists at
 _BASE_DEVICES = (BASE_ROUTER, BASE_COMPUTER)
 
 
+def _world_up(base_rpy: Sequence[float] = SimConfig.base_rpy) -> np.ndarray:
+    """(3,) unit vector of the world's up (+z) in the arm's base frame, ``R^T e_z`` for the base
+    orientation R = Rz(yaw) Ry(pitch) Rx(roll) of ``base_rpy`` (URDF roll, pitch, yaw [rad]).
+
+    Gravity acts along minus this vector, buoyancy along it; (0, 0, 0) gives exactly
+    (0, 0, 1) (the upright base), (π, 0, 0) about (0, 0, -1) (the base hanging).
+    """
+    import mujoco  # imported here: the protocol layer must not need MuJoCo
+
+    q = np.zeros(4)
+    mujoco.mju_euler2Quat(q, np.asarray(base_rpy, dtype=float), "XYZ")  # as the URDF origins below
+    mujoco.mju_negQuat(q, q)  # the inverse rotation: world → base
+    up = np.zeros(3)
+    mujoco.mju_rotVecQuat(up, np.array([0.0, 0.0, 1.0]), q)
+    return up
+
+
 def sim_spec(joints: Sequence[JointSpec] = BRAVO7, kv: float = _KV,
-             physics_dt: float = SimConfig.physics_dt, dynamics: bool = True) -> mujoco.MjSpec:
+             physics_dt: float = SimConfig.physics_dt, dynamics: bool = True,
+             base_rpy: Sequence[float] = SimConfig.base_rpy) -> mujoco.MjSpec:
     """MuJoCo model of the simulated arm: six hinges G…B, jaws slide A, a velocity actuator and
     an integral-torque motor on each.
 
@@ -85,7 +105,8 @@ def sim_spec(joints: Sequence[JointSpec] = BRAVO7, kv: float = _KV,
     from each joint to the next (no contacts). With ``dynamics`` each link carries the
     manufacturer's mass, centre of mass and inertia (:func:`uvms_jax.bravo7.urdf_inertials`;
     the closed jaws' as a body fixed to link B at the tool frame, ``"jaws_housing"``) under
-    gravity along the base's -z; buoyancy is applied by :class:`SimArm`. Without it the
+    gravity along the world's -z (:func:`_world_up`: the base's -z when upright); buoyancy is
+    applied by :class:`SimArm`. MuJoCo's world is the arm's base frame. Without it the
     capsules have the density of water and are gravity compensated. The jaws' fingers (the
     slide) are light and gravity compensated either way.
 
@@ -94,6 +115,8 @@ def sim_spec(joints: Sequence[JointSpec] = BRAVO7, kv: float = _KV,
       kv: velocity actuator gain [N·m·s/rad; N·s/m for the jaws].
       physics_dt: time step [s].
       dynamics: the manufacturer's mass properties, gravity on.
+      base_rpy: orientation of the base in the world, URDF roll, pitch, yaw [rad]
+        (:attr:`SimConfig.base_rpy`); it sets the gravity vector.
 
     Returns:
       an uncompiled ``mujoco.MjSpec`` (``.compile()`` gives the ``MjModel``).
@@ -107,6 +130,7 @@ def sim_spec(joints: Sequence[JointSpec] = BRAVO7, kv: float = _KV,
     spec.compiler.eulerseq = "XYZ"  # URDF rpy: extrinsic roll, pitch, yaw
     spec.option.timestep = physics_dt
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+    spec.option.gravity = -_GRAVITY * _world_up(base_rpy)
     spec.default.geom.contype = 0  # joint-space physics: nothing collides
     spec.default.geom.conaffinity = 0
     spec.default.geom.density = 1000.0
@@ -173,7 +197,8 @@ class SimArm:
         self._mj = mujoco
         self.config = config
         self.joints = tuple(joints)
-        self.model = sim_spec(self.joints, physics_dt=config.physics_dt, dynamics=config.dynamics).compile()
+        self.model = sim_spec(self.joints, physics_dt=config.physics_dt, dynamics=config.dynamics,
+                              base_rpy=config.base_rpy).compile()
         self.data = mujoco.MjData(self.model)
         names = [j.name for j in self.joints]
         self._qadr = np.array([self.model.jnt_qposadr[self.model.joint(n).id] for n in names])
@@ -193,14 +218,18 @@ class SimArm:
                 raise ValueError(f"initial {j.name} = {v} outside [{j.lower}, {j.upper}]")
         self.data.qpos[self._qadr] = q0 * self._scale
         self._mj.mj_forward(self.model, self.data)
-        # Buoyancy of each link with mass: body ids, centres of buoyancy in the bodies [m], lifts [N].
+        # Buoyancy of each link with mass: body ids, centres of buoyancy in the bodies [m], lifts
+        # [N] along the world's up, fixed in the base frame (the base does not move).
         buoyant = [(self.model.body("jaws_housing" if body == "tool" else f"link_{body}").id, inertial)
                    for body, inertial in zip(bravo7.INERTIAL_BODIES, bravo7.urdf_inertials())
                    if body != "base" and config.dynamics and config.water_density > 0]
         self._buoy_ids = np.array([b for b, _ in buoyant], dtype=int)
-        self._buoy_lift = np.array([config.water_density * i.volume * _GRAVITY for _, i in buoyant])
+        lifts = np.array([config.water_density * i.volume * _GRAVITY for _, i in buoyant])
         self._buoy_arm = np.array([np.subtract(i.cob, i.com) for _, i in buoyant]).reshape(-1, 3)
-        self.data.xfrc_applied[self._buoy_ids, 2] = self._buoy_lift
+        lift = lifts[:, None] * _world_up(config.base_rpy)  # (k, 3) [N]
+        self.data.xfrc_applied[self._buoy_ids, :3] = lift
+        # Its moment arm turns with the link: r × F = [F]×ᵀ r, whose row j is F × e_j (k, 3, 3) [N].
+        self._buoy_moment = np.cross(lift[:, None, :], np.eye(3))
         # Views of MjData (fetching one is slow in a per-step loop) and the rows of the buoyant
         # bodies: a slice when their ids run on (they do: G…B, then the jaws' housing).
         self._xmat, self._xfrc = self.data.xmat, self.data.xfrc_applied
@@ -294,16 +323,17 @@ class SimArm:
         return (force[self._act] + force[self._iact]) / self._torque_constant * 1e3
 
     def _apply_buoyancy(self) -> None:
-        """Set each link's buoyancy (up, at its centre of buoyancy) as an applied force.
+        """Set each link's buoyancy (along the world's up, at its centre of buoyancy) as an
+        applied force.
 
         MuJoCo applies it at the centre of mass, so the lift's torque about that point goes
-        with it: ``r × f ẑ = (r_y f, -r_x f, 0)``, r = R (cob - com) in the world frame
-        (written out: this runs every physics step; the vertical force is set once)."""
+        with it: ``r × F``, r = R (cob - com) in MuJoCo's world (the base frame), F the lift
+        along :func:`_world_up` (F is set once; this runs every physics step, hence the
+        precomputed matrix of ``r ↦ r × F``)."""
         if self._buoy_ids.size == 0:
             return
-        R, arm, f = self._xmat[self._buoy_rows], self._buoy_arm, self._buoy_lift
-        self._xfrc[self._buoy_rows, 3] = np.einsum("kj,kj->k", R[:, 3:6], arm) * f
-        self._xfrc[self._buoy_rows, 4] = -np.einsum("kj,kj->k", R[:, 0:3], arm) * f
+        r = np.einsum("kij,kj->ki", self._xmat[self._buoy_rows].reshape(-1, 3, 3), self._buoy_arm)
+        self._xfrc[self._buoy_rows, 3:6] = np.einsum("kij,kj->ki", self._buoy_moment, r)
 
     def _holding_torque(self) -> np.ndarray:
         """(n,) drive torques that hold the arm still in its current pose [N·m; N]."""

@@ -2,9 +2,10 @@
 
     uvms-hw run PLAN [--sim | --udp HOST:PORT | --serial DEV] [--dry-run] [--speed-scale S]
                      [--drop P] [--corrupt P] [--latency S] [--stuck-joint X]
-                     [--hw-fault X:BITS[@T]] [--stream HZ] [--config hw.yaml] [--out DIR] ...
+                     [--hw-fault X:BITS[@T]] [--base-rpy R P Y] [--stream HZ] [--config hw.yaml]
+                     [--out DIR] ...
     uvms-hw export PLAN --ros OUT.yaml [--jaws-start MM]
-    uvms-hw sim [--port 6789] [--drop P] [--coalesce] ...
+    uvms-hw sim [--port 6789] [--drop P] [--coalesce] [--base-rpy R P Y] ...
     uvms-hw --version
 
 PLAN is a ``plan.json`` or a ``trajectory_msgs/JointTrajectory``-shaped file, YAML or JSON by
@@ -85,7 +86,8 @@ def _parse_fault(text: str) -> dict:
 
 
 def _sim_args(p: argparse.ArgumentParser) -> None:
-    g = p.add_argument_group("simulated arm faults (default: none, or the --config sim section)")
+    g = p.add_argument_group("simulated arm: faults and mounting (default: no faults, base upright, "
+                             "or the --config sim section)")
     g.add_argument("--drop", type=float, help="probability a datagram is lost (each direction)")
     g.add_argument("--corrupt", type=float, help="probability a reply has one byte changed")
     g.add_argument("--latency", type=float, help="added reply latency [s]")
@@ -95,6 +97,9 @@ def _sim_args(p: argparse.ArgumentParser) -> None:
     g.add_argument("--coalesce", action="store_true", default=None,
                    help="answer a datagram with one datagram (default: one packet per datagram, as the arm)")
     g.add_argument("--seed", type=int, help="fault-injection seed")
+    g.add_argument("--base-rpy", type=float, nargs=3, metavar=("R", "P", "Y"),
+                   help="orientation of the arm's base in the world, URDF roll pitch yaw [rad]: gravity "
+                        "along the world's -z, buoyancy +z (0 0 0: upright; 3.14159 0 0: hanging)")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -162,7 +167,8 @@ def _configs(args: argparse.Namespace) -> tuple[HwConfig, SimConfig]:
     sim_over = {k: v for k, v in {
         "drop": args.drop, "corrupt": args.corrupt, "latency_s": args.latency,
         "stuck_joint": args.stuck_joint.upper() if args.stuck_joint else None, "seed": args.seed,
-        "coalesce": args.coalesce}.items()
+        "coalesce": args.coalesce,
+        "base_rpy": tuple(args.base_rpy) if args.base_rpy is not None else None}.items()
         if v is not None}
     sim_over.update(args.hw_fault or {})
     return hw, dataclasses.replace(sim, **sim_over)
@@ -189,9 +195,10 @@ def _run(args: argparse.Namespace) -> int:
     if not (args.sim or args.udp or args.serial):
         print("uvms-hw: choose a link: --sim, --udp HOST:PORT or --serial DEV", file=sys.stderr)
         return EXIT_REFUSED
-    fault_flags = (args.drop, args.corrupt, args.latency, args.stuck_joint, args.hw_fault, args.coalesce)
-    if not args.sim and any(f is not None for f in fault_flags):
-        print("uvms-hw: fault injection flags need --sim", file=sys.stderr)
+    sim_flags = (args.drop, args.corrupt, args.latency, args.stuck_joint, args.hw_fault, args.coalesce,
+                 args.base_rpy)
+    if not args.sim and any(f is not None for f in sim_flags):
+        print("uvms-hw: fault injection and simulated-arm flags need --sim", file=sys.stderr)
         return EXIT_REFUSED
     out = args.out or Path("outputs/hw") / time.strftime("%Y-%m-%d_%H-%M-%S")
     client = None
