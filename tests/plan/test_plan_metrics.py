@@ -30,6 +30,7 @@ from uvms_jax.settings import SettingsError, from_mapping
 CONFIGS = Path(__file__).parents[2] / "configs"
 SCENARIO = CONFIGS / "scenario" / "thesis_cage.yaml"
 ATOL = 1e-9  # float64 throughout; hand formulas vs code differ only by round-off
+WEIGHTLESS = {"gravity_base": np.zeros(3), "water_density": 0.0}  # only the held object's force
 
 
 @pytest.fixture(scope="module")
@@ -46,7 +47,7 @@ def test_two_point_metrics_by_hand(scene):
     delta = 0.3
     q1 = q0 + np.array([delta, 0, 0, 0, 0, 0])
     f = np.array([0.0, 0.0, -1.2])  # base frame: along G's axis (z)
-    jm, ee, tau = trajectory_metrics(chain, np.stack([q0, q1]), f)
+    jm, ee, tau = trajectory_metrics(chain, np.stack([q0, q1]), f, **WEIGHTLESS)
     assert jm == pytest.approx(delta, abs=ATOL)
     frames = np.asarray(kin.kinematics(chain, q0).T_base_joint)
     p = np.asarray(kin.fk(chain, q0))[:3, 3]
@@ -63,13 +64,13 @@ def test_two_point_metrics_by_hand(scene):
     t0, t1 = torques(q0), torques(q1)
     assert abs(t0[0]) < ATOL
     assert tau == pytest.approx(max(np.abs(t0).max(), np.abs(t1).max()), abs=ATOL)
-    # Nothing held: no torque from a payload.
-    assert trajectory_metrics(chain, np.stack([q0, q1]))[2] == 0.0
+    # Nothing held and a weightless arm: no torque (tests/plan/test_plan_torque.py weighs the arm).
+    assert trajectory_metrics(chain, np.stack([q0, q1]), **WEIGHTLESS)[2] == 0.0
 
 
 def test_metrics_reject_bad_input():
     with pytest.raises(ValueError, match="finite"):
-        trajectory_metrics(kin.bravo7(), np.full((2, 6), np.nan))
+        trajectory_metrics(kin.bravo7(), np.full((2, 6), np.nan), **WEIGHTLESS)
 
 
 def test_time_parameterisation_synchronised():

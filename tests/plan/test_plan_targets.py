@@ -78,7 +78,7 @@ def test_edges_planned_and_revalidated(setup, planner):
         m = e.metrics
         assert m.planning_time <= 5.0 and m.joint_movement > 0 and m.ee_distance > 0
         assert m.security >= 0.0
-        assert (m.max_torque > 0) == (src in scene.objects)
+        assert m.max_torque > 0  # the arm's own weight and buoyancy load every move
 
 
 def test_plan_passes_hw_dry_run(setup):

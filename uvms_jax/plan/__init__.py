@@ -18,7 +18,8 @@
 * planning: :func:`plan_motion` (any OMPL geometric planner by name, :func:`ompl_planners`,
   with its parameters, :func:`planner_parameters`; simplification; MuJoCo re-check),
   :func:`time_parameterize`, :class:`Trajectory`, :func:`check_trajectory`, :func:`seed_ompl`;
-* metrics: :func:`trajectory_metrics`, :class:`EdgeMetrics` (fields: ``uvms_jax.sched.METRICS``);
+* metrics: :func:`trajectory_metrics`, :class:`EdgeMetrics` (fields: ``uvms_jax.sched.METRICS``),
+  :func:`static_torques` (the arm's weight and buoyancy and the held object's load);
 * task graph: :func:`task_edges`, :func:`plan_edge`, :func:`metric_tensor` (the input of
   ``uvms_jax.sched.normalise_metrics``), :func:`plan_from_edges`.
 
@@ -29,6 +30,7 @@ The package never imports ``uvms_jax.hw``: plans meet the hardware only through
 from uvms_jax.plan._collision import CollisionChecker
 from uvms_jax.plan._collision import densify
 from uvms_jax.plan._metrics import EdgeMetrics
+from uvms_jax.plan._metrics import static_torques
 from uvms_jax.plan._metrics import trajectory_metrics
 from uvms_jax.plan._planners import ompl_planners
 from uvms_jax.plan._planners import planner_parameters

@@ -127,8 +127,8 @@ def plan_edge(
     """Plan one edge, time-parameterise it, re-check it and measure its metrics.
 
     Metrics are measured on the path interpolated at ``recheck_resolution`` (clearance at
-    ``clearance_resolution``), torques with the wrench of the held object (edges out of an
-    object) rotated into the arm's base frame. With ``fast`` (a
+    ``clearance_resolution``), torques from the arm's own weight and buoyancy plus the held
+    object's load (edges out of an object), gravity rotated into the arm's base frame. With ``fast`` (a
     :class:`SphereChecker` on ``checker``) the planner checks motions with it; every result is
     re-checked with MuJoCo.
     ``params``: the planner's parameters (see :func:`~uvms_jax.plan.plan_motion`).
@@ -146,7 +146,10 @@ def plan_edge(
     if ctx.held is not None:
         force = scene.T_base_world[:3, :3] @ scene.payload_force_world(ctx.held)
     dense = densify(res.path, recheck_resolution)
-    jm, ee, tau = trajectory_metrics(chain, dense, force)
+    # Gravity in the base frame: the base may be tilted or hang (SceneSpec.with_base).
+    gravity = scene.T_base_world[:3, :3] @ np.array([0.0, 0.0, -scene.spec.gravity])
+    jm, ee, tau = trajectory_metrics(chain, dense, force, gravity_base=gravity,
+                                     water_density=scene.spec.water_density)
     clearance = float(np.min(checker.clearance_batch(densify(res.path, clearance_resolution))))
     metrics = EdgeMetrics(planning_time=res.planning_time_s, joint_movement=jm, ee_distance=ee, security=clearance,
                           max_torque=tau)
