@@ -9,13 +9,14 @@ A thin entry point: config → :class:`uvms_jax.evo.DockingSettings` → :func:`
   wmax_best.png, wmax_ill_placed.png   w_max heat maps (eq. 16)
   convergence.png     best fitness per generation of every GA and CMA-ES run
   summary.json        acceptance figures (GA vs grid, batch time, evaluations/s, quarter/facing checks)
-For an arm scene (docking/scene@scene=bravo7_panel, bravo7_tables) best_pose.json (IK solution
-and w per target) and docked_top_view.png replace the w_max files.
+For an arm scene (docking/preset=bravo7, bravo7_tables) best_pose.json (IK solution and w per
+target) and docked_top_view.png replace the w_max files.
 
   python experiments/docking.py                              # full (the paper's arm)
   python experiments/docking.py docking/preset=fast          # ~1 minute demo
   python experiments/docking.py docking/preset=bravo7        # Bravo 7 beside a panel (GPU)
   python experiments/docking.py docking/preset=bravo7_fast   # the same at test size
+  python experiments/docking.py docking/preset=bravo7_tables # above the thesis's tables (GPU)
 """
 
 from __future__ import annotations
@@ -29,7 +30,7 @@ import jax
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, OmegaConf
 
-from uvms_jax import evo
+from uvms_jax import evo, plan
 from uvms_jax.settings import from_mapping
 
 log = logging.getLogger(__name__)
@@ -40,11 +41,14 @@ jax.config.update("jax_default_matmul_precision", "highest")
 @hydra.main(version_base="1.3", config_path="../configs", config_name="docking")
 def main(cfg: DictConfig) -> dict:
     out = Path(HydraConfig.get().runtime.output_dir)
+    c = OmegaConf.to_container(cfg, resolve=True)
+    scenario = c.pop("scenario", None)  # a pick-and-place scenario: its grasp and place poses are the task
     with _cli.config_errors():
-        settings = from_mapping(evo.DockingSettings, OmegaConf.to_container(cfg, resolve=True))
+        settings = from_mapping(evo.DockingSettings, c)
+        task = plan.docking_task(plan.build_scene(scenario)) if scenario else None
     if settings.dtype == "float64":
         jax.config.update("jax_enable_x64", True)
-    run = evo.run_docking(settings)
+    run = evo.run_docking(settings, task)
     summary = evo.write_docking(run, out)
     log.info("GA/grid ratios %s (refined grid: %s); %.0f GA evaluations/s; outputs in %s",
              summary["ga_ratio_to_grid"], summary["ga_ratio_to_refined_grid"], summary["ga_evaluations_per_s"], out)

@@ -1,24 +1,25 @@
 """End-to-end pipeline: what ``make demo`` runs (docs/design.md "Data flow").
 
-Stages, each in its own folder of the Hydra run directory (``uvms_jax.pipeline``):
+One intervention with one Reach Bravo 7 under a vehicle above the thesis's tables. Stages,
+each in its own folder of the Hydra run directory (``uvms_jax.pipeline``):
 
-  docking/    docking GA (fast preset), grid reference, w_max maps (docs/theory.md §3)
-  surrogate/  small FFBN/RBFN surrogates of w, timed against the analytic index (§4)
-  plan/       IK targets and OMPL plans of every task-graph edge of the thesis cage (§5)
-  schedule/   the planning metrics' cost matrix → greedy, GRASP, A*, exact; the thesis eq. 4.1
-              instance beside the thesis timings; the winner's plan.json
+  surrogate/  the arm's dexterity map on its vehicle, learned from analytic scores (docs/docking.md)
+  docking/    the vehicle pose by the GA (analytic, and on the map), grid reference (docs/docking.md)
+  plan/       IK targets and OMPL plans of every task-graph edge, the arm's base at the docked pose
+  schedule/   the planning metrics' cost matrix → greedy, GRASP, A*, exact; the winner's plan.json
   hw/         the winner's plan checked (dry run) and executed on the simulated Bravo 7
+  baseline/   plan, schedule and run again with the thesis's fixed cage-top mount; compared
 
-and ``summary.md`` (every stage's table, the papers' figures next to ours, links to every PNG)
-and ``results.json`` (key figures, for ``experiments/gather.py``) in the run directory.
+and ``summary.md`` (the chain at a glance, every stage's tables, links to every PNG) and
+``results.json`` (key figures, for ``experiments/gather.py``) in the run directory.
 
     python experiments/pipeline.py                      # the demo (< 10 min on 2 CPU cores)
     python experiments/pipeline.py experiment=tiny      # smoke run
     python experiments/pipeline.py 'stages=[schedule,hw]' hw.plan=examples/thesis_plan.json
 
-The docking, surrogate and schedule stages take their experiment's own config
-(``configs/<name>.yaml``) composed with ``<stage>.overrides``; ``ga``, ``seed`` and
-``sched.weights`` of this config are merged over them.
+The docking and schedule stages take their experiment's own config (``configs/<name>.yaml``)
+composed with ``<stage>.overrides``; ``ga``, ``seed`` and ``sched.weights`` of this config are
+merged over them.
 """
 
 from __future__ import annotations
@@ -62,12 +63,12 @@ def settings_of(cfg: DictConfig) -> PipelineSettings:
         hw_stage["plan"] = hydra.utils.to_absolute_path(hw_stage["plan"])
     elif "plan" not in stages:
         hw_stage["plan"] = str(EXAMPLE_PLAN)
+    docking = _stage_config("docking", c["docking"]["overrides"], ga=c["ga"], seed=c["seed"])
+    docking.pop("scenario", None)  # the pipeline's own scenario is the task
     return from_mapping(PipelineSettings, {
-        "seed": c["seed"], "stages": stages,
-        "docking": _stage_config("docking", c["docking"]["overrides"], ga=c["ga"], seed=c["seed"]),
-        "surrogate": _stage_config("surrogate", c["surrogate"]["overrides"], seed=c["seed"]),
-        "scenario": c["scenario"], "plan": c["plan"], "sched": schedule, "sched_planner": c["sched"]["planner"],
-        "hw": hw_stage})
+        "seed": c["seed"], "stages": stages, "reach": c["reach"], "docking": docking,
+        "docking_fitness": c["docking_fitness"], "scenario": c["scenario"], "baseline": c.get("baseline"),
+        "plan": c["plan"], "sched": schedule, "sched_planner": c["sched"]["planner"], "hw": hw_stage})
 
 
 @hydra.main(version_base="1.3", config_path="../configs", config_name="pipeline")

@@ -10,7 +10,7 @@ import pytest
 from hydra import compose, initialize_config_dir
 from omegaconf import OmegaConf
 
-from uvms_jax import evo, kin
+from uvms_jax import evo, kin, plan
 from uvms_jax.evo._collide import boxes_overlap, segment_box_distance
 from uvms_jax.settings import from_mapping
 
@@ -201,23 +201,33 @@ def test_panel_targets_face_the_panel():
     np.testing.assert_allclose(sorted(set(np.round(p[:, 2], 9))), [-0.4, -0.3, -0.2], atol=1e-9)
 
 
-def test_tables_scene_groups_the_symmetric_grasps():
+def test_tables_task_groups_the_symmetric_grasps():
+    """The thesis tables' grasp and place poses as a docking task (uvms_jax.plan.docking_task)."""
     with initialize_config_dir(config_dir=str(CONFIGS), version_base="1.3"):
-        cfg = compose("docking", overrides=["docking/scene@scene=bravo7_tables"])
-    scene = from_mapping(evo.DockingSettings, OmegaConf.to_container(cfg, resolve=True)).scene
-    T, group, T_box, half, names = evo.scenario_targets(scene.scenario)
-    assert len(names) == 8 and group.max() == 7  # 4 objects and 4 bases
-    assert np.bincount(group)[0] == 4  # cube 1: four grasps a quarter turn apart
-    assert T_box.shape == (len(scene.scenario["tables"]), 4, 4)
-    # Every grasp approaches from above (tool z down) within the tables' incline.
-    assert np.all(T[:, 2, 2] < -0.9)
+        cfg = compose("docking", overrides=["docking/preset=bravo7_tables"])
+    scenario = OmegaConf.to_container(cfg, resolve=True)["scenario"]
+    task = plan.docking_task(plan.build_scene(scenario))
+    assert len(task.names) == 8 and task.group.max() == 7  # 4 objects and 4 bases
+    assert np.bincount(task.group)[0] == 4  # cube 1: four grasps a quarter turn apart
+    assert task.T_world_box.shape == (len(scenario["tables"]), 4, 4)
+    assert np.all(task.T_world_tool[:, 2, 2] < -0.9)  # every grasp approaches from above
+    fewer = evo.fewer_alternatives(task, 2)
+    assert np.all(np.bincount(fewer.group) == np.minimum(np.bincount(task.group), 2))
+    # The kept alternatives of cube 1 are a half turn apart (every other of its four yaws).
+    x0, x2 = task.T_world_tool[np.flatnonzero(task.group == 0)[[0, 2]], :3, 0]
+    np.testing.assert_allclose(fewer.T_world_tool[np.flatnonzero(fewer.group == 0), :3, 0], [x0, x2])
 
 
-def test_arm_scene_settings_need_one_target_source():
-    with pytest.raises(ValueError, match="exactly one target source"):
-        evo.ArmSceneSettings()
+def test_arm_scene_needs_exactly_one_task():
+    task = evo.panel_task(evo.PanelSettings())
+    with pytest.raises(ValueError, match="exactly one task"):
+        evo.arm_docking_problem(evo.ArmSceneSettings())
+    with pytest.raises(ValueError, match="exactly one task"):
+        evo.arm_docking_problem(evo.ArmSceneSettings(panel=evo.PanelSettings()), task)
     with pytest.raises(ValueError, match="unknown arm"):
         evo.arm_docking_problem(evo.ArmSceneSettings(arm="puma", panel=evo.PanelSettings()))
+    with pytest.raises(ValueError, match="alternatives"):
+        evo.ArmSceneSettings(alternatives=0)
 
 
 @pytest.mark.slow

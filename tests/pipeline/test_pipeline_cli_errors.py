@@ -72,12 +72,14 @@ def test_gather_usage_error_is_one_line():
 
 
 @pytest.mark.parametrize(("script", "own", "foreign"), [
-    ("docking.py", ["docking/preset: bravo7, bravo7_fast, fast, full*", "ga: bravo7, paper*"], ["sched/weights", "surrogate:", "scenario"]),
+    ("docking.py", ["docking/preset: bravo7, bravo7_fast, bravo7_tables, demo, fast, full*", "ga: bravo7, paper*",
+                    "scenario: cage_obstacles, thesis_cage, thesis_tables"], ["sched/weights", "surrogate:"]),
     ("schedule.py", ["sched/source: edges_csv, synthetic, thesis_matrix*", "sched/weights: equal*"],
      ["docking/preset", "ga:", "surrogate:"]),
     ("surrogate.py", ["surrogate: paper*, small"], ["sched/weights", "ga:", "docking/preset"]),
     ("plan.py", ["plan: default*", "scenario: cage_obstacles, thesis_cage*"], ["sched/weights", "ga:", "surrogate:"]),
-    ("pipeline.py", ["experiment: full, tiny", "ga: bravo7, paper*", "sched/weights: equal*", "hw: default*"],
+    ("pipeline.py", ["experiment: full, tiny", "ga: bravo7*, paper", "sched/weights: equal*", "hw: default*",
+                     "scenario: cage_obstacles, thesis_cage, thesis_tables*", "scenario@baseline: cage_obstacles, thesis_cage*"],
      ["docking/preset", "sched/source", "surrogate:"]),
 ])
 def test_help_lists_own_groups_only(script, own, foreign):

@@ -8,18 +8,21 @@ import re
 import subprocess
 import sys
 
+import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 from hydra import compose, initialize_config_dir
 
 from _pipeline_helpers import CONFIG_DIR, ROOT
 from uvms_jax.pipeline import PipelineSettings
 
 STAGE_FILES = {  # each stage's folder must hold these files
-    "docking": ["runs.csv", "grid_optimum.json", "wmax.json", "wmax_best.png", "summary.json"],
-    "surrogate": ["report.json"],
+    "surrogate": ["reach_map.json"],
+    "docking": ["runs.csv", "grid_optimum.json", "best_pose.json", "docked_top_view.png", "summary.json"],
     "plan": ["edges.csv", "targets.json", "cost_RRTConnect.csv", "ee_paths_RRTConnect.png"],
     "schedule": ["table.md", "results.json", "plan.json"],
     "hw": ["run.csv", "result.json"],
+    "baseline": ["plan/edges.csv", "schedule/plan.json", "hw/result.json"],
 }
 
 
@@ -44,7 +47,8 @@ def test_configs_compose(pipeline, experiment):
         for overrides in ([], [f"experiment={experiment}"]):
             cfg = compose(config_name="pipeline", overrides=overrides)
             settings = pipeline.settings_of(cfg)
-            assert settings.stages == ("docking", "surrogate", "plan", "schedule", "hw")
+            assert settings.stages == ("surrogate", "docking", "plan", "schedule", "hw", "baseline")
+            assert settings.scenario["cage"] is None and settings.baseline["cage"] is not None  # open water; the cage
             assert settings.plan.seed == cfg.seed and settings.sched.weights.name == "equal"
             assert settings.docking.ga.population_size == cfg.ga.population_size
             assert settings.sched.source.kind == "edges_csv"  # the planning stage's metrics
@@ -78,13 +82,24 @@ def test_pipeline_tiny_end_to_end(tmp_path):
     res = _run(tmp_path, ["experiment=tiny"])
     summary = (tmp_path / "summary.md").read_text()
     titled = _tables_of(summary)
-    for words in ("Stage times", "Docking", "Surrogates", "planning", "Schedules", "Execution"):
+    for words in ("Stage times", "Docking", "Surrogate", "Planning", "Schedules", "Execution", "Baseline"):
         assert any(words in t for t in titled), (words, titled)
     for stage, files in STAGE_FILES.items():
         for f in files:
             assert (tmp_path / stage / f).exists(), f"{stage}/{f}"
     for png in tmp_path.rglob("*.png"):  # every PNG is linked
         assert str(png.relative_to(tmp_path)) in summary
-    assert res["plan"]["RRTConnect_success"] > 0
+    assert "## The intervention at a glance" in summary
+    assert res["plan"]["RRTConnect_success"] == 34
     assert res["hw"]["ok"], res["hw"]["reason"]
+    assert res["hw"]["gates"] == 38 and res["hw"]["sim"]["limit_violations"] == 0  # every gate reached
     assert res["hw"]["plan"].endswith("schedule/plan.json")
+    # The planning scene's arm base is the docked vehicle's mount, computed here from the pose:
+    # T_world_vehicle = (x, y, z, Rz(ψ)), then the scene file's mount (0.35 m ahead, 0.2 m down, hanging).
+    x, y, z, psi = res["docking"]["pose"]
+    T_world_vehicle = np.eye(4)
+    T_world_vehicle[:3, :3] = Rotation.from_euler("z", psi).as_matrix()
+    T_world_vehicle[:3, 3] = x, y, z
+    mount = np.array([[1.0, 0, 0, 0.35], [0, -1.0, 0, 0], [0, 0, -1.0, -0.2], [0, 0, 0, 1.0]])
+    np.testing.assert_allclose(res["plan"]["T_world_base"], T_world_vehicle @ mount, atol=1e-6)
+    assert res["docking"]["pose_M_a"] > 0 and res["baseline"]["fixed"]["ok"]

@@ -14,6 +14,8 @@ from uvms_jax.evo._arm import ArmDockingProblem
 from uvms_jax.evo._arm import ArmReport
 from uvms_jax.evo._arm import arm_report
 from uvms_jax.evo._arm import arm_solutions
+from uvms_jax.evo._arm import arm_terms
+from uvms_jax.evo._arm import arm_tool_poses
 from uvms_jax.evo._arm import arm_solutions_jit
 from uvms_jax.evo._arm import dls_ik
 from uvms_jax.evo._arm import evaluate_arm
@@ -39,6 +41,7 @@ from uvms_jax.evo._ga import BinaryGA
 from uvms_jax.evo._ga import GAParams
 from uvms_jax.evo._ga import GAResult
 from uvms_jax.evo._ga import GAState
+from uvms_jax.evo._ga import ga_batch_compiled
 from uvms_jax.evo._ga import run_ga
 from uvms_jax.evo._ga import run_ga_batch
 from uvms_jax.evo._grid import GridResult
@@ -55,10 +58,12 @@ from uvms_jax.evo._problem import evaluate_traced
 from uvms_jax.evo._problem import in_search_set
 from uvms_jax.evo._problem import make_docking_problem
 from uvms_jax.evo._scenes import ARMS
+from uvms_jax.evo._scenes import ArmTask
 from uvms_jax.evo._scenes import load_arm
 from uvms_jax.evo._scenes import arm_docking_problem
 from uvms_jax.evo._scenes import panel_targets
-from uvms_jax.evo._scenes import scenario_targets
+from uvms_jax.evo._scenes import panel_task
+from uvms_jax.evo._scenes import fewer_alternatives
 from uvms_jax.evo._settings import FIELDS
 from uvms_jax.evo._settings import ArmSceneSettings
 from uvms_jax.evo._settings import BoxSettings

@@ -229,6 +229,17 @@ def dls_ik(chain: Chain, T_base_tool: Array, q0: Array, iterations: int, damping
     return jax.lax.fori_loop(0, iterations, step, _wrap(chain, q))
 
 
+def arm_tool_poses(problem: ArmDockingProblem, pose: Array) -> tuple[Array, Array, Array]:
+    """The demanded tool poses seen from the arm at vehicle poses ``(..., 4)`` (traceable).
+
+    Returns:
+      ``T_world_vehicle (..., 4, 4)``, ``T_world_base (..., 4, 4)`` and ``T_base_tool (..., k, 4, 4)``.
+    """
+    T_world_vehicle = base_transform(pose)
+    T_world_base = T_world_vehicle @ problem.T_vehicle_base
+    return T_world_vehicle, T_world_base, _inverse(T_world_base)[..., None, :, :] @ problem.T_world_tool
+
+
 def arm_solutions(problem: ArmDockingProblem, pose: Array) -> tuple[Array, Array, Array]:
     """All seeds' IK solutions for vehicle poses ``(..., 4)`` (traceable; jitted as
     :func:`arm_solutions_jit`).
@@ -238,9 +249,7 @@ def arm_solutions(problem: ArmDockingProblem, pose: Array) -> tuple[Array, Array
       ``w (..., k, S)`` manipulability (0 where not valid).
     """
     p = problem
-    T_world_vehicle = base_transform(pose)  # (..., 4, 4)
-    T_world_base = T_world_vehicle @ p.T_vehicle_base
-    T_base_tool = _inverse(T_world_base)[..., None, :, :] @ p.T_world_tool  # (..., k, 4, 4)
+    T_world_vehicle, T_world_base, T_base_tool = arm_tool_poses(p, pose)
     q = dls_ik(p.chain, T_base_tool[..., None, :, :], p.seeds, p.iterations, p.damping)  # (..., k, S, n)
     K = kin.kinematics(p.chain, q)
     reached = kin.reaches(T_base_tool[..., None, :, :], K.T_base_tool)
@@ -277,8 +286,10 @@ def target_w(problem: ArmDockingProblem, w: Array) -> Array:
     return jnp.moveaxis(best, 0, -1)
 
 
-def _terms(problem: ArmDockingProblem, pose: Array, w: Array) -> DockingEval:
-    """Objective terms of vehicle poses ``(..., 4)`` from their per-seed ``w (..., k, S)``."""
+def arm_terms(problem: ArmDockingProblem, pose: Array, w: Array) -> DockingEval:
+    """Objective terms of vehicle poses ``(..., 4)`` from the manipulability ``w (..., k, S)``
+    of each demanded tool pose's ``S`` candidate solutions (0 where not valid); ``S = 1`` for
+    one value per tool pose (e.g. a learned map's, :mod:`uvms_jax.surrogate`)."""
     p = problem
     M_a = jnp.min(target_w(p, w), axis=-1)  # eq. 1
     p_d = jnp.einsum("...ij,j->...i", base_transform(pose)[..., :3, :3], p.p_dock) + pose[..., :3]
@@ -290,7 +301,7 @@ def _terms(problem: ArmDockingProblem, pose: Array, w: Array) -> DockingEval:
 
 def evaluate_arm_traced(problem: ArmDockingProblem, pose: Array) -> DockingEval:
     """Objective terms of vehicle poses ``(..., 4)`` (eq. 1, 3, 14, 15), for use inside ``jit``."""
-    return _terms(problem, pose, arm_solutions(problem, pose)[2])
+    return arm_terms(problem, pose, arm_solutions(problem, pose)[2])
 
 
 _evaluate_arm_jit = jax.jit(evaluate_arm_traced)
@@ -336,7 +347,7 @@ def _report(problem: ArmDockingProblem, pose: Array) -> ArmReport:
     best = jnp.argmax(w, axis=-1)  # (..., k)
     q_best = jnp.take_along_axis(q, best[..., None, None], axis=-2)[..., 0, :]
     ok = jnp.any(valid, axis=-1)
-    return ArmReport(_terms(problem, pose, w), jnp.where(ok[..., None], q_best, jnp.nan), ok, jnp.max(w, axis=-1))
+    return ArmReport(arm_terms(problem, pose, w), jnp.where(ok[..., None], q_best, jnp.nan), ok, jnp.max(w, axis=-1))
 
 
 def arm_report(problem: ArmDockingProblem, pose) -> ArmReport:

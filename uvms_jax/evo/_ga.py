@@ -26,6 +26,8 @@ Operators (each written per individual and batched with ``vmap``):
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import dataclasses
 from functools import partial
 from typing import Any, NamedTuple
@@ -341,3 +343,15 @@ def run_ga_batch(
     """
     _check(codec, ga)
     return _run_batch_jit(keys, problem, codec, ga, params if params is not None else ga.default_params)
+
+
+def ga_batch_compiled(
+    keys: Array, problem: Any, codec: BinaryCodec, ga: BinaryGA, params: GAParams | None = None
+) -> Callable[[Array, Any, BinaryCodec, GAParams], GAResult]:
+    """:func:`run_ga_batch` compiled ahead of time for these arguments' shapes, without running
+    it: call the result as ``fn(keys, problem, codec, params)`` (params required). Separates the
+    compilation time from the run time without running a costly fitness twice."""
+    _check(codec, ga)
+    params = params if params is not None else ga.default_params
+    compiled = _run_batch_jit.lower(keys, problem, codec, ga, params).compile()
+    return lambda k, p, c, prm: compiled(k, p, c, prm)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -54,28 +55,46 @@ def panel_targets(panel: PanelSettings) -> np.ndarray:
     return T
 
 
-def scenario_targets(scenario: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, list[str]]:
-    """Targets and obstacles of a pick-and-place scenario (``configs/scenario/*.yaml``).
+class ArmTask(NamedTuple):
+    """What the arm must reach, as data: tool poses grouped into targets, and the obstacles
+    around them (e.g. a pick-and-place scenario's grasp and place poses and its tables,
+    :func:`uvms_jax.plan.docking_task`).
 
-    Returns:
-      ``T_world_tool (k, 4, 4)``: the grasp pose of every object and the place pose of every
-      base, one per symmetric yaw of the object; ``group (k,)``: the node of each pose as a
-      target index; the scenario's tables as boxes ``(T (m, 4, 4), half (m, 3))``; the node
-      names, one per target.
+    Attributes:
+      T_world_tool: ``(k, 4, 4)`` demanded tool poses in the world [m].
+      group: ``(k,)`` target of each pose, ``0 … g − 1``; the poses of a target are
+        alternatives (e.g. the symmetric grasps of an object).
+      names: ``(g,)`` a label per target.
+      T_world_box, half: ``(m, 4, 4), (m, 3)`` obstacle boxes in the world [m].
     """
-    from uvms_jax import plan  # only this preset needs the planning scene (MuJoCo, OMPL)
 
-    scene = plan.build_scene(scenario)
-    nodes = sorted(scene.objects) + sorted(scene.bases)
-    poses, group, names = [], [], []
-    for i, node in enumerate(nodes):
-        _, at, _ = plan.tool_poses(scene, node)
-        poses.append(at)
-        group += [i] * len(at)
-        names.append((scene.objects.get(node) or scene.bases[node]).name)
-    tables = tuple(BoxSettings(b.name, b.pos, b.size, b.rpy) for b in scene.spec.tables)
-    T_box, half = boxes(tables)
-    return np.concatenate(poses), np.asarray(group), T_box, half, names
+    T_world_tool: np.ndarray
+    group: np.ndarray
+    names: tuple[str, ...]
+    T_world_box: np.ndarray
+    half: np.ndarray
+
+
+def panel_task(panel: PanelSettings) -> ArmTask:
+    """The panel's control points, each its own target, with no obstacles (the scene's boxes
+    hold the panel)."""
+    T = panel_targets(panel)
+    return ArmTask(T, np.arange(len(T)), tuple(f"point {i}" for i in range(len(T))), *boxes(()))
+
+
+def fewer_alternatives(task: ArmTask, alternatives: int | None) -> ArmTask:
+    """At most ``alternatives`` poses per target, evenly spaced in the given order (e.g. 2 of
+    a cube's 4 grasp yaws: 0 and π); None keeps all."""
+    if alternatives is None:
+        return task
+    if alternatives < 1:
+        raise ValueError(f"alternatives must be >= 1 or None, got {alternatives}")
+    keep = []
+    for g in range(len(task.names)):
+        idx = np.flatnonzero(task.group == g)
+        keep += list(idx[np.linspace(0, len(idx), min(alternatives, len(idx)), endpoint=False).astype(int)])
+    keep = np.sort(np.asarray(keep))
+    return task._replace(T_world_tool=task.T_world_tool[keep], group=task.group[keep])
 
 
 def load_arm(arm: str, tip: str | None = None) -> tuple[kin.Chain, float | None]:
@@ -105,27 +124,32 @@ def load_arm(arm: str, tip: str | None = None) -> tuple[kin.Chain, float | None]
     raise ValueError(f"unknown arm {arm!r}: a name in {sorted(ARMS)} or a .urdf / .xml (MJCF) file")
 
 
-def arm_docking_problem(scene: ArmSceneSettings, dtype=None) -> ArmDockingProblem:
-    """The :class:`ArmDockingProblem` of an arm scene's settings.
+def arm_docking_problem(scene: ArmSceneSettings, task: ArmTask | None = None, dtype=None) -> ArmDockingProblem:
+    """The :class:`ArmDockingProblem` of an arm scene's settings and its task.
+
+    Args:
+      scene: the arm, the vehicle, the pose box, the objective's weights and the IK settings.
+      task: what the arm must reach; None takes the scene's panel (``scene.panel``).
+      dtype: float dtype of the problem's arrays.
 
     Raises:
-      ValueError: unknown arm, or bad geometry (see :func:`make_arm_docking_problem`).
+      ValueError: no task or two (a panel and a task), unknown arm, or bad geometry (see
+        :func:`make_arm_docking_problem`).
     """
+    if (scene.panel is None) == (task is None):
+        raise ValueError("an arm scene needs exactly one task: scene.panel, or a task passed in (e.g. a "
+                         "pick-and-place scenario's tool poses, uvms_jax.plan.docking_task)")
     chain, radius = load_arm(scene.arm, scene.arm_tip)
     if scene.link_radius is None and radius is None:
         raise ValueError(f"arm {scene.arm!r} comes from a file: set link_radius (its links' capsule radius [m])")
+    task = fewer_alternatives(panel_task(scene.panel) if task is None else task, scene.alternatives)
     T_box, half = boxes(scene.scene_boxes)
-    group = None
-    if scene.panel is not None:
-        T_tool = panel_targets(scene.panel)
-    else:
-        T_tool, group, T_tables, half_tables, _ = scenario_targets(scene.scenario)
-        T_box, half = np.concatenate([T_box, T_tables]), np.concatenate([half, half_tables])
+    T_box, half = np.concatenate([T_box, task.T_world_box]), np.concatenate([half, task.half])
     return make_arm_docking_problem(
         chain=chain,
         T_vehicle_base=pose_matrix(scene.mount_xyz, scene.mount_rpy),
-        T_world_tool=T_tool,
-        group=group,
+        T_world_tool=task.T_world_tool,
+        group=task.group,
         low=scene.pose_low,
         high=scene.pose_high,
         p_dock=scene.p_dock,

@@ -79,10 +79,11 @@ class ArmSceneSettings:
         required for an arm from a file).
       vehicle_boxes: the vehicle body, boxes in V.
       scene_boxes: obstacles in W (panel, seabed, tables).
-      panel: targets on a task panel, or None.
-      scenario: a pick-and-place scenario (``configs/scenario/*.yaml``), or None: its tables
-        join the scene boxes and its grasp and place tool poses become the targets (the
-        symmetric grasps of an object are alternatives of one target).
+      panel: targets on a task panel, or None: the task is then passed to
+        :func:`uvms_jax.evo.run_docking` (e.g. a pick-and-place scenario's, from
+        :func:`uvms_jax.plan.docking_task`).
+      alternatives: at most this many alternative tool poses per target (evenly spaced among
+        the symmetric grasps); None keeps all. Fewer make each evaluation cheaper.
       pose_low, pose_high: box of vehicle poses ``[x, y, z, ψ]`` [m, rad] (holds Wd).
       p_dock: docking point in V [m]; p_init: its initial position in W [m] (D of eq. 3).
       a, b: weights of eq. 8.
@@ -97,7 +98,7 @@ class ArmSceneSettings:
     vehicle_boxes: tuple[BoxSettings, ...] = (BoxSettings("hull", (0.0, 0.0, 0.0), (0.9, 0.7, 0.4)),)
     scene_boxes: tuple[BoxSettings, ...] = ()
     panel: PanelSettings | None = None
-    scenario: dict | None = None
+    alternatives: int | None = None
     pose_low: tuple[float, float, float, float] = (-1.6, -0.8, -0.4, -math.pi)
     pose_high: tuple[float, float, float, float] = (-0.4, 0.8, 0.8, math.pi)
     p_dock: tuple[float, float, float] = (0.0, 0.0, 0.0)
@@ -110,8 +111,8 @@ class ArmSceneSettings:
     ik_seed: int = 0
 
     def __post_init__(self):
-        if (self.panel is None) == (self.scenario is None):
-            raise ValueError("an arm scene needs exactly one target source: panel or scenario")
+        if self.alternatives is not None and self.alternatives < 1:
+            raise ValueError(f"alternatives must be >= 1 or null, got {self.alternatives}")
 
 
 @dataclasses.dataclass(frozen=True)

@@ -66,8 +66,6 @@ def _write_wmax(run: DockingRun, out: Path) -> None:
 
 def _write_arm_pose(run: DockingRun, out: Path) -> None:
     """The best GA pose of an arm scene: joint solution and w per target, and a top view."""
-    from uvms_jax.evo._docking import docking_problem
-
     pose = run.poses[int(np.argmax(run.fitness))]
     ik = run.best_ik
     (out / "best_pose.json").write_text(json.dumps({
@@ -75,8 +73,7 @@ def _write_arm_pose(run: DockingRun, out: Path) -> None:
         "targets": [{"reached": bool(o), "w": float(wi), "q": None if not o else qi.round(5).tolist()}
                     for qi, o, wi in zip(ik.q, ik.valid, ik.w)],
     }, indent=2))
-    problem = docking_problem(run.settings.scene, run.settings.dtype)  # geometry for the figure
-    plot_docked_top_view(problem, pose, ik.q, ik.valid, ik.w, out / "docked_top_view.png")
+    plot_docked_top_view(run.problem, pose, ik.q, ik.valid, ik.w, out / "docked_top_view.png")
 
 
 def write_docking(run: DockingRun, out: Path) -> dict:

@@ -1,9 +1,13 @@
-"""The end-to-end run (``make demo``): docking → surrogates → planning → scheduling → execution.
+"""The end-to-end run (``make demo``): one intervention with one arm under one vehicle.
 
-Each stage is its package's stage function (``evo.run_docking``, ``surrogate.run_surrogates``,
-``plan.plan_task_graph``, ``sched.run_schedule``, ``hw.run_plan``) followed by its writer;
-results pass between stages in memory. :func:`run_pipeline` runs the configured stages and
-writes ``summary.md`` (every stage's tables beside the papers') and ``results.json``.
+surrogate → docking → planning → scheduling → execution (→ the fixed-mount baseline). Each
+stage is its package's stage function (``surrogate.run_reach_map``, ``evo.run_docking`` and
+``surrogate.dock_with_map``, ``plan.plan_task_graph``, ``sched.run_schedule``,
+``hw.run_plan``) followed by its writer; results pass between stages in memory: the docked
+pose puts the arm's base into the planning scene (:func:`docked_scene`), the planning metrics
+become the cost matrix, the winning schedule's plan is executed. :func:`run_pipeline` runs the
+configured stages and writes ``summary.md`` (the chain at a glance, every stage's tables) and
+``results.json``.
 """
 
 from uvms_jax.pipeline._report import StageReport
@@ -12,5 +16,6 @@ from uvms_jax.pipeline._run import run_pipeline
 from uvms_jax.pipeline._settings import STAGES
 from uvms_jax.pipeline._settings import HwStageSettings
 from uvms_jax.pipeline._settings import PipelineSettings
+from uvms_jax.pipeline._stages import docked_scene
 
-__all__ = ["STAGES", "HwStageSettings", "PipelineSettings", "StageReport", "md_table", "run_pipeline"]
+__all__ = ["STAGES", "HwStageSettings", "PipelineSettings", "StageReport", "docked_scene", "md_table", "run_pipeline"]

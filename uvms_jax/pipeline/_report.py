@@ -54,14 +54,17 @@ def md_table(header: Sequence[str], rows: Sequence[Sequence[Any]]) -> str:
     return "\n".join(lines)
 
 
-def write_summary(out: Path, reports: Sequence[StageReport], total_s: float, config_yaml: str) -> Path:
-    """``out/summary.md``: stage times, every stage's tables and notes, links to its PNGs, the config."""
+def write_summary(out: Path, reports: Sequence[StageReport], total_s: float, config_yaml: str, chain: str = "") -> Path:
+    """``out/summary.md``: the chain at a glance, stage times, every stage's tables and notes,
+    links to its PNGs, the config."""
     dev = jax.devices()[0]
     lines = ["# uvms_jax pipeline run", "",
              f"{time.strftime('%Y-%m-%d %H:%M:%S')} · {platform.machine()}, {os.cpu_count()} CPUs, "
              f"device {dev.platform} ({dev.device_kind}) · Python {platform.python_version()}, jax {jax.__version__} · "
-             f"load average {', '.join(f'{v:.1f}' for v in os.getloadavg())} · total wall time **{total_s:.1f} s**", "",
-             "## Stage times", "",
+             f"load average {', '.join(f'{v:.1f}' for v in os.getloadavg())} · total wall time **{total_s:.1f} s**", ""]
+    if chain:
+        lines += ["## The intervention at a glance", "", chain, ""]
+    lines += ["## Stage times", "",
              md_table(["stage", "folder", "wall [s]", "CPU [s]"],
                       [[r.title.split(" (")[0], f"[{r.name}/]({r.name}/)", r.seconds, r.cpu_seconds] for r in reports]
                       + [["total", "", total_s, sum(r.cpu_seconds for r in reports)]]), "",

@@ -12,7 +12,7 @@ import jax
 from uvms_jax import progress
 from uvms_jax.pipeline._report import write_summary
 from uvms_jax.pipeline._settings import STAGES, PipelineSettings
-from uvms_jax.pipeline._stages import STAGE_FNS, Flow
+from uvms_jax.pipeline._stages import STAGE_FNS, Flow, chain
 
 log = logging.getLogger(__name__)
 
@@ -43,11 +43,12 @@ def run_pipeline(settings: PipelineSettings, out: Path, config_text: str = "") -
         report = STAGE_FNS[name](settings, stage_out, flow)
         report.seconds, report.cpu_seconds = time.perf_counter() - t0, time.process_time() - c0
         reports.append(report)
+        flow.reports[name] = report
         log.info("== stage %s done in %.1f s: %s", name, report.seconds, report.results)
     total = time.perf_counter() - t_start
     results = {"total_seconds": total, "stage_seconds": {r.name: r.seconds for r in reports},
                "stage_cpu_seconds": {r.name: r.cpu_seconds for r in reports}, **{r.name: r.results for r in reports}}
     (out / "results.json").write_text(json.dumps(results, indent=1, default=str))
-    summary = write_summary(out, reports, total, config_text)
+    summary = write_summary(out, reports, total, config_text, chain(flow, out))
     log.info("pipeline done in %.1f s; summary: %s", total, summary)
     return results

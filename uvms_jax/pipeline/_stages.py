@@ -4,14 +4,17 @@ writer, and the part of ``summary.md`` it contributes (tables of ours beside the
 from __future__ import annotations
 
 import dataclasses
+import json
 import logging
 import math
 from pathlib import Path
 
 import jax
+import jax.numpy as jnp
 import numpy as np
+from scipy.spatial.transform import Rotation
 
-from uvms_jax import bravo7, evo, hw, kin, planfile, progress, sched, surrogate
+from uvms_jax import bravo7, evo, hw, planfile, progress, sched, surrogate
 from uvms_jax import plan as planning
 from uvms_jax.pipeline._report import StageReport, md_table
 from uvms_jax.pipeline._settings import PipelineSettings
@@ -20,8 +23,6 @@ log = logging.getLogger(__name__)
 
 # Thesis Table 5.5: solver times on the eq. 4.1 matrix [ms] (docs/theory.md §5).
 THESIS_SOLVER_MS = {"greedy": 0.0121, "grasp": 110.2, "astar": 0.9435, "exact": None}
-# Docking paper Table 3 (docs/theory.md §3): best pose and the M_a range of its seven GA runs.
-PAPER_DOCKING = {"pose": (-0.32, -0.36, 0.24, 0.79), "Ma": (0.134, 0.181)}
 # hw/run.mp4: the ~92 s demo run → ~730 frames, 22–25 s of software (Mesa) rendering on 2 cores.
 VIDEO_FPS = 8.0
 VIDEO_SIZE = (480, 360)  # width, height [pixels]
@@ -29,79 +30,155 @@ VIDEO_SIZE = (480, 360)  # width, height [pixels]
 
 @dataclasses.dataclass
 class Flow:
-    """What a stage hands to the later ones, in memory."""
+    """What a stage hands to the later ones, in memory.
 
+    Attributes:
+      task: the scenario's grasp and place poses and tables, as the docking stage's task.
+      problem: the docking problem of the arm on its vehicle over the scenario's task.
+      reach: the surrogate stage's learned map.
+      pose: the docking stage's vehicle pose ``(4,)`` [m, rad]; T_world_vehicle, T_world_base:
+        ``(4, 4)`` the vehicle and the arm's base there.
+      scene_spec: the planning scene (the scenario with the arm under the docked vehicle).
+      task_plan, plan, plan_source: planning → schedule → execution.
+      reports: the reports of the stages run so far, by name.
+    """
+
+    task: evo.ArmTask | None = None
+    problem: evo.ArmDockingProblem | None = None
+    reach: surrogate.ReachMapRun | None = None
+    pose: np.ndarray | None = None
+    T_world_vehicle: np.ndarray | None = None
+    T_world_base: np.ndarray | None = None
+    scene_spec: planning.SceneSpec | None = None
     task_plan: planning.TaskGraphPlan | None = None
     plan: planfile.Plan | None = None
     plan_source: str = ""
+    reports: dict[str, StageReport] = dataclasses.field(default_factory=dict)
 
 
 def _pose(p) -> list[float]:
     return [round(float(v), 3) + 0.0 for v in p]
 
 
-def docking(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
-    """Docking GA (+ grid reference) and the w_max maps of the best and the ill-placed pose."""
-    run = evo.run_docking(s.docking)
-    evo.write_docking(run, out)
-    rows = [[i + 1, *_pose(p), float(f), float(m), int(g)]
-            for i, (p, f, m, g) in enumerate(zip(run.poses, run.fitness, run.M_a, run.generations))]
-    pp = PAPER_DOCKING
-    rows.append(["paper Table 3", *pp["pose"], None, f"{pp['Ma'][0]}–{pp['Ma'][1]}", "≤ 500"])
-    rows.append(["grid optimum", *_pose(run.grid.pose), run.grid.fitness, run.grid.M_a,
-                 f"{run.grid.candidates} candidates"])
-    t1 = md_table(["GA run", "x [m]", "y [m]", "z [m]", "ψ [rad]", "fitness (eq. 15)", "M_a (eq. 1)", "generations"], rows)
-    t2 = md_table(["pose", "x, y, z, ψ", "zero-w area of the task area", "mean w_max", "paper"],
-                  [[name, ", ".join(f"{v:.3f}" for v in m.pose), f"{100 * m.map.zero_fraction:.1f} %", m.w_max_mean, paper]
-                   for name, m, paper in (("best GA pose", run.wmax_best, "Fig. 9: w_max stays high"),
-                                          ("ill-placed (paper)", run.wmax_ill_placed, "Fig. 10: large zero-w region"))])
-    ratio = run.ga_ratio_to_grid
-    res = {"ga_best_fitness": float(run.fitness.max()), "ga_ratio_to_grid_min": float(ratio.min()),
-           "ga_batch_seconds": run.ga_batch_seconds, "grid_fitness": run.grid.fitness,
-           "zero_w_best": run.wmax_best.map.zero_fraction, "zero_w_ill_placed": run.wmax_ill_placed.map.zero_fraction,
-           "all_face_task_area": run.all_face_task_area}
-    notes = [f"{len(run.fitness)} GA runs in one jitted batch: {run.ga_batch_seconds:.2f} s after compilation "
-             f"(compile + first batch {run.ga_compile_seconds:.1f} s); GA / grid optimum {ratio.min():.3f}–{ratio.max():.3f}.",
-             "Absolute M_a differs from the paper's (its frames are not fully given; docs/theory.md §1.1): compare the "
-             "placement (near quarter, facing the task area) and the w_max maps."]
-    return StageReport("docking", "Docking GA and w_max maps (docs/theory.md §3, docking paper Table 3, Figs 9–10)",
-                       [t1, t2], res, notes)
+def _docking_problem(s: PipelineSettings, flow: Flow) -> evo.ArmDockingProblem:
+    """The arm-on-vehicle docking problem over the scenario's grasp and place poses (built once)."""
+    if flow.problem is None:
+        flow.task = planning.docking_task(planning.build_scene(s.scenario))
+        flow.problem = evo.docking_problem(s.docking.scene, s.docking.dtype, flow.task)
+    return flow.problem
 
 
 def surrogates(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
-    """FFBN/RBFN surrogates of the 12-DOF UVMS's indices, timed against the analytic index."""
-    run = surrogate.run_surrogates(jax.random.key(s.surrogate.seed), kin.uvms12(), s.surrogate)
-    surrogate.write_surrogates(run, out)
-    rows, res = [], {}
-    for name, n in run.networks.items():
-        p, timing = n["paper"], n.get("timing", {})
-        t, t5 = timing.get("1000", {}), timing.get("100000", {})
-        units = n["hidden_units"] if n["kind"] == "ffbn" else f"{n['hidden_units']} (spread {n['spread']:.3g})"
-        rows.append([name, units, p.get("hidden_units", f"spread {p.get('spread')}"),
-                     f"{100 * n['max_rel_test_error']:.2f} %", n["operation_count"], p["operation_count"],
-                     t.get("network_s", math.nan) * 1e3, p["seconds_1000"] * 1e3, t.get("speedup"), t5.get("speedup")])
-        res[f"{name}_max_rel_error"] = n["max_rel_test_error"]
-        res[f"{name}_units"] = n["hidden_units"]
-        if t5:
-            res[f"{name}_speedup_1e5"] = t5["speedup"]
-    for index, a in run.analytic.items():
-        t = a["timing"].get("1000", {})
-        rows.append([f"analytic {index}", "—", "—", "—", a["xla_flops_per_sample"], a["paper"]["operation_count"],
-                     t.get("seconds", math.nan) * 1e3, a["paper"]["seconds_1000"] * 1e3, None, None])
-    table = md_table(["network", "units (ours)", "units (paper)", "max rel. test error (eq. 21)", "ops (ours)",
-                      "ops (paper Table 4)", "1000 inputs [ms] (ours)", "1000 inputs [ms] (paper Table 5)",
-                      "speed-up at 1e3", "speed-up at 1e5"], rows)
-    notes = ["Ours: float32, jitted, compilation excluded, this machine; paper: Matlab on an i7-3930K. "
-             "Analytic ops (ours) are XLA flops per sample.",
-             "Acceptance figures: " + ", ".join(f"{k} = {v:.3g}" if isinstance(v, float) else f"{k} = {v}"
-                                                for k, v in run.acceptance.items())]
-    return StageReport("surrogate", "Surrogates of w and KCI (docs/theory.md §4, dexterity paper Tables 4–5)",
+    """Learn the arm's best manipulability at a tool pose seen from its base on this vehicle
+    (the inner part of the docking fitness) from analytic scores of random vehicle poses."""
+    run = surrogate.run_reach_map(_docking_problem(s, flow), s.reach)
+    flow.reach = run
+    t, r = run.test, run.settings
+    res = {"n_train_poses": run.n_train, "n_test_poses": run.n_test, "analytic_seconds": run.analytic_seconds,
+           "train_seconds": run.train_seconds, **t}
+    (out / "reach_map.json").write_text(json.dumps({**res, "settings": dataclasses.asdict(r)}, indent=1))
+    table = md_table(["vehicle poses (train / test)", "samples (tool poses)", "analytic scoring [s]", "FFBN units",
+                      "training [s]", "test RMSE of w", "max error of w", "largest w", "test MAE of M_a"],
+                     [[f"{run.n_train} / {run.n_test}", (run.n_train + run.n_test) * int(flow.problem.group.shape[0]),
+                       run.analytic_seconds, r.hidden, run.train_seconds, t["rmse_w"], t["max_abs_error_w"],
+                       t["w_range"], t["mae_M_a"]]])
+    notes = ["The docking fitness spends its time in multi-seed numerical IK; what it keeps per tool pose is the best "
+             "w over the valid solutions (reached, within the limits, clear of the vehicle), a function of the tool "
+             "pose seen from the arm's base alone. An FFBN learns it here (9 inputs: position and the tool's x and z "
+             "axes; tanh hidden layer; Adam). The scene's obstacles are not in the map: poses chosen on it are scored "
+             "again analytically (docking stage). The dexterity paper's surrogates of the 12-DOF UVMS are reproduced "
+             "apart: `python experiments/surrogate.py` (docs/reproduction.md)."]
+    return StageReport("surrogate", "Surrogate: the Bravo 7's dexterity map on its vehicle (docs/docking.md)",
                        [table], res, notes)
 
 
+def _world_obstacles(problem: evo.ArmDockingProblem, T_world_vehicle: np.ndarray) -> tuple[planning.Obstacle, ...]:
+    """The vehicle's boxes at its docked pose, as planning-scene obstacles (world frame)."""
+    out = []
+    for i, (T, half) in enumerate(zip(np.asarray(problem.T_vehicle_box), np.asarray(problem.vehicle_half))):
+        W = T_world_vehicle @ T
+        rpy = Rotation.from_matrix(W[:3, :3]).as_euler("xyz")
+        out.append(planning.Obstacle(f"vehicle{i}", "box", tuple(W[:3, 3].tolist()), tuple(rpy.tolist()),
+                                     tuple((2 * half).tolist())))
+    return tuple(out)
+
+
+def docked_scene(scenario, problem: evo.ArmDockingProblem, pose) -> tuple[np.ndarray, np.ndarray, planning.SceneSpec]:
+    """The planning scene of a docked vehicle: the scenario with the arm's base on the vehicle
+    at ``pose (4,) = [x, y, z, ψ]`` [m, rad] (the docking problem's mount) and the vehicle's
+    boxes as obstacles.
+
+    Returns:
+      ``(T_world_vehicle (4, 4), T_world_base (4, 4), scene spec)``.
+    """
+    T_world_vehicle, T_world_base, _ = (np.asarray(a, dtype=float)
+                                        for a in evo.arm_tool_poses(problem, jnp.asarray(pose, problem.low.dtype)))
+    spec = planning.SceneSpec.from_mapping(scenario).with_base(T_world_base)
+    spec = dataclasses.replace(spec, obstacles=spec.obstacles + _world_obstacles(problem, T_world_vehicle))
+    return T_world_vehicle, T_world_base, spec
+
+
+def docking(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
+    """Docking GA (+ grid reference) of the vehicle over the scenario's task; with a learned
+    map, the GA on it too; the chosen pose puts the arm's base into the planning scene."""
+    problem = _docking_problem(s, flow)
+    run = evo.run_docking(s.docking, flow.task)
+    evo.write_docking(run, out)
+    best = int(np.argmax(run.fitness))
+    rows = [[f"analytic GA run {i + 1}", *_pose(p), float(f), float(m), int(e)]
+            for i, (p, f, m, e) in enumerate(zip(run.poses, run.fitness, run.M_a, run.evaluations))]
+    rows.append(["grid optimum", *_pose(run.refined_grid.pose), run.refined_grid.fitness, run.refined_grid.M_a,
+                 run.grid.candidates + run.refined_grid.candidates])
+    res = {"ga_best_fitness": float(run.fitness[best]), "ga_best_M_a": float(run.M_a[best]),
+           "ga_ratio_to_grid_min": float(run.ga_ratio_to_refined_grid.min()), "ga_batch_seconds": run.ga_batch_seconds,
+           "grid_fitness": run.refined_grid.fitness, "ga_evaluations": int(np.sum(run.evaluations))}
+    pose, source, pose_M_a = run.poses[best], "analytic GA", float(run.M_a[best])
+    notes = [f"{len(run.fitness)} GA runs in one jitted batch: {run.ga_batch_seconds:.1f} s after compilation "
+             f"({run.ga_evaluations_per_second:.0f} evaluations/s); GA / grid optimum "
+             f"{run.ga_ratio_to_refined_grid.min():.3f}–{run.ga_ratio_to_refined_grid.max():.3f}. Fitness: eq. 15 "
+             f"(a·M_a − b·D in Wd), M_a = min over the {problem.n_groups} targets of the best w over each target's "
+             f"alternatives and IK seeds."]
+    if flow.reach is not None:
+        md = surrogate.dock_with_map(problem, flow.reach, s.docking.ga, s.docking.n_runs, s.seed,
+                                     s.reach.rounds, s.reach.infill)
+        rows += [[f"GA on the map, run {i + 1}", *_pose(p), float(f), float(m), int(e)]
+                 for i, (p, f, m, e) in enumerate(zip(md.poses, md.fitness, md.M_a, md.evaluations))]
+        t_map = flow.reach.analytic_seconds + flow.reach.train_seconds + md.seconds
+        analytic_s = run.ga_batch_seconds / float(np.sum(run.evaluations))  # per pose, in the GA batch
+        speedup = analytic_s / md.eval_seconds
+        loss = 1.0 - float(md.fitness[md.best]) / float(run.fitness[best])
+        res.update({"map_best_fitness": float(md.fitness[md.best]), "map_best_M_a": float(md.M_a[md.best]),
+                    "map_eval_speedup": speedup, "map_loss_of_optimum": loss, "map_seconds_total": t_map,
+                    "map_analytic_evaluations": md.analytic_evaluations})
+        notes.append(
+            f"**Surrogate fitness** (`docking.fitness=surrogate` sends its pose on): one evaluation costs "
+            f"{md.eval_seconds * 1e6:.1f} µs on the map against {analytic_s * 1e3:.1f} ms analytically in the GA batch "
+            f"(**{speedup:.0f}×**, this run). Its best pose scores "
+            f"{float(md.fitness[md.best]):.3f} analytically against the analytic GA's {float(run.fitness[best]):.3f}: "
+            f"a loss of optimum of **{100 * loss:.1f} %**. End to end the map is not yet cheaper on this task: "
+            f"{t_map:.0f} s (analytic scoring of {flow.reach.n_train + flow.reach.n_test} + {md.analytic_evaluations} "
+            f"poses, training, {s.reach.rounds} GA rounds) against {run.ga_batch_seconds:.0f} s for the analytic GA "
+            "batch; it pays off once learned, for every further GA run, task or sweep on this arm and vehicle.")
+        if s.docking_fitness == "surrogate":
+            pose, source, pose_M_a = md.poses[md.best], "GA on the map", float(md.M_a[md.best])
+    if not pose_M_a > 0:
+        raise ValueError(f"the docking stage found no vehicle pose from which the arm reaches every target "
+                         f"(M_a = 0 at the {source}'s best {_pose(pose)}): enlarge the GA (ga.population_size, "
+                         "ga.max_generations) or change the pose box (docking scene pose_low / pose_high)")
+    flow.pose = np.asarray(pose, dtype=float)
+    flow.T_world_vehicle, flow.T_world_base, flow.scene_spec = docked_scene(s.scenario, problem, flow.pose)
+    res.update({"pose": flow.pose.tolist(), "pose_source": source, "pose_M_a": pose_M_a, "base_xyz": _pose(flow.T_world_base[:3, 3])})
+    t1 = md_table(["run", "x [m]", "y [m]", "z [m]", "ψ [rad]", "fitness (eq. 15)", "M_a (eq. 1)", "evaluations"], rows)
+    notes.append(f"Chosen: the {source}'s best pose {_pose(flow.pose)} → the arm's base at "
+                 f"{_pose(flow.T_world_base[:3, 3])} m in the planning scene, with the vehicle's hull as an obstacle.")
+    return StageReport("docking", "Docking: where the vehicle holds the Bravo 7 over the tables (docs/docking.md)",
+                       [t1], res, notes)
+
+
 def plan(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
-    """IK targets and OMPL plans of every task-graph edge; kept in memory for the schedule."""
-    scene = planning.build_scene(s.scenario)
+    """IK targets and OMPL plans of every task-graph edge, the arm's base where the docking
+    stage put it (else the scenario's mount); kept in memory for the schedule."""
+    scene = planning.build_scene(flow.scene_spec if flow.scene_spec is not None else s.scenario)
     task_plan = planning.plan_task_graph(jax.random.key(s.plan.seed), scene, s.plan)
     planning.write_task_graph(task_plan, out)
     flow.task_plan = task_plan
@@ -118,7 +195,12 @@ def plan(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
              f"IK targets {task_plan.ik_seconds:.1f} s (mostly XLA compilation). Every path re-checked at "
              f"{pc.recheck_resolution} rad with margin 0 and time-parameterised ({pc.max_velocity} rad/s). "
              "The thesis publishes no per-edge planning times; BENCHMARKS.md has a 5 s-budget run of all three planners."]
-    return StageReport("plan", "Bravo 7 planning of the thesis cage (docs/theory.md §5, thesis ch. 5.1)", [table], res, notes)
+    res["base_xyz"] = _pose(scene.T_world_base[:3, 3])
+    res["T_world_base"] = scene.T_world_base.tolist()
+    first = min(scene.objects)  # the arm at its first grasp: the picture of the intervention
+    if first in task_plan.targets and planning.render_frame(scene, task_plan.targets[first].q_at, out / "scene.png"):
+        notes.append("`plan/scene.png`: the arm at its grasp of the first object, in the planning scene.")
+    return StageReport("plan", "Planning every pick-and-place move (docs/theory.md §5, thesis ch. 5.1)", [table], res, notes)
 
 
 def schedule(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
@@ -173,8 +255,11 @@ def execute(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
         the_plan, source = flow.plan, flow.plan_source
     else:
         raise ValueError("the hw stage needs a plan: run the plan and schedule stages, or set hw.plan")
+    # The simulated arm's gravity and buoyancy follow the base the plan was made for.
+    spec = flow.task_plan.scene.spec if flow.task_plan is not None else None
+    sim = hs.sim if spec is None else dataclasses.replace(hs.sim, base_rpy=spec.mount_rpy)
     with progress.bar(total=len(the_plan.segments), desc="hw", unit="seg") as bar:
-        run = hw.run_plan(the_plan, link=hs.link, config=hs.executor, sim=hs.sim,
+        run = hw.run_plan(the_plan, link=hs.link, config=hs.executor, sim=sim,
                           progress=lambda i, n, name: bar.update(i - bar.n))  # i: segments finished
         if run.ok:
             bar.update(bar.total - bar.n)
@@ -234,4 +319,97 @@ def _run_video(s: PipelineSettings, flow: Flow, run_log: hw.RunLog, out: Path, r
             "(arm only: the jaws' opening and the carried objects are not drawn).")
 
 
-STAGE_FNS = {"docking": docking, "surrogate": surrogates, "plan": plan, "schedule": schedule, "hw": execute}
+def _path_figures(flow: Flow, planner: str, path) -> dict:
+    """Raw metrics along a schedule (no normalisation, so two scenes compare): sums of planning
+    time [s], joint movement [rad] and tool path [m], the smallest clearance [m] and the largest
+    joint torque [N·m]."""
+    m = flow.task_plan.metrics[planner]  # (5, N, N) in sched.METRICS order
+    legs = np.stack([m[:, a, b] for a, b in zip(path[:-1], path[1:])], axis=1)  # (5, legs)
+    r = dict(zip(sched.METRICS, legs))
+    return {"planning_time_s": float(np.sum(r["planning_time"])), "joint_movement_rad": float(np.sum(r["joint_movement"])),
+            "ee_distance_m": float(np.sum(r["ee_distance"])), "min_clearance_m": float(np.min(r["security"])),
+            "max_torque_Nm": float(np.max(r["max_torque"]))}
+
+
+def _fixed_mount_M_a(problem: evo.ArmDockingProblem, T_world_base: np.ndarray) -> float | None:
+    """M_a of the docking task with the arm's base fixed at ``T_world_base`` (no vehicle hull):
+    the docking problem at the vehicle pose that puts the base there, when that pose is level
+    (the docking problem's vehicle only yaws); None otherwise."""
+    T = T_world_base @ np.linalg.inv(np.asarray(problem.T_vehicle_base, dtype=float))
+    if not np.allclose(T[2, :3], (0, 0, 1), atol=1e-6):
+        return None
+    pose = np.array([*T[:3, 3], np.arctan2(T[1, 0], T[0, 0])])
+    dtype = problem.T_vehicle_box.dtype
+    no_hull = problem.replace(T_vehicle_box=jnp.zeros((0, 4, 4), dtype), vehicle_half=jnp.zeros((0, 3), dtype))
+    return float(evo.evaluate_arm(no_hull, pose).M_a)
+
+
+def baseline(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
+    """The same task with the thesis's fixed cage-top mount (``baseline``): plan, schedule and
+    run again, and compare with the docked arm."""
+    if s.baseline is None:
+        raise ValueError("the baseline stage needs a baseline scenario (`baseline.scenario`)")
+    fixed = Flow(scene_spec=planning.SceneSpec.from_mapping(s.baseline))
+    quiet = dataclasses.replace(s, hw=dataclasses.replace(s.hw, plot=False))
+    stages = {}
+    for name, fn in (("plan", plan), ("schedule", schedule), ("hw", execute)):
+        (out / name).mkdir(parents=True, exist_ok=True)
+        stages[name] = fn(quiet, out / name, fixed).results
+    planner = s.sched_planner or s.plan.planners[0]
+    rows, res = [], {}
+    for label, f, r in (("docked under the vehicle", flow, {k: v.results for k, v in flow.reports.items()}),
+                        ("fixed cage-top mount (thesis)", fixed, stages)):
+        if "schedule" not in r or f.task_plan is None:
+            continue
+        path = [int(v) for v in r["schedule"]["winner_path"].split("-")]
+        fig = _path_figures(f, planner, path)
+        if f is flow:
+            M_a = r["docking"]["pose_M_a"] if "docking" in r else None
+        else:
+            M_a = _fixed_mount_M_a(flow.problem, f.task_plan.scene.T_world_base) if flow.problem is not None else None
+        hw_r = r.get("hw", {})
+        rows.append([label, ", ".join(f"{v:.3f}" for v in f.task_plan.scene.T_world_base[:3, 3]), M_a,
+                     r["plan"].get(f"{planner}_success"), r["schedule"]["winner_path"], fig["joint_movement_rad"],
+                     fig["ee_distance_m"], fig["min_clearance_m"], fig["max_torque_Nm"], hw_r.get("duration_s"),
+                     hw_r.get("gates"), hw_r.get("reason")])
+        res[label.split()[0]] = {"M_a": M_a, "winner_path": r["schedule"]["winner_path"], **fig,
+                                 "executed_s": hw_r.get("duration_s"), "ok": hw_r.get("ok")}
+    table = md_table(["arm base", "base xyz [m]", "M_a of the task", "edges planned", "schedule", "joint movement [rad]",
+                      "tool path [m]", "min clearance [m]", "max torque [N·m]", "executed [s]", "gates", "result"], rows)
+    notes = []
+    if len(rows) == 2:
+        d, b = res["docked"], res["fixed"]
+        faster = "docked" if (d["executed_s"] or np.inf) < (b["executed_s"] or np.inf) else "fixed"
+        notes.append(f"The **{faster}** arm finishes the task sooner ({d['executed_s']} s docked, {b['executed_s']} s "
+                     f"fixed); M_a {d['M_a']} docked against {b['M_a']} fixed (the fixed mount's M_a: the docking "
+                     "problem with the base there and no hull).")
+    notes.append("Sums along each schedule of the raw metrics (not the normalised costs, which are relative to each "
+                 "scene's own edges). The baseline plans in the thesis's cage (`configs/scenario/thesis_cage.yaml`).")
+    return StageReport("baseline", "Baseline: the thesis's fixed mount against the docked arm", [table], res, notes)
+
+
+def chain(flow: Flow, out: Path) -> str:
+    """The intervention at a glance (markdown): pose → base in the scene → schedule → run, and
+    the planning stage's picture of the scene (``out/plan/scene.png``)."""
+    r = {k: v.results for k, v in flow.reports.items()}
+    steps = []
+    if "docking" in r:
+        d = r["docking"]
+        steps.append(f"**dock** the vehicle at x, y, z, ψ = {d['pose']} ({d['pose_source']})")
+    if "plan" in r:
+        steps.append(f"**arm base** in the planning scene at {r['plan']['base_xyz']} m; "
+                     + ", ".join(f"{k.removesuffix('_success')} {v} edges" for k, v in r["plan"].items()
+                                 if k.endswith("_success")))
+    if "schedule" in r:
+        steps.append(f"**schedule** {r['schedule']['winner_path']} ({r['schedule']['winner']}, cost "
+                     f"{r['schedule']['winner_cost']:.4f})")
+    if "hw" in r:
+        h = r["hw"]
+        steps.append(f"**run** on the simulated Bravo 7: {h.get('reason')}, {h.get('gates')} gates, "
+                     f"{h.get('duration_s')} s")
+    picture = out / "plan" / "scene.png"
+    return " → ".join(steps) + ("\n\n![the arm in the planning scene](plan/scene.png)" if picture.exists() else "")
+
+
+STAGE_FNS = {"surrogate": surrogates, "docking": docking, "plan": plan, "schedule": schedule, "hw": execute,
+             "baseline": baseline}

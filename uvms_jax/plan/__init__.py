@@ -4,7 +4,7 @@
   :func:`plan_task_graph` → :class:`TaskGraphPlan` (targets, every edge by every planner,
   metric tensors, cost matrices, :class:`PlannerSummary`), :func:`plan_for_schedule` → a
   :class:`uvms_jax.planfile.Plan`; files: :func:`write_task_graph`, :func:`write_plan`;
-  figures: :func:`plot_ee_paths`, :func:`plot_plan_joints`, :func:`render_frames`;
+  figures: :func:`plot_ee_paths`, :func:`plot_plan_joints`, :func:`render_frame`, :func:`render_frames`;
   video of an executed run: :func:`render_run_video` → :class:`VideoInfo` (MP4, offscreen
   MuJoCo, camera :func:`scene_camera`);
 * scene: :class:`SceneSpec` (from ``configs/scenario/*.yaml``; extra :class:`Obstacle` s —
@@ -14,7 +14,8 @@
   their batched versions, ``path_is_valid``; :func:`densify`; :class:`SphereChecker` (the arm
   as spheres, compiled; whole motions per call, conservative, MuJoCo confirms rejections);
 * targets: :func:`pick_place_targets` (batched numerical IK of the eight pick-and-place steps),
-  :class:`NodeTarget`, :data:`STEPS`;
+  :class:`NodeTarget`, :data:`STEPS`; :func:`docking_task` (the grasp and place poses as a
+  docking optimiser's task, ``uvms_jax.evo.ArmTask``);
 * planning: :func:`plan_motion` (any OMPL geometric planner by name, :func:`ompl_planners`,
   with its parameters, :func:`planner_parameters`; simplification; MuJoCo re-check),
   :func:`time_parameterize`, :class:`Trajectory`, :func:`check_trajectory`, :func:`seed_ompl`;
@@ -44,6 +45,7 @@ from uvms_jax.plan._planning import seed_ompl
 from uvms_jax.plan._planning import time_parameterize
 from uvms_jax.plan._plots import plot_ee_paths
 from uvms_jax.plan._plots import plot_plan_joints
+from uvms_jax.plan._plots import render_frame
 from uvms_jax.plan._plots import render_frames
 from uvms_jax.plan._scene import Box
 from uvms_jax.plan._scene import Context
@@ -60,6 +62,7 @@ from uvms_jax.plan._spheres import SphereChecker
 from uvms_jax.plan._targets import STEPS
 from uvms_jax.plan._targets import NodeTarget
 from uvms_jax.plan._targets import node_contexts
+from uvms_jax.plan._targets import docking_task
 from uvms_jax.plan._targets import pick_place_targets
 from uvms_jax.plan._targets import tool_poses
 from uvms_jax.plan._taskgraph import PlannerSummary

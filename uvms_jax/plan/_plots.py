@@ -106,10 +106,9 @@ def plot_plan_joints(plan: planfile.Plan, path: Path) -> None:
     plt.close(fig)
 
 
-def render_frames(scene: Scene, targets: Mapping[int, NodeTarget], out_dir: Path) -> int:
-    """Offscreen frames ``frame_start.png`` and ``frame_node<n>.png`` (each node's grasp/final
-    configuration) into ``out_dir``; returns how many were written, 0 where no GL context
-    exists (set ``MUJOCO_GL`` before MuJoCo is first imported to choose the backend)."""
+def render_frame(scene: Scene, q, path: Path) -> bool:
+    """One offscreen frame of the scene with the arm at ``q (6,)`` [rad] into ``path`` (PNG);
+    False where no GL context exists."""
     try:
         import mujoco
 
@@ -117,15 +116,19 @@ def render_frames(scene: Scene, targets: Mapping[int, NodeTarget], out_dir: Path
         d = mujoco.MjData(m)
         renderer = mujoco.Renderer(m, 480, 640)
     except Exception as e:  # no EGL/OSMesa/GLFW context on this machine
-        log.warning("offscreen rendering unavailable (%s); skipping frames", e)
-        return 0
-    plt = pyplot()
-    cam = scene_camera()
-    frames = [("start", np.asarray(scene.spec.start_q))] + [(f"node{n}", t.q_at) for n, t in targets.items()]
-    for name, q in frames:
-        d.qpos[:] = q
-        mujoco.mj_forward(m, d)
-        renderer.update_scene(d, cam)
-        plt.imsave(out_dir / f"frame_{name}.png", renderer.render())
+        log.warning("offscreen rendering unavailable (%s); no frame", e)
+        return False
+    d.qpos[:] = q
+    mujoco.mj_forward(m, d)
+    renderer.update_scene(d, scene_camera(scene))
+    pyplot().imsave(path, renderer.render())
     renderer.close()
-    return len(frames)
+    return True
+
+
+def render_frames(scene: Scene, targets: Mapping[int, NodeTarget], out_dir: Path) -> int:
+    """Offscreen frames ``frame_start.png`` and ``frame_node<n>.png`` (each node's grasp/final
+    configuration) into ``out_dir``; returns how many were written, 0 where no GL context
+    exists (set ``MUJOCO_GL`` before MuJoCo is first imported to choose the backend)."""
+    frames = [("start", np.asarray(scene.spec.start_q))] + [(f"node{n}", t.q_at) for n, t in targets.items()]
+    return sum(render_frame(scene, q, out_dir / f"frame_{name}.png") for name, q in frames)

@@ -245,9 +245,10 @@ class Obstacle:
 
 @dataclasses.dataclass(frozen=True)
 class SceneSpec:
-    """Everything that defines the scene (``configs/scenario/*.yaml``); see that file for units."""
+    """Everything that defines the scene (``configs/scenario/*.yaml``); see that file for units.
+    ``cage_size`` None: no cage and no ceiling (open water, e.g. the arm under a vehicle)."""
 
-    cage_size: tuple[float, float, float]
+    cage_size: tuple[float, float, float] | None
     profile: float
     ceiling_thickness: float
     mount_pos: tuple[float, float, float]
@@ -307,10 +308,11 @@ class SceneSpec:
             objects.append(Item(int(o["node"]), str(o["name"]), str(o["shape"]), t(dims[o["shape"]]()),
                                 str(o["table"]), t(o["at"]), float(o.get("yaw", 0.0))))
         grasp = m.get("grasp", {})
+        cage = m.get("cage")
         spec = SceneSpec(
-            cage_size=t(m["cage"]["size"]),
-            profile=float(m["cage"]["profile"]),
-            ceiling_thickness=float(m["cage"]["ceiling_thickness"]),
+            cage_size=None if cage is None else t(cage["size"]),
+            profile=0.0 if cage is None else float(cage["profile"]),
+            ceiling_thickness=0.0 if cage is None else float(cage["ceiling_thickness"]),
             mount_pos=t(m["arm"]["mount_pos"]),
             mount_rpy=t(m["arm"]["mount_rpy"]),
             mount_size=t(m["arm"]["mount_size"]),
@@ -477,14 +479,14 @@ class Scene:
                 f'quat="{_fmt(kin.quat_wxyz(T[:3, :3]))}" rgba="{rgba}" contype="{SCENE_BITS[0]}" conaffinity="{SCENE_BITS[1]}"/>'
             )
 
-        L, W, H = s.cage_size
-        p = s.profile
-        # The ceiling and the table under everything are half-spaces (MuJoCo planes): exact,
-        # cheap against every shape, and they also forbid slipping past their edges.
-        world.append(
-            f'<geom name="ceiling" type="plane" pos="0 0 {H}" quat="0 1 0 0" size="{L / 2} {W / 2} 0.05" '
-            f'rgba="0.7 0.7 0.7 0.2" contype="{SCENE_BITS[0]}" conaffinity="{SCENE_BITS[1]}"/>'
-        )
+        if s.cage_size is not None:
+            L, W, H = s.cage_size
+            # The ceiling and the table under everything are half-spaces (MuJoCo planes): exact,
+            # cheap against every shape, and they also forbid slipping past their edges.
+            world.append(
+                f'<geom name="ceiling" type="plane" pos="0 0 {H}" quat="0 1 0 0" size="{L / 2} {W / 2} 0.05" '
+                f'rgba="0.7 0.7 0.7 0.2" contype="{SCENE_BITS[0]}" conaffinity="{SCENE_BITS[1]}"/>'
+            )
         under = s.tables[0]
         top = under.T_world_top
         world.append(
@@ -492,16 +494,18 @@ class Scene:
             f'size="{under.size[0] / 2} {under.size[1] / 2} 0.05" rgba="0.6 0.55 0.5 1" '
             f'contype="{SCENE_BITS[0]}" conaffinity="{SCENE_BITS[1]}"/>'
         )
-        k = 0
-        for sx in (-1, 1):
-            for sy in (-1, 1):
-                box(f"cage:post{k}", _pose(p=(sx * (L - p) / 2, sy * (W - p) / 2, H / 2)), (p, p, H), "0.6 0.6 0.65 1")
-                k += 1
-        for z in (p / 2, H - p / 2):
+        if s.cage_size is not None:
+            p = s.profile
+            k = 0
             for sx in (-1, 1):
-                box(f"cage:x{k}", _pose(p=(sx * (L - p) / 2, 0, z)), (p, W - 2 * p, p), "0.6 0.6 0.65 1")
-                box(f"cage:y{k}", _pose(p=(0, sx * (W - p) / 2, z)), (L - 2 * p, p, p), "0.6 0.6 0.65 1")
-                k += 1
+                for sy in (-1, 1):
+                    box(f"cage:post{k}", _pose(p=(sx * (L - p) / 2, sy * (W - p) / 2, H / 2)), (p, p, H), "0.6 0.6 0.65 1")
+                    k += 1
+            for z in (p / 2, H - p / 2):
+                for sx in (-1, 1):
+                    box(f"cage:x{k}", _pose(p=(sx * (L - p) / 2, 0, z)), (p, W - 2 * p, p), "0.6 0.6 0.65 1")
+                    box(f"cage:y{k}", _pose(p=(0, sx * (W - p) / 2, z)), (L - 2 * p, p, p), "0.6 0.6 0.65 1")
+                    k += 1
         ms = s.mount_size
         mount_T = self.T_world_base @ _pose(p=(0, 0, -ms[2] / 2))
         box("mount", mount_T, ms, "0.3 0.3 0.3 1")

@@ -28,17 +28,23 @@ CAMERA_LOOKAT = (0.0, 0.0, 0.45)  # [m], world frame
 CAMERA_DISTANCE = 2.2  # [m]
 CAMERA_AZIMUTH = 135.0  # [deg]
 CAMERA_ELEVATION = -30.0  # [deg]
+CAGE_BASE_Z = 0.94  # [m] height of the arm's base in the cage (configs/scenario/thesis_cage.yaml)
 HEADLIGHT_AMBIENT = 0.35  # RGB intensity of the video's headlight, each channel
 HEADLIGHT_DIFFUSE = 0.6
 
 
-def scene_camera():
-    """The free ``mujoco.MjvCamera`` that frames the cage (see ``CAMERA_*``)."""
+def scene_camera(scene: Scene | None = None):
+    """The free ``mujoco.MjvCamera`` that frames the cage (see ``CAMERA_*``); for an arm base
+    higher than the cage's (e.g. under a vehicle), it looks higher and steps back so that the
+    base and what carries it stay in view."""
     import mujoco
 
     cam = mujoco.MjvCamera()
     cam.lookat[:] = CAMERA_LOOKAT
     cam.distance, cam.azimuth, cam.elevation = CAMERA_DISTANCE, CAMERA_AZIMUTH, CAMERA_ELEVATION
+    above = 0.0 if scene is None else max(0.0, float(scene.T_world_base[2, 3]) - CAGE_BASE_Z)
+    cam.lookat[2] += above / 2
+    cam.distance += 2 * above
     return cam
 
 
@@ -144,7 +150,7 @@ def render_run_video(scene: Scene, t, q, path: Path | str, *, fps: float = 8.0,
         raise RuntimeError(f"offscreen rendering unavailable ({e}); set MUJOCO_GL=egl or osmesa") from e
     for flag in (mujoco.mjtRndFlag.mjRND_SHADOW, mujoco.mjtRndFlag.mjRND_REFLECTION):
         renderer.scene.flags[flag] = False
-    cam = scene_camera()
+    cam = scene_camera(scene)
     start = time.perf_counter()
     try:
         with warnings.catch_warnings():

@@ -10,7 +10,11 @@ The whole design run is one stage: ``run_surrogates(key, chain, settings) -> Sur
 (settings: :class:`SurrogateSettings`, mirroring ``configs/surrogate.yaml``), and
 ``write_surrogates(run, out)`` writes its report, figures, datasets and networks.
 
-Error metric throughout: the maximum relative test error ``max |(T − S)/T|`` (paper eq. 21).
+For an arm on a vehicle, :func:`run_reach_map` learns the arm's best manipulability at a tool
+pose seen from its base (:class:`ReachMap`), the inner part of the docking fitness, and
+:class:`SurrogateDockingProblem` / :func:`dock_with_map` let the docking GA run on it.
+
+Error metric of the index surrogates: the maximum relative test error ``max |(T − S)/T|`` (paper eq. 21).
 """
 
 from uvms_jax.surrogate._adam import fit_adam
@@ -56,6 +60,17 @@ from uvms_jax.surrogate._rbfn import RBFN
 from uvms_jax.surrogate._rbfn import RBFNFit
 from uvms_jax.surrogate._rbfn import fit_rbfn
 from uvms_jax.surrogate._rbfn import fit_rbfn_arrays
+from uvms_jax.surrogate._reach import MapDocking
+from uvms_jax.surrogate._reach import ReachData
+from uvms_jax.surrogate._reach import ReachMap
+from uvms_jax.surrogate._reach import ReachMapRun
+from uvms_jax.surrogate._reach import ReachMapSettings
+from uvms_jax.surrogate._reach import SurrogateDockingProblem
+from uvms_jax.surrogate._reach import dock_with_map
+from uvms_jax.surrogate._reach import fit_reach_map
+from uvms_jax.surrogate._reach import reach_dataset
+from uvms_jax.surrogate._reach import reach_features
+from uvms_jax.surrogate._reach import run_reach_map
 from uvms_jax.surrogate._run import PAPER
 from uvms_jax.surrogate._run import SurrogateRun
 from uvms_jax.surrogate._run import acceptance_figures
