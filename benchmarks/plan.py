@@ -4,16 +4,24 @@ checks) and the compiled sphere checker (one call per motion, MuJoCo confirming 
 plus validity checks per second.
 
 Per checker and planner: planning time per edge (median, mean, max), edges planned and
-re-checked (every path is re-checked with MuJoCo at margin 0 either way), and the wall time of
-the whole graph (planning, time parameterisation, re-check, metrics). Compilation (Numba, XLA)
-is done in a warm-up before any timing and reported apart. Prints one JSON object.
+re-checked (every path is re-checked with MuJoCo at margin 0 either way), the wall time of the
+whole graph (planning, time parameterisation, re-check, metrics) and where it goes: seconds in
+each step of :func:`uvms_jax.plan.plan_edge` (``steps_s``: the planner's solve and
+simplification, the MuJoCo re-check, time parameterisation, trajectory check, metrics,
+clearance; ``other`` is the rest). ``graph_wall_s`` sums the planners' graph times per checker.
+Compilation (Numba, XLA) is done in a warm-up before any timing and reported apart. Prints one
+JSON object.
 
     .venv/bin/python benchmarks/plan.py [--planners RRTConnect PRM] [--checkers spheres]
+        [--params '{"BKPIECE1": {"range": 1.0}}']
 """
 
 from __future__ import annotations
 
 import argparse
+import collections
+import contextlib
+import functools
 import json
 import platform
 import time
@@ -25,6 +33,15 @@ import yaml
 
 from uvms_jax import kin
 from uvms_jax import plan as P
+from uvms_jax.plan import _collision, _spheres, _tasks
+
+# The steps of plan_edge, as (namespace, attribute, label); plan_motion's time includes the
+# re-check, reported apart and subtracted. The clearance is either MuJoCo's at every sample or
+# the sphere checker's min_clearance (which calls MuJoCo's single-state clearance, not the batch).
+_STEPS = ((_collision.CollisionChecker, "path_is_valid", "recheck_mujoco"), (_tasks, "plan_motion", "plan_motion"),
+          (_tasks, "time_parameterize", "time_parameterize"), (_tasks, "check_trajectory", "check_trajectory"),
+          (_tasks, "trajectory_metrics", "metrics"), (_collision.CollisionChecker, "clearance_batch", "clearance"),
+          (_spheres.SphereChecker, "min_clearance", "clearance"))
 
 SCENARIO = Path(__file__).parents[1] / "configs" / "scenario" / "thesis_cage.yaml"
 
@@ -35,23 +52,53 @@ def _rate(fn, n: int) -> float:
     return n / (time.perf_counter() - t)
 
 
+@contextlib.contextmanager
+def _timed_steps(acc: dict[str, float]):
+    """Add the seconds spent in each of :data:`_STEPS` to ``acc`` while inside."""
+    saved = []
+    for owner, name, label in _STEPS:
+        fn = getattr(owner, name)
+        saved.append((owner, name, fn))
+
+        def timed(*a, _fn=fn, _label=label, **k):
+            t = time.perf_counter()
+            try:
+                return _fn(*a, **k)
+            finally:
+                acc[_label] += time.perf_counter() - t
+
+        setattr(owner, name, functools.wraps(fn)(timed))
+    try:
+        yield acc
+    finally:
+        for owner, name, fn in saved:
+            setattr(owner, name, fn)
+
+
 def _graph(scene, checker, fast, targets, edges, planner, settings, chain) -> dict:
-    """Plan every edge with one planner; per-edge planning times and the graph's wall time."""
+    """Plan every edge with one planner; per-edge planning times, the graph's wall time and
+    its split over the steps of plan_edge."""
     times, ok, reval = {}, 0, 0
+    acc: dict[str, float] = collections.defaultdict(float)
     t0 = time.perf_counter()
-    for src, dst in edges:
-        r = P.plan_edge(scene, checker, targets, src, dst, planner, budget_s=settings.budget_s,
-                        resolution=settings.resolution, recheck_resolution=settings.recheck_resolution,
-                        clearance_resolution=settings.clearance_resolution, simplify_s=settings.simplify_s,
-                        max_velocity=settings.max_velocity, max_acceleration=settings.max_acceleration,
-                        chain=chain, fast=fast)
-        times[f"{src}->{dst}"] = round(r.plan.planning_time_s * 1e3, 3)
-        ok += r.success
-        reval += r.revalidated
+    with _timed_steps(acc):
+        for src, dst in edges:
+            r = P.plan_edge(scene, checker, targets, src, dst, planner, budget_s=settings.budget_s,
+                            resolution=settings.resolution, recheck_resolution=settings.recheck_resolution,
+                            clearance_resolution=settings.clearance_resolution, simplify_s=settings.simplify_s,
+                            max_velocity=settings.max_velocity, max_acceleration=settings.max_acceleration,
+                            chain=chain, fast=fast, params=settings.planner_params.get(planner))
+            times[f"{src}->{dst}"] = round(r.plan.planning_time_s * 1e3, 3)
+            ok += r.success
+            reval += r.revalidated
     wall = time.perf_counter() - t0
+    steps = {"plan_motion": acc["plan_motion"] - acc["recheck_mujoco"]}
+    steps |= {label: acc[label] for _, _, label in _STEPS if label != "plan_motion"}  # labels may repeat
+    steps["other"] = wall - sum(steps.values())
     t = np.array(list(times.values()))
     return {"success": ok, "revalidated": reval, "edges": len(edges), "median_ms": float(np.median(t)),
-            "mean_ms": float(t.mean()), "max_ms": float(t.max()), "graph_wall_s": round(wall, 3), "per_edge_ms": times}
+            "mean_ms": float(t.mean()), "max_ms": float(t.max()), "graph_wall_s": round(wall, 3),
+            "steps_s": {k: round(v, 3) for k, v in steps.items()}, "per_edge_ms": times}
 
 
 def main() -> None:
@@ -60,10 +107,12 @@ def main() -> None:
     ap.add_argument("--checkers", nargs="+", default=list(P.CHECKERS), choices=P.CHECKERS)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--checks", type=int, default=20000)
+    ap.add_argument("--params", type=json.loads, default={},
+                    help='planner parameters as JSON, e.g. \'{"BKPIECE1": {"range": 1.0}}\' (default: OMPL\'s)')
     args = ap.parse_args()
     jax.config.update("jax_enable_x64", True)
     P.seed_ompl(args.seed)
-    settings = P.PlanSettings(planners=tuple(args.planners))
+    settings = P.PlanSettings(planners=tuple(args.planners), planner_params=args.params)
     scene = P.build_scene(yaml.safe_load(SCENARIO.read_text()))
     checker = P.CollisionChecker(scene, margin=settings.margin, clearance_max=settings.clearance_max)
     t0 = time.perf_counter()
@@ -79,7 +128,8 @@ def main() -> None:
     for planner in args.planners:  # warm-up: XLA compiles of the metrics, first OMPL calls
         for f in (None, fast):
             for src, dst in edges[:: max(1, len(edges) // 6)]:
-                P.plan_edge(scene, checker, targets, src, dst, planner, chain=chain, fast=f)
+                P.plan_edge(scene, checker, targets, src, dst, planner, chain=chain, fast=f,
+                            params=settings.planner_params.get(planner))
     warmup_s = time.perf_counter() - t0
 
     Q = np.random.default_rng(args.seed).uniform(checker.lower, checker.upper, (args.checks, 6))
@@ -98,13 +148,15 @@ def main() -> None:
         n0 = (fast.n_motions, fast.n_states, fast.n_confirmed)
         t0 = time.perf_counter()
         runs = {planner: _graph(scene, checker, f, targets, edges, planner, settings, chain) for planner in args.planners}
-        per_checker[name] = {"graph_all_planners_wall_s": round(time.perf_counter() - t0, 3), "planners": runs}
+        per_checker[name] = {"graph_all_planners_wall_s": round(time.perf_counter() - t0, 3),
+                             "graph_wall_s": {p: r["graph_wall_s"] for p, r in runs.items()}, "planners": runs}
         if f is not None:
             per_checker[name]["motions"] = fast.n_motions - n0[0]
             per_checker[name]["samples_checked"] = fast.n_states - n0[1]
             per_checker[name]["rejections_confirmed_by_mujoco"] = fast.n_confirmed - n0[2]
     print(json.dumps({
         "device": f"{platform.machine()} CPU, Python {platform.python_version()}",
+        "planner_params": settings.planner_params,
         "ik_targets_s_incl_compile": round(ik_s, 2),
         "numba_compile_or_cache_load_s": round(numba_s, 2),
         "warmup_s": round(warmup_s, 2),

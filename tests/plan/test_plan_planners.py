@@ -74,11 +74,12 @@ def test_settings_take_planners_and_parameters_from_config():
 
 
 @pytest.mark.parametrize("name, params", [("RRTstar", {"range": 1.0}), ("RRT", {"goal_bias": 0.1}),
-                                          ("KPIECE1", {})])
+                                          ("KPIECE1", {}), ("BKPIECE1", {}), ("LBKPIECE1", {"range": 1.0})])
 def test_other_planners_plan_with_the_sphere_checker(name, params):
     """Motions accepted by the sphere checker are sampled like the re-check, so the first
     attempt's path passes it (OMPL's own state-by-state checks at the planner's coarser step
-    and with a margin usually do, but not by construction)."""
+    and with a margin usually do, but not by construction). The KPIECE family too, although
+    the bindings give it no partial motions."""
     seed_ompl(0)
     raw = yaml.safe_load(SCENARIO.read_text())
     reference = CollisionChecker(build_scene(raw))

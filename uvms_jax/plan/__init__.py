@@ -11,7 +11,7 @@
   box, cylinder, sphere, capsule, mesh file), :func:`build_scene` → :class:`Scene` (MuJoCo
   model, object and base poses, grasp; the arm's base pose a parameter), :class:`Context`;
 * collision: :class:`CollisionChecker` (MuJoCo, the reference) — ``is_valid``, ``clearance``,
-  their batched versions, ``path_is_valid``; :func:`densify`; :class:`SphereChecker` (the arm
+  their batched versions, ``path_is_valid``, ``min_clearance`` (exact, MuJoCo only where the sphere bounds leave it open); :func:`densify`; :class:`SphereChecker` (the arm
   as spheres, compiled; whole motions per call, conservative, MuJoCo confirms rejections);
 * targets: :func:`pick_place_targets` (batched numerical IK of the eight pick-and-place steps),
   :class:`NodeTarget`, :data:`STEPS`; :func:`docking_task` (the grasp and place poses as a

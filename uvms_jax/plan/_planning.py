@@ -7,8 +7,7 @@ the true geometry (margin 0). States are checked with MuJoCo; motions either by 
 state (MuJoCo, ``resolution``) or by one :class:`~uvms_jax.plan.SphereChecker` call each,
 sampled like the re-check. The planner works with the checker's safety margin, so the re-check
 passes unless OMPL's own motion checks skipped a thin obstacle (with the sphere checker it
-passes by construction, for planners outside ``PARTIAL_MOTIONS``). A path that fails the
-re-check is re-planned while budget is left.
+passes by construction). A path that fails the re-check is re-planned while budget is left.
 Time parameterisation follows the arm's controller (thesis 4.6,
 :func:`uvms_jax.motion.synchronised_move`): rest to rest between consecutive waypoints, all
 joints arriving together, within the velocity and acceleration limits.
@@ -34,9 +33,11 @@ from uvms_jax.plan._spheres import SphereChecker
 __all__ = ["PLANNERS", "PlanResult", "Trajectory", "plan_motion", "seed_ompl", "time_parameterize"]
 
 PLANNERS = ("RRTConnect", "BKPIECE1", "PRM")  # the thesis's three (any of ompl_planners() works)
-# Planners that grow trees from the valid part of a rejected motion (OMPL's checkMotion with
-# ``lastValid``). The Python bindings never fill ``lastValid`` from a Python motion validator,
-# so these keep OMPL's state-by-state motion checks (with the fast state checker).
+# Planners that can grow trees from the valid part of a rejected motion (OMPL's checkMotion
+# with ``lastValid``). The Python bindings never fill ``lastValid`` from a Python motion
+# validator: with the sphere checker these planners drop a rejected motion whole (as OMPL does
+# for a valid part shorter than ``min_valid_path_fraction``); on the thesis task graph that
+# halves BKPIECE1's planning time against OMPL's state-by-state MuJoCo checks, every edge solved.
 PARTIAL_MOTIONS = ("KPIECE1", "BKPIECE1", "LBKPIECE1")
 log = logging.getLogger(__name__)
 _ompl_seed: int | None = None  # the seed OMPL's process-wide RNG took, None before seed_ompl
@@ -169,9 +170,9 @@ def plan_motion(
       recheck_resolution: joint step of the re-check of the result [rad].
       simplify_s: time given to path simplification per attempt [s].
       fast: a :class:`SphereChecker` on ``checker``: it checks whole motions (MuJoCo confirms
-        its rejections), sampled at ``recheck_resolution`` like the re-check; planners of
-        :data:`PARTIAL_MOTIONS` use it only to simplify (a re-plan after a failed re-check
-        keeps it). None: OMPL checks motions state by state with MuJoCo at ``resolution``.
+        its rejections), sampled at ``recheck_resolution`` like the re-check (planners of
+        :data:`PARTIAL_MOTIONS` then get no partial motions). None: OMPL checks motions state
+        by state with MuJoCo at ``resolution``.
       params: the planner's parameters (:func:`planner_parameters`), e.g. ``{"range": 1.0}``.
 
     Raises:
@@ -202,8 +203,7 @@ def plan_motion(
         if fast.reference is not checker:
             raise ValueError("fast must be a SphereChecker built on the given checker")
         validator = _SegmentValidator(si, fast, recheck_resolution, n)
-        if planner not in PARTIAL_MOTIONS:
-            si.setMotionValidator(validator)
+        si.setMotionValidator(validator)
     ss.setPlanner(make_planner(planner, si, params))
     start, goal = space.allocState(), space.allocState()
     start[0:n] = q_start.tolist()
@@ -216,8 +216,6 @@ def plan_motion(
         solved = ss.solve(budget_s - spent)
         exact = bool(solved) and ss.haveExactSolutionPath()
         if exact:
-            if validator is not None:
-                si.setMotionValidator(validator)  # simplification needs no partial motions
             if ss.getSolutionPath().getStateCount() > 2 and si.checkMotion(start, goal):
                 # Simplification ends at the straight segment whenever it is free; one motion
                 # check finds that without the rounds of shortcutting.

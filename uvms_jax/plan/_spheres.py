@@ -29,6 +29,10 @@ configuration MuJoCo accepts (sphere bumps, polytope corners): MuJoCo, the refer
 every sample it rejects — a collision ends the motion's check, a false alarm resumes it. The
 samples of a motion are those of :func:`~uvms_jax.plan.densify` at the same resolution, so a
 path made of accepted motions passes the MuJoCo re-check there.
+
+The same spheres bound the clearance from below (:meth:`SphereChecker.clearance_lower_bounds`),
+so that the smallest clearance along a path needs MuJoCo at a few samples only
+(:meth:`SphereChecker.min_clearance`, the same value as MuJoCo at every sample).
 """
 
 from __future__ import annotations
@@ -180,6 +184,103 @@ def _place(g, placed, X, p, R, g_body, g_start, g_end, sph_local) -> None:
 
 
 @numba.njit(cache=True, nogil=True)
+def _forward(q, R, p, Rj, M, parent, R_fixed, p_fixed, axis, qadr) -> None:
+    """Forward kinematics into ``R (B + 1, 3, 3)``, ``p (B + 1, 3)`` (slot 0: the root, set by
+    the caller; body b in slot b + 1): R_b = R_parent R_fixed Rot(axis, q), p_b = p_parent +
+    R_parent p_fixed. ``Rj``, ``M``: ``(3, 3)`` scratch."""
+    n_body = parent.shape[0]
+    for b in range(n_body):
+        a0, a1, a2 = axis[b, 0], axis[b, 1], axis[b, 2]
+        s, c = np.sin(q[qadr[b]]), np.cos(q[qadr[b]])
+        v = 1.0 - c
+        Rj[0, 0] = c + a0 * a0 * v
+        Rj[0, 1] = a0 * a1 * v - a2 * s
+        Rj[0, 2] = a0 * a2 * v + a1 * s
+        Rj[1, 0] = a1 * a0 * v + a2 * s
+        Rj[1, 1] = c + a1 * a1 * v
+        Rj[1, 2] = a1 * a2 * v - a0 * s
+        Rj[2, 0] = a2 * a0 * v - a1 * s
+        Rj[2, 1] = a2 * a1 * v + a0 * s
+        Rj[2, 2] = c + a2 * a2 * v
+        j = parent[b] + 1
+        for r in range(3):
+            p[b + 1, r] = p[j, r] + R[j, r, 0] * p_fixed[b, 0] + R[j, r, 1] * p_fixed[b, 1] + R[j, r, 2] * p_fixed[b, 2]
+            for cc in range(3):
+                M[r, cc] = R[j, r, 0] * R_fixed[b, 0, cc] + R[j, r, 1] * R_fixed[b, 1, cc] + R[j, r, 2] * R_fixed[b, 2, cc]
+        for r in range(3):
+            for cc in range(3):
+                R[b + 1, r, cc] = M[r, 0] * Rj[0, cc] + M[r, 1] * Rj[1, cc] + M[r, 2] * Rj[2, cc]
+
+
+@numba.njit(cache=True)
+def _poly_distance(x, o, faces, poly_start, poly_end, boxes) -> float:
+    """Lower bound of the signed distance of point ``x (3,)`` to polytope ``o`` [m]: exact for a
+    box, else the largest signed face distance (both 1-Lipschitz in ``x``)."""
+    if boxes[o, 0, 0] > 0.0:
+        return _box_distance(x, boxes[o])
+    lb = -np.inf
+    for f in range(poly_start[o], poly_end[o]):
+        lb = max(lb, faces[f, 0] * x[0] + faces[f, 1] * x[1] + faces[f, 2] * x[2] + faces[f, 3])
+    return lb
+
+
+@numba.njit(cache=True, nogil=True)
+def _clearance_bounds(Q, cap, R_root, p_root, parent, R_fixed, p_fixed, axis, qadr, sph_local, sph_r, g_start,
+                      g_end, g_body, g_centre, g_radius, faces, poly_start, poly_end, boxes, cp_geom, cp_poly,
+                      cs_geom, cs_c, cs_r):
+    """``(k,)`` lower bounds of the clearance at the rows of ``Q (k, n)``, capped at ``cap``
+    [m] (see :meth:`SphereChecker.clearance_lower_bounds`)."""
+    n_body = parent.shape[0]
+    R = np.empty((n_body + 1, 3, 3))
+    p = np.empty((n_body + 1, 3))
+    R[0] = R_root
+    p[0] = p_root
+    Rj = np.empty((3, 3))
+    M = np.empty((3, 3))
+    C = np.empty((g_start.shape[0], 3))
+    x = np.empty(3)
+    n_poly = cp_geom.shape[0]
+    n_pair = n_poly + cs_geom.shape[0]
+    geom = np.concatenate((cp_geom, cs_geom))
+    coarse = np.empty(n_pair)
+    out = np.empty(Q.shape[0])
+    for i in range(Q.shape[0]):
+        _forward(Q[i], R, p, Rj, M, parent, R_fixed, p_fixed, axis, qadr)
+        for g in range(g_start.shape[0]):
+            b = g_body[g] + 1
+            for r in range(3):
+                C[g, r] = p[b, r] + R[b, r, 0] * g_centre[g, 0] + R[b, r, 1] * g_centre[g, 1] + R[b, r, 2] * g_centre[g, 2]
+        # Each pair's bound through the geom's bounding sphere (its spheres lie inside it);
+        # the pairs are then refined nearest first, so that the rest are mostly skipped.
+        for j in range(n_pair):
+            g = geom[j]
+            if j < n_poly:
+                coarse[j] = _poly_distance(C[g], cp_poly[j], faces, poly_start, poly_end, boxes) - g_radius[g]
+            else:
+                s0 = j - n_poly
+                coarse[j] = np.sqrt((C[g, 0] - cs_c[s0, 0]) ** 2 + (C[g, 1] - cs_c[s0, 1]) ** 2
+                                    + (C[g, 2] - cs_c[s0, 2]) ** 2) - g_radius[g] - cs_r[s0]
+        best = cap
+        for j in np.argsort(coarse):
+            if coarse[j] >= best:
+                break
+            g = geom[j]
+            b = g_body[g] + 1
+            for k in range(g_start[g], g_end[g]):
+                for r in range(3):
+                    x[r] = p[b, r] + R[b, r, 0] * sph_local[k, 0] + R[b, r, 1] * sph_local[k, 1] + R[b, r, 2] * sph_local[k, 2]
+                if j < n_poly:
+                    d = _poly_distance(x, cp_poly[j], faces, poly_start, poly_end, boxes) - sph_r[k]
+                else:
+                    s0 = j - n_poly
+                    d = np.sqrt((x[0] - cs_c[s0, 0]) ** 2 + (x[1] - cs_c[s0, 1]) ** 2 + (x[2] - cs_c[s0, 2]) ** 2) \
+                        - sph_r[k] - cs_r[s0]
+                best = min(best, d)
+        out[i] = best
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
 def _first_collision(q0, q1, steps, order, start, active, R_root, p_root, parent, R_fixed, p_fixed, axis, qadr,
                      sph_body, sph_local, sph_r, g_start, g_end, g_body, g_centre, g_radius, g_seg, g_cap,
                      faces, poly_start, poly_end, poly_c, poly_r, boxes, pp_geom, pp_poly, ss_a, ss_b, st_geom, st_c, st_r,
@@ -203,28 +304,7 @@ def _first_collision(q0, q1, steps, order, start, active, R_root, p_root, parent
         u = order[t] / steps
         for i in range(q0.shape[0]):
             q[i] = q0[i] + u * (q1[i] - q0[i])
-        # Forward kinematics: R_b = R_parent R_fixed Rot(axis, q), p_b = p_parent + R_parent p_fixed.
-        for b in range(n_body):
-            a0, a1, a2 = axis[b, 0], axis[b, 1], axis[b, 2]
-            s, c = np.sin(q[qadr[b]]), np.cos(q[qadr[b]])
-            v = 1.0 - c
-            Rj[0, 0] = c + a0 * a0 * v
-            Rj[0, 1] = a0 * a1 * v - a2 * s
-            Rj[0, 2] = a0 * a2 * v + a1 * s
-            Rj[1, 0] = a1 * a0 * v + a2 * s
-            Rj[1, 1] = c + a1 * a1 * v
-            Rj[1, 2] = a1 * a2 * v - a0 * s
-            Rj[2, 0] = a2 * a0 * v - a1 * s
-            Rj[2, 1] = a2 * a1 * v + a0 * s
-            Rj[2, 2] = c + a2 * a2 * v
-            j = parent[b] + 1
-            for r in range(3):
-                p[b + 1, r] = p[j, r] + R[j, r, 0] * p_fixed[b, 0] + R[j, r, 1] * p_fixed[b, 1] + R[j, r, 2] * p_fixed[b, 2]
-                for cc in range(3):
-                    M[r, cc] = R[j, r, 0] * R_fixed[b, 0, cc] + R[j, r, 1] * R_fixed[b, 1, cc] + R[j, r, 2] * R_fixed[b, 2, cc]
-            for r in range(3):
-                for cc in range(3):
-                    R[b + 1, r, cc] = M[r, 0] * Rj[0, cc] + M[r, 1] * Rj[1, cc] + M[r, 2] * Rj[2, cc]
+        _forward(q, R, p, Rj, M, parent, R_fixed, p_fixed, axis, qadr)
         for g in range(g_start.shape[0]):
             if not active[g]:
                 continue  # e.g. the in-hand copies of the objects not held
@@ -294,6 +374,27 @@ def _first_collision(q0, q1, steps, order, start, active, R_root, p_root, parent
                 if np.sqrt(dx * dx + dy * dy + dz * dz) <= sph_r[k] + st_r[s0] + margin:
                     return t
     return -1
+
+
+def _pair_filter(m: mujoco.MjModel):
+    """``collides(g1, g2) -> bool``: whether MuJoCo tests geoms ``g1``, ``g2`` of model ``m`` as
+    a pair (its ``contype``/``conaffinity`` bits, welded bodies, the parent–child filter,
+    ``<exclude>``)."""
+    excluded = {int(s) for s in m.exclude_signature[: m.nexclude]}
+    weld = m.body_weldid
+
+    def collides(g1: int, g2: int) -> bool:
+        b1, b2 = m.geom_bodyid[g1], m.geom_bodyid[g2]
+        w1, w2 = weld[b1], weld[b2]
+        if w1 == w2:
+            return False
+        if w1 and w2 and (w1 == weld[m.body_parentid[w2]] or w2 == weld[m.body_parentid[w1]]):
+            return False
+        if ((int(min(b1, b2)) << 16) + int(max(b1, b2))) in excluded:
+            return False
+        return bool((m.geom_contype[g1] & m.geom_conaffinity[g2]) or (m.geom_contype[g2] & m.geom_conaffinity[g1]))
+
+    return collides
 
 
 class SphereChecker:
@@ -392,6 +493,7 @@ class SphereChecker:
                          np.array(g_body), np.array(g_centre), np.array(g_radius), np.array(g_seg), np.array(g_cap))
         self._faces = np.array(faces).reshape(-1, 4)
         self._cache: dict[Context, tuple] = {}
+        self._clearance_cache: dict[Context, tuple] = {}
         self.n_motions = self.n_states = self.n_confirmed = 0
         # Compile (or load Numba's on-disk cache) now, not inside a planner's time budget.
         self.spheres_free(np.zeros((1, m.nq)))
@@ -403,26 +505,13 @@ class SphereChecker:
         if context in self._cache:
             return self._cache[context]
         self.reference.set_context(context)
-        m = self.reference._m
-        excluded = {int(s) for s in m.exclude_signature[: m.nexclude]}
-        weld = m.body_weldid
+        collides = _pair_filter(self.reference._m)
 
-        def collides(g1: int, g2: int) -> bool:
-            b1, b2 = m.geom_bodyid[g1], m.geom_bodyid[g2]
-            w1, w2 = weld[b1], weld[b2]
-            if w1 == w2:
-                return False
-            if w1 and w2 and (w1 == weld[m.body_parentid[w2]] or w2 == weld[m.body_parentid[w1]]):
-                return False
-            if ((int(min(b1, b2)) << 16) + int(max(b1, b2))) in excluded:
-                return False
-            return bool((m.geom_contype[g1] & m.geom_conaffinity[g2]) or (m.geom_contype[g2] & m.geom_conaffinity[g1]))
-
-        polys = sorted(self._poly_range)
-        reach = self._reach()
+        polys, starts, ends, ball_c, ball_r, boxes, poly_dist = self._polytopes
+        reach = self._reach() + self.margin
         pp_geom, pp_poly, ss_a, ss_b, st_geom, st_c, st_r = [], [], [], [], [], [], []
         for i, g1 in enumerate(self._moving):
-            pp = [k for k, g2 in enumerate(polys) if collides(g1, g2) and self._within(g2, reach[i])]
+            pp = [k for k, g2 in enumerate(polys) if poly_dist[k] <= reach[i] and collides(g1, g2)]
             pp_geom += [i] * len(pp)
             pp_poly += pp
             for j in range(i + 1, len(self._moving)):
@@ -437,16 +526,6 @@ class SphereChecker:
         # Half-spaces first: the ceiling and the floor are met most often.
         order = sorted(range(len(pp_poly)), key=lambda k: self._poly_range[polys[pp_poly[k]]][1]
                        - self._poly_range[polys[pp_poly[k]]][0] > 1)
-        starts = np.array([self._poly_range[g][0] for g in polys], dtype=np.int64)
-        ends = np.array([self._poly_range[g][1] for g in polys], dtype=np.int64)
-        ball_c = np.array([self._poly_ball[g][0] for g in polys], dtype=float).reshape(-1, 3)
-        ball_r = np.array([self._poly_ball[g][1] for g in polys], dtype=float)
-        boxes = np.zeros((max(len(polys), 1), 5, 3))
-        for k, g in enumerate(polys):
-            a, b = self._poly_range[g]
-            box = _box_of(self._faces[a:b])
-            if box is not None:
-                boxes[k, 0, 0], boxes[k, 1:] = 1.0, box
         ints = lambda x: np.array(x, dtype=np.int64)  # noqa: E731
         active = np.zeros(len(self._moving), dtype=np.bool_)
         active[np.array(pp_geom + ss_a + ss_b + st_geom, dtype=np.int64)] = True
@@ -469,18 +548,30 @@ class SphereChecker:
                 b = parent[b]
         return out
 
-    def _within(self, g: int, reach: float) -> bool:
-        """Whether fixed polytope geom ``g`` comes within ``reach`` + margin of the first moving
-        body's origin (a lower bound of its distance decides; half-spaces always do)."""
-        a, b = self._poly_range[g]
-        eq = self._faces[a:b]
-        box = _box_of(eq) if len(eq) == 6 else None
-        o = self._origin
-        if box is not None:
-            dist = _box_distance(o, np.vstack([[1.0, 0.0, 0.0], box]))
-        else:
-            dist = float(np.max(eq[:, :3] @ o + eq[:, 3]))
-        return dist <= reach + self.margin
+    @functools.cached_property
+    def _polytopes(self) -> tuple:
+        """The fixed polytopes, the same in every context: their geom ids ``(P,)`` (sorted),
+        face ranges ``(P,)`` ×2 into the face equations, bounding balls (centres ``(P, 3)``,
+        radii ``(P,)`` [m]), boxes ``(P, 5, 3)`` (flag row 1 for a box, see
+        :func:`_box_distance`; zeros otherwise) and a lower bound of each one's distance from
+        the first moving body's origin ``(P,)`` [m] (a box's exact signed distance, else the
+        largest signed face distance). Built once: every context selects pairs from it."""
+        polys = sorted(self._poly_range)
+        starts = np.array([self._poly_range[g][0] for g in polys], dtype=np.int64)
+        ends = np.array([self._poly_range[g][1] for g in polys], dtype=np.int64)
+        ball_c = np.array([self._poly_ball[g][0] for g in polys], dtype=float).reshape(-1, 3)
+        ball_r = np.array([self._poly_ball[g][1] for g in polys], dtype=float)
+        boxes = np.zeros((max(len(polys), 1), 5, 3))
+        dist = np.empty(len(polys))
+        for k, g in enumerate(polys):
+            eq = self._faces[starts[k]:ends[k]]
+            box = _box_of(eq)
+            if box is not None:
+                boxes[k, 0, 0], boxes[k, 1:] = 1.0, box
+                dist[k] = _box_distance(self._origin, boxes[k])
+            else:
+                dist[k] = float(np.max(eq[:, :3] @ self._origin + eq[:, 3]))
+        return polys, starts, ends, ball_c, ball_r, boxes, dist
 
     def set_context(self, context: Context) -> None:
         """Switch this checker and the reference checker to ``context``."""
@@ -524,3 +615,52 @@ class SphereChecker:
                 return False
             t = self._first(q0, q1, steps, order, t + 1)
         return True
+
+    # -- clearance -----------------------------------------------------------------------
+    def _clearance_pairs(self, context: Context) -> tuple:
+        """Kernel arrays of the pairs of the reference checker's clearance model in
+        ``context`` (arm geoms against polytopes, then against spheres of fixed geoms), less
+        polytopes farther than ``clearance_max`` from anything the arm reaches."""
+        if context in self._clearance_cache:
+            return self._clearance_cache[context]
+        self.reference.set_context(context)
+        collides = _pair_filter(self.reference._mc)
+        polys, _, _, _, _, _, poly_dist = self._polytopes
+        reach = self._reach() + self.reference.clearance_max
+        cp_geom, cp_poly, cs_geom, cs_c, cs_r = [], [], [], [], []
+        for i, g1 in enumerate(self._moving):
+            for k, g2 in enumerate(polys):
+                if poly_dist[k] <= reach[i] and collides(g1, g2):
+                    cp_geom.append(i)
+                    cp_poly.append(k)
+            for g2, (c, r) in self._static.items():
+                if collides(g1, g2):
+                    cs_geom += [i] * len(r)
+                    cs_c += list(c)
+                    cs_r += list(r)
+        ints = lambda x: np.array(x, dtype=np.int64)  # noqa: E731
+        pairs = (ints(cp_geom), ints(cp_poly), ints(cs_geom), np.array(cs_c, dtype=float).reshape(-1, 3),
+                 np.array(cs_r, dtype=float))
+        self._clearance_cache[context] = pairs
+        return pairs
+
+    def clearance_lower_bounds(self, Q) -> np.ndarray:
+        """``(k,)`` lower bounds [m] of the reference checker's :meth:`~CollisionChecker.clearance`
+        at the rows of ``Q (k, n)`` [rad], in the current context, in one compiled call.
+
+        Each is the smallest distance of an arm sphere to a scene polytope (its largest face
+        distance, a box's exact distance) or a fixed sphere, capped at ``clearance_max``: the
+        spheres contain the arm's geoms, so no pair MuJoCo measures is nearer (up to MuJoCo's
+        own tolerance)."""
+        Q = self.reference._check_batch(Q)
+        _, sph_local, sph_r, g_start, g_end, g_body, g_centre, g_radius, _, _ = self._spheres
+        _, faces, starts, ends, _, _, boxes, *_ = self._pairs(self.context)
+        return _clearance_bounds(Q, self.reference.clearance_max, *self._chain, sph_local, sph_r, g_start, g_end,
+                                 g_body, g_centre, g_radius, faces, starts, ends, boxes,
+                                 *self._clearance_pairs(self.context))
+
+    def min_clearance(self, Q) -> float:
+        """The reference checker's :meth:`~CollisionChecker.min_clearance` of ``Q (k, n)``
+        [rad] (the same value), with MuJoCo run only where :meth:`clearance_lower_bounds`
+        leaves the minimum open."""
+        return self.reference.min_clearance(Q, self.clearance_lower_bounds(Q))

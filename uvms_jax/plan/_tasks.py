@@ -17,6 +17,7 @@ start positions as obstacles, except the one held or being grasped.
 from __future__ import annotations
 
 import dataclasses
+import weakref
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -66,6 +67,19 @@ def task_edges(scene: Scene) -> list[tuple[int, int]]:
     return [(int(i), int(j)) for i, j in np.argwhere(np.asarray(problem.rule)[:n, :n])]
 
 
+_EDGE_SETS: dict[int, tuple[weakref.ref, frozenset[tuple[int, int]]]] = {}
+
+
+def _edge_set(scene: Scene) -> frozenset[tuple[int, int]]:
+    """:func:`task_edges` of ``scene`` as a set, computed once per scene object (a scene is
+    not changed after it is built; the rules cost ~1 ms, as much as planning an edge)."""
+    hit = _EDGE_SETS.get(id(scene))
+    if hit is None or hit[0]() is not scene:
+        hit = (weakref.ref(scene, lambda _, key=id(scene): _EDGE_SETS.pop(key, None)), frozenset(task_edges(scene)))
+        _EDGE_SETS[id(scene)] = hit
+    return hit[1]
+
+
 def _q_at_node(scene: Scene, targets: Mapping[int, NodeTarget], node: int) -> np.ndarray:
     if node in (START, goal_node(scene)):
         return np.asarray(scene.spec.start_q, dtype=float)
@@ -77,7 +91,7 @@ def _q_at_node(scene: Scene, targets: Mapping[int, NodeTarget], node: int) -> np
 def edge_endpoints(scene: Scene, targets: Mapping[int, NodeTarget], src: int, dst: int) -> tuple[np.ndarray, np.ndarray, Context]:
     """``(q_from, q_to, context)`` of edge ``src → dst``; raises ValueError for a move the
     task graph forbids."""
-    if (src, dst) not in set(task_edges(scene)):
+    if (src, dst) not in _edge_set(scene):
         raise ValueError(f"move {src} -> {dst} is not in the task graph")
     ctx = Context(held=src) if src in scene.objects else Context()
     return _q_at_node(scene, targets, src), _q_at_node(scene, targets, dst), ctx
@@ -150,7 +164,7 @@ def plan_edge(
     gravity = scene.T_base_world[:3, :3] @ np.array([0.0, 0.0, -scene.spec.gravity])
     jm, ee, tau = trajectory_metrics(chain, dense, force, gravity_base=gravity,
                                      water_density=scene.spec.water_density)
-    clearance = float(np.min(checker.clearance_batch(densify(res.path, clearance_resolution))))
+    clearance = (fast or checker).min_clearance(densify(res.path, clearance_resolution))
     metrics = EdgeMetrics(planning_time=res.planning_time_s, joint_movement=jm, ee_distance=ee, security=clearance,
                           max_torque=tau)
     return EdgeResult(planner, src, dst, res, traj, metrics, check)
