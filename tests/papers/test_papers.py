@@ -53,3 +53,55 @@ def test_offset_chain_moves_the_tool_along_the_approach_axis(papers):
     T, T_off = np.asarray(kin.fk(arm, q))[0], np.asarray(kin.fk(papers.offset_chain(arm, 0.25), q))[0]
     np.testing.assert_allclose(T_off[:3, 3], T[:3, 3] + 0.25 * T[:3, 0], atol=1e-6)
     np.testing.assert_allclose(T_off[:3, :3], T[:3, :3], atol=1e-6)
+
+
+def _thesis_raw_metrics():
+    """Synthetic raw ``(5, 10, 10)`` metrics on the thesis graph (every allowed move)."""
+    import jax
+
+    from uvms_jax import sched
+
+    layout = sched.thesis_problem()
+    return sched.random_metrics(jax.random.key(3), layout)
+
+
+def test_thesis_paths_scored_on_our_instance(papers):
+    """Σ K·N of each thesis path equals the path's cost on the cost matrix built from the same
+    metrics (the schedulers' own arithmetic, a separate code path)."""
+    from uvms_jax import sched
+
+    raw = _thesis_raw_metrics()
+    for table in ("5.2", "5.7", "A.5"):
+        K = papers.PAPER_T22[table][0][2]
+        problem, nm = sched.problem_from_metrics(raw, weights=K)
+        for alg, (sums, cost) in papers.thesis_path_sums(table, nm).items():
+            path = next(r[1] for r in papers.PAPER_T22[table] if r[0] == alg)
+            assert sums.shape == (5,) and np.all(sums >= 0)
+            assert math.isclose(cost, sched.path_cost(problem, [int(v) for v in path.split("-")]), rel_tol=1e-12)
+
+
+def test_instances_from_an_edges_csv(papers, tmp_path):
+    """Planners with rows in edges.csv give their metrics back; one without rows is reported."""
+    from uvms_jax import sched
+
+    raw = _thesis_raw_metrics()
+    src, dst = np.nonzero(np.all(np.isfinite(raw), axis=0))
+    rows = ["planner,src,dst,success," + ",".join(sched.EDGE_CSV_COLUMNS)]
+    for planner in ("RRTConnect", "PRM"):
+        rows += [f"{planner},{s},{d},True," + ",".join(repr(float(v)) for v in raw[:, s, d]) for s, d in zip(src, dst)]
+    path = tmp_path / "edges.csv"
+    path.write_text("\n".join(rows) + "\n")
+    instances, missing = papers.thesis_instances(path, budget_s=1.0)
+    assert set(instances) == {"RRTConnect", "PRM"} and set(missing) == {"BKPIECE1"}
+    assert "BKPIECE1" in missing["BKPIECE1"]
+    for inst in instances.values():
+        np.testing.assert_allclose(inst.raw, raw)  # NaN where no move, in both
+        assert inst.straight is None and inst.attempted is None
+    table = papers.instance_table(instances)
+    assert table.count("\n") == 3  # header, rule, two planners
+
+
+def test_returns_to_the_start(papers):
+    assert papers._returns("0-4-8-0-3-7-0-1-5-0-2-6-9") == 3
+    assert papers._returns("0-4-8-3-7-2-6-1-5-9") == 0
+    assert papers._and(["a"]) == "a" and papers._and(["a", "b", "c"]) == "a, b and c" and papers._and([]) == ""
