@@ -132,7 +132,13 @@ def docking(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
     res = {"ga_best_fitness": float(run.fitness[best]), "ga_best_M_a": float(run.M_a[best]),
            "ga_ratio_to_grid_min": float(run.ga_ratio_to_refined_grid.min()), "ga_batch_seconds": run.ga_batch_seconds,
            "grid_fitness": run.refined_grid.fitness, "ga_evaluations": int(np.sum(run.evaluations))}
-    pose, source, pose_M_a = run.poses[best], "analytic GA", float(run.M_a[best])
+    # The analytic optimisers' best: the GA runs or the grid reference, whichever scores higher
+    # (on a small CPU budget the GA can miss the narrow region that reaches every target).
+    grid = run.refined_grid
+    if grid.fitness > run.fitness[best]:
+        pose, source, pose_M_a, best_fitness = grid.pose, "grid search", grid.M_a, grid.fitness
+    else:
+        pose, source, pose_M_a, best_fitness = run.poses[best], "analytic GA", float(run.M_a[best]), float(run.fitness[best])
     notes = [f"{len(run.fitness)} GA runs in one jitted batch: {run.ga_batch_seconds:.1f} s after compilation "
              f"({run.ga_evaluations_per_second:.0f} evaluations/s); GA / grid optimum "
              f"{run.ga_ratio_to_refined_grid.min():.3f}–{run.ga_ratio_to_refined_grid.max():.3f}. Fitness: eq. 15 "
@@ -146,19 +152,23 @@ def docking(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
         t_map = flow.reach.analytic_seconds + flow.reach.train_seconds + md.seconds
         analytic_s = run.ga_batch_seconds / float(np.sum(run.evaluations))  # per pose, in the GA batch
         speedup = analytic_s / md.eval_seconds
-        loss = 1.0 - float(md.fitness[md.best]) / float(run.fitness[best])
+        loss = 1.0 - float(md.fitness[md.best]) / best_fitness if best_fitness > 0 else math.nan
         res.update({"map_best_fitness": float(md.fitness[md.best]), "map_best_M_a": float(md.M_a[md.best]),
                     "map_eval_speedup": speedup, "map_loss_of_optimum": loss, "map_seconds_total": t_map,
                     "map_analytic_evaluations": md.analytic_evaluations})
         notes.append(
-            f"**Surrogate fitness** (`docking.fitness=surrogate` sends its pose on): one evaluation costs "
+            f"**Surrogate fitness** (`docking_fitness=surrogate` sends its pose on): one evaluation costs "
             f"{md.eval_seconds * 1e6:.1f} µs on the map against {analytic_s * 1e3:.1f} ms analytically in the GA batch "
             f"(**{speedup:.0f}×**, this run). Its best pose scores "
-            f"{float(md.fitness[md.best]):.3f} analytically against the analytic GA's {float(run.fitness[best]):.3f}: "
-            f"a loss of optimum of **{100 * loss:.1f} %**. End to end the map is not yet cheaper on this task: "
-            f"{t_map:.0f} s (analytic scoring of {flow.reach.n_train + flow.reach.n_test} + {md.analytic_evaluations} "
-            f"poses, training, {s.reach.rounds} GA rounds) against {run.ga_batch_seconds:.0f} s for the analytic GA "
-            "batch; it pays off once learned, for every further GA run, task or sweep on this arm and vehicle.")
+            f"{float(md.fitness[md.best]):.3f} analytically against the analytic optimisers' {best_fitness:.3f} ({source}): "
+            f"a loss of optimum of **{100 * loss:.1f} %**. End to end, compilation excluded: {t_map:.0f} s for the map "
+            f"(analytic scoring of {flow.reach.n_train + flow.reach.n_test} + {md.analytic_evaluations} poses, "
+            f"training, {s.reach.rounds} GA rounds of {int(np.sum(md.evaluations))} map evaluations in all) against "
+            f"{run.ga_batch_seconds:.0f} s for the analytic GA batch ({int(np.sum(run.evaluations))} evaluations); "
+            "a learned map serves every further GA run, task or sweep of this arm on this vehicle.")
+        if md.fitness[md.best] > best_fitness and s.docking_fitness == "analytic":
+            notes.append("The GA on the map found a better pose than the analytic optimisers (scored analytically); "
+                         "`docking_fitness=surrogate` sends it on.")
         if s.docking_fitness == "surrogate":
             pose, source, pose_M_a = md.poses[md.best], "GA on the map", float(md.M_a[md.best])
     if not pose_M_a > 0:
@@ -369,22 +379,27 @@ def baseline(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
             M_a = _fixed_mount_M_a(flow.problem, f.task_plan.scene.T_world_base) if flow.problem is not None else None
         hw_r = r.get("hw", {})
         rows.append([label, ", ".join(f"{v:.3f}" for v in f.task_plan.scene.T_world_base[:3, 3]), M_a,
-                     r["plan"].get(f"{planner}_success"), r["schedule"]["winner_path"], fig["joint_movement_rad"],
+                     r["plan"].get(f"{planner}_success"), r["schedule"]["winner_path"], r["schedule"]["winner_cost"],
+                     fig["joint_movement_rad"],
                      fig["ee_distance_m"], fig["min_clearance_m"], fig["max_torque_Nm"], hw_r.get("duration_s"),
                      hw_r.get("gates"), hw_r.get("reason")])
         res[label.split()[0]] = {"M_a": M_a, "winner_path": r["schedule"]["winner_path"], **fig,
                                  "executed_s": hw_r.get("duration_s"), "ok": hw_r.get("ok")}
-    table = md_table(["arm base", "base xyz [m]", "M_a of the task", "edges planned", "schedule", "joint movement [rad]",
+    table = md_table(["arm base", "base xyz [m]", "M_a of the task", "edges planned", "schedule",
+                      "cost (own scene's normalisation)", "joint movement [rad]",
                       "tool path [m]", "min clearance [m]", "max torque [N·m]", "executed [s]", "gates", "result"], rows)
     notes = []
     if len(rows) == 2:
         d, b = res["docked"], res["fixed"]
         faster = "docked" if (d["executed_s"] or np.inf) < (b["executed_s"] or np.inf) else "fixed"
-        notes.append(f"The **{faster}** arm finishes the task sooner ({d['executed_s']} s docked, {b['executed_s']} s "
-                     f"fixed); M_a {d['M_a']} docked against {b['M_a']} fixed (the fixed mount's M_a: the docking "
-                     "problem with the base there and no hull).")
-    notes.append("Sums along each schedule of the raw metrics (not the normalised costs, which are relative to each "
-                 "scene's own edges). The baseline plans in the thesis's cage (`configs/scenario/thesis_cage.yaml`).")
+        dexterous = "docked" if (d["M_a"] or 0) > (b["M_a"] or 0) else "fixed"
+        notes.append(f"The **{faster}** arm finishes the task sooner ({d['executed_s']:.1f} s docked, "
+                     f"{b['executed_s']:.1f} s fixed); the **{dexterous}** arm is the more dexterous over the targets "
+                     f"(M_a {d['M_a']:.4f} docked, {b['M_a']:.4f} fixed; the fixed mount's M_a is the docking problem's "
+                     "with the base there and no hull).")
+    notes.append("Sums along each schedule of the raw metrics; the costs are normalised within each scene's own edges "
+                 "(thesis eq. 4.16), so they rank schedules of one scene, not the two scenes. The baseline plans in "
+                 "the thesis's cage (`configs/scenario/thesis_cage.yaml`).")
     return StageReport("baseline", "Baseline: the thesis's fixed mount against the docked arm", [table], res, notes)
 
 
@@ -395,7 +410,8 @@ def chain(flow: Flow, out: Path) -> str:
     steps = []
     if "docking" in r:
         d = r["docking"]
-        steps.append(f"**dock** the vehicle at x, y, z, ψ = {d['pose']} ({d['pose_source']})")
+        steps.append(f"**dock** the vehicle at x, y, z, ψ = {_pose(d['pose'])} ({d['pose_source']}, M_a "
+                     f"{d['pose_M_a']:.4f})")
     if "plan" in r:
         steps.append(f"**arm base** in the planning scene at {r['plan']['base_xyz']} m; "
                      + ", ".join(f"{k.removesuffix('_success')} {v} edges" for k, v in r["plan"].items()
