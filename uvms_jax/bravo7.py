@@ -18,6 +18,7 @@ Units: metres and radians; the jaws A move in metres here (the wire speaks milli
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -259,6 +260,7 @@ def dh_inertial_frames(q) -> list:
     return out
 
 
+@functools.cache  # constants: computed once (the planner's torque metric asks for them per move)
 def urdf_inertials() -> tuple[Inertial, ...]:
     """:data:`DH_INERTIALS` mapped into the URDF frames of :data:`INERTIAL_BODIES` (SI units).
 

@@ -67,14 +67,16 @@ def _point_loads(chain: kin.Chain, gravity_base, water_density: float, force_bas
 @jax.jit
 def _load_torques(chain: kin.Chain, q, body, local, force):
     """``(k, n)`` τ = Σ_points J_p(q)ᵀ f_p: each joint's static torque from the point loads
-    fixed to the links it turns (arguments as :func:`_point_loads`, ``q (k, n)``)."""
+    fixed to the links it turns (arguments as :func:`_point_loads`, ``q (k, n)``), and the
+    tool points ``(k, 3)`` [m] (one compiled call for both metrics that need kinematics)."""
     k = kin.kinematics(chain, q)
     frames = jnp.concatenate([k.T_base_joint, k.T_base_tool[..., None, :, :]], axis=-3)[..., body, :, :]
     p = jnp.einsum("...pij,pj->...pi", frames[..., :3, :3], local) + frames[..., :3, 3]  # (k, P, 3)
     v, w = k.twists[..., None, :3], k.twists[..., None, 3:]  # (k, n, 1, 3)
     velocity = v + jnp.cross(w, p[..., None, :, :])  # (k, n, P, 3): point p under a unit rate of joint i
     turned = body[None, :] >= jnp.arange(chain.n_joints)[:, None]  # (n, P): joint i turns the links ≥ i
-    return jnp.einsum("...ipc,pc,ip->...i", velocity, force.astype(velocity.dtype), turned.astype(velocity.dtype))
+    tau = jnp.einsum("...ipc,pc,ip->...i", velocity, force.astype(velocity.dtype), turned.astype(velocity.dtype))
+    return tau, k.T_base_tool[..., :3, 3]
 
 
 def static_torques(chain: kin.Chain, q, *, gravity_base, water_density: float, force_base=None):
@@ -102,11 +104,16 @@ def static_torques(chain: kin.Chain, q, *, gravity_base, water_density: float, f
     q = np.asarray(q, dtype=float)
     if q.ndim != 2 or q.shape[1] != chain.n_joints or not np.all(np.isfinite(q)):
         raise ValueError(f"q must be a finite (k, {chain.n_joints}) array, got shape {q.shape}")
+    return _torques_and_tool(chain, q, gravity_base, water_density, force_base)[0]
+
+
+def _torques_and_tool(chain: kin.Chain, q: np.ndarray, gravity_base, water_density: float, force_base):
+    """:func:`static_torques` ``(k, n)`` and the tool points ``(k, 3)`` of checked ``q (k, n)``."""
     body, local, force = _point_loads(chain, gravity_base, water_density, force_base)
     qp = jnp.asarray(_pad(q))
     dtype = qp.dtype
-    tau = _load_torques(chain, qp, jnp.asarray(body), jnp.asarray(local, dtype), jnp.asarray(force, dtype))
-    return np.asarray(tau)[: len(q)]
+    tau, p = _load_torques(chain, qp, jnp.asarray(body), jnp.asarray(local, dtype), jnp.asarray(force, dtype))
+    return np.asarray(tau)[: len(q)], np.asarray(p)[: len(q)]
 
 
 def trajectory_metrics(
@@ -139,7 +146,6 @@ def trajectory_metrics(
     if q.ndim != 2 or q.shape[0] < 1 or q.shape[1] != chain.n_joints or not np.all(np.isfinite(q)):
         raise ValueError(f"q must be a finite (k >= 1, {chain.n_joints}) array, got shape {q.shape}")
     joint_movement = float(np.sum(np.abs(np.diff(q, axis=0))))
-    p = np.asarray(kin.fk(chain, jnp.asarray(_pad(q))))[: len(q), :3, 3]
+    tau, p = _torques_and_tool(chain, q, gravity_base, water_density, force_base)
     ee_distance = float(np.sum(np.linalg.norm(np.diff(p, axis=0), axis=1)))
-    tau = static_torques(chain, q, gravity_base=gravity_base, water_density=water_density, force_base=force_base)
     return joint_movement, ee_distance, float(np.max(np.abs(tau)))
