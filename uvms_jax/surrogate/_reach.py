@@ -31,6 +31,7 @@ from uvms_jax import evo
 from uvms_jax.surrogate._adam import fit_adam
 from uvms_jax.surrogate._ffbn import MLP, mlp_apply
 from uvms_jax.surrogate._scaler import Scaler, fit_scaler
+from uvms_jax.surrogate._timing import time_index_fn
 
 __all__ = ["MapDocking", "ReachData", "ReachMap", "ReachMapRun", "ReachMapSettings", "SurrogateDockingProblem",
            "dock_with_map", "fit_reach_map", "reach_dataset", "reach_features", "run_reach_map"]
@@ -298,8 +299,6 @@ def dock_with_map(problem: evo.ArmDockingProblem, run: ReachMapRun, ga: evo.GASe
     on (the map is least reliable exactly where its optimum lies). Each run's final best pose is
     scored analytically; the map's fitness is timed on ``timing_batch`` random poses.
     """
-    from uvms_jax.surrogate._timing import time_index_fn
-
     if rounds < 1 or infill < 1:
         raise ValueError(f"need rounds >= 1 and infill >= 1, got {rounds}, {infill}")
     s = run.settings
