@@ -500,6 +500,24 @@ class SphereChecker:
         self.n_motions = self.n_states = self.n_confirmed = 0
 
     # -- pairs of a context ----------------------------------------------------------------
+    def _scene_pairs(self, collides, reach) -> tuple[list, list, list, list, list]:
+        """Moving geoms against the scene, as the filter ``collides`` allows: ``(geom, polytope)``
+        pairs of polytopes within each geom's ``reach (G,)`` [m] (by polytope distance), and
+        ``(geom, sphere centre, sphere radius)`` rows of the fixed geoms' spheres."""
+        polys, *_, poly_dist = self._polytopes
+        p_geom, p_poly, s_geom, s_c, s_r = [], [], [], [], []
+        for i, g1 in enumerate(self._moving):
+            for k, g2 in enumerate(polys):
+                if poly_dist[k] <= reach[i] and collides(g1, g2):
+                    p_geom.append(i)
+                    p_poly.append(k)
+            for g2, (c, r) in self._static.items():
+                if collides(g1, g2):
+                    s_geom += [i] * len(r)
+                    s_c += list(c)
+                    s_r += list(r)
+        return p_geom, p_poly, s_geom, s_c, s_r
+
     def _pairs(self, context: Context) -> tuple:
         """Kernel arrays of the pairs MuJoCo tests in ``context`` (its filters, in its order)."""
         if context in self._cache:
@@ -509,20 +527,13 @@ class SphereChecker:
 
         polys, starts, ends, ball_c, ball_r, boxes, poly_dist = self._polytopes
         reach = self._reach() + self.margin
-        pp_geom, pp_poly, ss_a, ss_b, st_geom, st_c, st_r = [], [], [], [], [], [], []
+        pp_geom, pp_poly, st_geom, st_c, st_r = self._scene_pairs(collides, reach)
+        ss_a, ss_b = [], []
         for i, g1 in enumerate(self._moving):
-            pp = [k for k, g2 in enumerate(polys) if poly_dist[k] <= reach[i] and collides(g1, g2)]
-            pp_geom += [i] * len(pp)
-            pp_poly += pp
             for j in range(i + 1, len(self._moving)):
                 if collides(g1, self._moving[j]):
                     ss_a.append(i)
                     ss_b.append(j)
-            for g2, (c, r) in self._static.items():
-                if collides(g1, g2):
-                    st_geom += [i] * len(r)
-                    st_c += list(c)
-                    st_r += list(r)
         # Half-spaces first: the ceiling and the floor are met most often.
         order = sorted(range(len(pp_poly)), key=lambda k: self._poly_range[polys[pp_poly[k]]][1]
                        - self._poly_range[polys[pp_poly[k]]][0] > 1)
@@ -625,19 +636,7 @@ class SphereChecker:
             return self._clearance_cache[context]
         self.reference.set_context(context)
         collides = _pair_filter(self.reference._mc)
-        polys, _, _, _, _, _, poly_dist = self._polytopes
-        reach = self._reach() + self.reference.clearance_max
-        cp_geom, cp_poly, cs_geom, cs_c, cs_r = [], [], [], [], []
-        for i, g1 in enumerate(self._moving):
-            for k, g2 in enumerate(polys):
-                if poly_dist[k] <= reach[i] and collides(g1, g2):
-                    cp_geom.append(i)
-                    cp_poly.append(k)
-            for g2, (c, r) in self._static.items():
-                if collides(g1, g2):
-                    cs_geom += [i] * len(r)
-                    cs_c += list(c)
-                    cs_r += list(r)
+        cp_geom, cp_poly, cs_geom, cs_c, cs_r = self._scene_pairs(collides, self._reach() + self.reference.clearance_max)
         ints = lambda x: np.array(x, dtype=np.int64)  # noqa: E731
         pairs = (ints(cp_geom), ints(cp_poly), ints(cs_geom), np.array(cs_c, dtype=float).reshape(-1, 3),
                  np.array(cs_r, dtype=float))
