@@ -20,6 +20,11 @@ SAMPLING_ATOL = 2e-4  # m: segments ≤ 3.5 m long, so samples lie ≤ 1.8e-4 m 
 REACH_ATOL = 1e-3  # m: the IK's 1e-4 m reach check, recomposed with vehicle and mount in float32
 W_RTOL = 2e-3  # float32 fused w vs float64 det(J Jᵀ) of the same J
 
+# The traceable helpers under test, each compiled once instead of primitive by primitive.
+_segment_box_distance, _boxes_overlap = jax.jit(segment_box_distance), jax.jit(boxes_overlap)
+_base_transform, _reaches = jax.jit(evo.base_transform), jax.jit(kin.reaches)
+_vehicle_clear, _target_w = jax.jit(evo.vehicle_clear), jax.jit(evo.target_w)
+
 
 def _random_pose(rng) -> np.ndarray:
     q = rng.normal(size=4)
@@ -39,7 +44,7 @@ def test_segment_box_distance_matches_dense_sampling():
     T = np.stack([_random_pose(rng) for _ in range(n)])
     half = rng.uniform(0.05, 0.4, (n, 3))
     a, b = rng.uniform(-1, 1, (n, 3)), rng.uniform(-1, 1, (n, 3))
-    d = np.asarray(segment_box_distance(jnp.asarray(a), jnp.asarray(b), jnp.asarray(T), jnp.asarray(half)))
+    d = np.asarray(_segment_box_distance(jnp.asarray(a), jnp.asarray(b), jnp.asarray(T), jnp.asarray(half)))
     # Oracle: SAMPLES points along each segment, exact point-to-box distance in the box frame.
     t = np.linspace(0.0, 1.0, SAMPLES)
     p = a[:, None] + t[None, :, None] * (b - a)[:, None]
@@ -75,7 +80,7 @@ def test_boxes_overlap_matches_mujoco():
     T_a, T_b = (np.stack([_random_pose(rng) for _ in range(n)]) for _ in range(2))
     half_a, half_b = rng.uniform(0.05, 0.35, (n, 3)), rng.uniform(0.05, 0.35, (n, 3))
     dist = np.array([_mj_box_distance(m, d, *case) for case in zip(T_a, half_a, T_b, half_b)])
-    got = np.asarray(boxes_overlap(*(jnp.asarray(x) for x in (T_a, half_a, T_b, half_b))))
+    got = np.asarray(_boxes_overlap(*(jnp.asarray(x) for x in (T_a, half_a, T_b, half_b))))
     clear = np.abs(dist) > 1e-3  # grazing contact: either answer is right
     assert clear.sum() > 250 and 30 < np.sum(dist[clear] < 0) < clear.sum() - 30
     np.testing.assert_array_equal(got[clear], dist[clear] < 0)
@@ -113,7 +118,7 @@ def test_valid_solutions_reach_within_limits_and_invalid_ones_score_zero(panel_p
     assert valid[0].any(axis=-1).all()  # every corner has a solution from the docked pose
     assert (~valid).any()  # and some seeds fail
     # Independent check of the valid ones: FK of the arm, composed with the vehicle and mount.
-    T_world_base = np.asarray(evo.base_transform(jnp.asarray(POSES))) @ _mount()
+    T_world_base = np.asarray(_base_transform(jnp.asarray(POSES))) @ _mount()
     T_world_tool = T_world_base[:, None, None] @ np.asarray(kin.fk(p.chain, jnp.asarray(q)))
     err = np.linalg.norm(T_world_tool[..., :3, 3] - np.asarray(p.T_world_tool)[None, :, None, :3, 3], axis=-1)
     assert np.all(err[valid] < REACH_ATOL)
@@ -129,9 +134,10 @@ def test_solutions_outside_the_limits_are_rejected(panel_problem, solutions):
     valid: the limits are checked, never enforced by clipping."""
     p = panel_problem
     q, valid = solutions[0][0], solutions[1][0]  # (4, S, 6), (4, S) at the docked pose
-    T_world_base = np.asarray(evo.base_transform(jnp.asarray(POSES[0]))) @ _mount()
+    T_world_base = np.asarray(_base_transform(jnp.asarray(POSES)))[0] @ _mount()  # the batch shape above
     T_base_tool = jnp.asarray(np.linalg.inv(T_world_base) @ np.asarray(p.T_world_tool), jnp.float32)
-    reached = np.asarray(kin.reaches(T_base_tool[:, None], kin.fk(p.chain, jnp.asarray(q))))
+    T_fk = kin.fk(p.chain, jnp.asarray(solutions[0]))[0]  # FK of all poses' solutions: the shape compiled above
+    reached = np.asarray(_reaches(T_base_tool[:, None], T_fk))
     within = np.all((q >= np.asarray(p.chain.lower)) & (q <= np.asarray(p.chain.upper)), axis=-1)
     assert np.any(reached & ~within)  # the case occurs with these seeds
     assert not np.any(valid & ~within)
@@ -148,7 +154,7 @@ def test_collisions_invalidate_solutions_and_poses(panel_problem):
     half = p.scene_half.at[0].set(jnp.asarray([0.05, 1.0, 1.0], jnp.float32))
     blocked = p.replace(T_world_box=T_box, scene_half=half)
     assert not bool(evo.arm_solutions_jit(blocked, jnp.asarray(POSES))[1][:2].any())
-    clear = np.asarray(evo.vehicle_clear(p, jnp.asarray(POSES)))
+    clear = np.asarray(_vehicle_clear(p, jnp.asarray(POSES)))
     assert clear.tolist() == [True, True, False]
 
 
@@ -156,7 +162,7 @@ def test_target_groups_take_the_best_alternative_and_M_a_the_worst_target(panel_
     p = panel_problem.replace(group=jnp.asarray([0, 0, 1, 1]), n_groups=2)
     rng = np.random.default_rng(2)
     w = rng.uniform(0, 0.02, (5, 4, 3))
-    got = np.asarray(evo.target_w(p, jnp.asarray(w)))
+    got = np.asarray(_target_w(p, jnp.asarray(w)))
     ref = np.stack([w[:, :2].max(axis=(1, 2)), w[:, 2:].max(axis=(1, 2))], axis=-1)
     np.testing.assert_allclose(got, ref)
 

@@ -113,9 +113,20 @@ def random_poses():
     return rng.uniform([-1.0, -1.0, 0.0, -np.pi], [1.0, 1.0, 0.3, np.pi], size=(10, 4))
 
 
-def test_fitness_matches_numpy_loop(problem, random_poses, scene):
-    poses = np.concatenate([np.array(FEASIBLE + INFEASIBLE), random_poses])
-    got = evo.evaluate(problem, poses)
+@pytest.fixture(scope="module")
+def all_poses(random_poses):
+    """``(21, 4)`` the feasible, infeasible and random poses: a batch size (one compile of the
+    objective's pose algebra) that several tests below share; ``evaluate`` is per pose, so
+    slices of it stand for the smaller sets."""
+    return np.concatenate([np.array(FEASIBLE + INFEASIBLE), random_poses])
+
+
+_INFEASIBLE = slice(len(FEASIBLE), len(FEASIBLE) + len(INFEASIBLE))
+
+
+def test_fitness_matches_numpy_loop(problem, all_poses, scene):
+    poses = all_poses
+    got = jax.tree_util.tree_map(np.asarray, evo.evaluate(problem, poses))  # NumPy once, then index
     corners = np.asarray(problem.p_control)
     assert corners.shape == (4, 3)
     for k, (pose, (f, M_a, D, in_wd)) in enumerate(zip(poses, reference(poses, corners, scene))):
@@ -124,19 +135,21 @@ def test_fitness_matches_numpy_loop(problem, random_poses, scene):
         np.testing.assert_allclose(float(got.D[k]), D, atol=FIT_ATOL, err_msg=str(pose))
         np.testing.assert_allclose(float(got.fitness[k]), f, atol=FIT_ATOL, err_msg=str(pose))
     # The reference set exercises both M_a > 0 and M_a = 0 inside Wd.
-    assert np.any(np.asarray(got.M_a)[: len(FEASIBLE)] > 0) and np.any(np.asarray(got.M_a)[: len(FEASIBLE)] == 0)
+    assert np.any(got.M_a[: len(FEASIBLE)] > 0) and np.any(got.M_a[: len(FEASIBLE)] == 0)
 
 
-def test_outside_search_set_is_zero(problem):
-    got = evo.evaluate(problem, np.array(INFEASIBLE))
-    assert not np.any(np.asarray(got.feasible))
-    np.testing.assert_array_equal(np.asarray(got.fitness), 0.0)
+def test_outside_search_set_is_zero(problem, all_poses):
+    got = jax.tree_util.tree_map(lambda x: np.asarray(x)[_INFEASIBLE], evo.evaluate(problem, all_poses))
+    assert np.array_equal(all_poses[_INFEASIBLE], np.array(INFEASIBLE))
+    assert not np.any(got.feasible)
+    np.testing.assert_array_equal(got.fitness, 0.0)
     # Not trivially zero: some of these poses do reach the whole task area.
-    assert np.any(np.asarray(got.M_a) > 0)
+    assert np.any(got.M_a > 0)
 
 
 def test_denser_control_grid_never_raises_area_manipulability(problem, random_poses, scene):
     dense = evo.make_docking_problem(**{**scene, "control_points_per_side": 5})
+    # 16 poses × 25 points stay within the IK's smallest padded target bucket (512): no new IK compile.
     poses = np.concatenate([np.array(FEASIBLE), random_poses])
     m2 = np.asarray(evo.evaluate(problem, poses).M_a)
     m5 = np.asarray(evo.evaluate(dense, poses).M_a)
@@ -144,7 +157,9 @@ def test_denser_control_grid_never_raises_area_manipulability(problem, random_po
     assert np.any(m2 > 0)
 
 
-@pytest.mark.parametrize("shape", [(4,), (2, 3, 4), (1, 1, 4)])
+# (3, 7) flattens to the 21 poses of ``all_poses``: the same compiled batch; (4,) and (1, 1)
+# share the one-pose batch of test_fixed_tool_yaw_mode.
+@pytest.mark.parametrize("shape", [(4,), (3, 7, 4), (1, 1, 4)])
 def test_batch_shapes(problem, shape):
     rng = np.random.default_rng(0)
     poses = rng.uniform([-1.0, -1.0, 0.0, -np.pi], [1.0, 1.0, 0.3, np.pi], size=shape)

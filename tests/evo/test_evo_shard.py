@@ -13,7 +13,7 @@ SCENE_YAML = HERE.parents[1] / "configs" / "docking" / "scene" / "paper.yaml"
 
 
 def test_sharded_grid_and_ga_equal_single_device():
-    env = dict(os.environ, XLA_FLAGS="--xla_force_host_platform_device_count=4", JAX_PLATFORMS="cpu")
+    env = dict(os.environ, XLA_FLAGS=f"{os.environ.get('XLA_FLAGS', '')} --xla_force_host_platform_device_count=4", JAX_PLATFORMS="cpu")
     out = subprocess.run(
         [sys.executable, str(HERE / "_sharded_run.py"), str(SCENE_YAML)],
         env=env, capture_output=True, text=True, timeout=900, check=True,

@@ -59,8 +59,8 @@ def test_kernel_derivative_is_the_xla_paths():
     q = _q(chain, 3, seed=1)
     rows = indices.task_rows("full")
 
-    def total(fn):
-        return jax.grad(lambda q: jnp.sum(fn(q)))(q)
+    def total(fn):  # one compiled program per derivative, not one per primitive
+        return jax.jit(jax.grad(lambda q: jnp.sum(fn(q))))(q)
 
     got = total(lambda q: _gpu.index_on_gpu(manipulability_from_rows, _manipulability_of, chain, q, rows))
     want = total(lambda q: _manipulability_of(chain, q, rows))

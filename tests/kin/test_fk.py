@@ -86,6 +86,10 @@ def test_jacobians_match_finite_differences(name):
         np.testing.assert_allclose(Js[:, 3:, i], omega, atol=FD_ATOL)
 
 
+_VMAP_BATCH = 32  # ≥ the largest batch below
+_fk_vmapped = jax.jit(jax.vmap(kin.fk, in_axes=(None, 0)))
+
+
 @pytest.mark.parametrize("shape", [(), (7,), (2, 3), (4, 1, 5)])
 def test_batch_shapes_and_batched_equals_looped(shape):
     chain = kin.uvms12()
@@ -98,8 +102,11 @@ def test_batch_shapes_and_batched_equals_looped(shape):
     flat_q = q.reshape(-1, 12)
     looped = np.stack([np.asarray(kin.jacobian(chain, qi)) for qi in flat_q]).reshape(J.shape)
     np.testing.assert_allclose(J, looped, atol=ATOL_64)
-    # Under an outer jit and vmap as well.
-    vm = jax.jit(jax.vmap(lambda qi: kin.fk(chain, qi)))(flat_q).reshape(T.shape)
+    # Under an outer jit and vmap as well, on the flat batch padded to a fixed size (one
+    # compiled program for every case).
+    padded = np.zeros((_VMAP_BATCH, 12))
+    padded[: len(flat_q)] = flat_q
+    vm = np.asarray(_fk_vmapped(chain, padded))[: len(flat_q)].reshape(T.shape)
     np.testing.assert_allclose(T, vm, atol=ATOL_64)
 
 
@@ -162,6 +169,7 @@ def test_gradient_in_the_geometry_matches_finite_differences():
         return jax.numpy.sum(T[..., :3, :] ** 2) + jax.numpy.sum(jax.numpy.sin(J))
 
     grad = float(jax.jit(jax.grad(f))(0.0))
+    f = jax.jit(f)  # one compiled program for both finite-difference points
     fd = (f(FD_STEP) - f(-FD_STEP)) / (2 * FD_STEP)
     np.testing.assert_allclose(grad, fd, rtol=1e-7, atol=FD_ATOL)
 

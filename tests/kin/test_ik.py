@@ -16,17 +16,33 @@ def random_in_limits(chain, n, seed):
     return lo + rng.random((n, chain.n_joints)) * (hi - lo)
 
 
-@pytest.mark.parametrize("shape", [(), (40,), (5, 8)])
-def test_elbow_ik_round_trip_on_every_valid_branch(shape):
+def fk_flat(chain, q):
+    """The oracle FK ``(..., 4, 4)`` of ``q (..., n)`` as NumPy, computed on the flat batch
+    padded to a multiple of 256 configurations: one compiled FK serves every batch shape of
+    this file (the shape handling under test is the IK's, not the FK's)."""
+    flat = np.asarray(q).reshape(-1, chain.n_joints)
+    padded = np.zeros((-(-len(flat) // 256) * 256, chain.n_joints))
+    padded[: len(flat)] = flat
+    return np.array(kin.fk(chain, padded))[: len(flat)].reshape(np.shape(q)[:-1] + (4, 4))
+
+
+# elbow_ik under a caller's jit (the pose checks see tracers), shared by two tests.
+jit_elbow_ik = jax.jit(kin.elbow_ik)
+
+
+# Batch shapes and call paths shared with the other tests of this file (one target and 12
+# targets eagerly, 5 × 30 targets under jit), so each compiled IK program serves two tests.
+@pytest.mark.parametrize(("shape", "under_jit"), [((), False), ((12,), False), ((5, 30), True)])
+def test_elbow_ik_round_trip_on_every_valid_branch(shape, under_jit):
     arm = kin.docking_arm()
     q = random_in_limits(arm, int(np.prod(shape, dtype=int)), seed=0).reshape(shape + (6,))
-    T = kin.fk(arm, q)
-    sol = jax.jit(kin.elbow_ik)(arm, T)
+    T = fk_flat(arm, q)
+    sol = (jit_elbow_ik if under_jit else kin.elbow_ik)(arm, T)
     assert sol.q.shape == shape + (8, 6) and sol.valid.shape == shape + (8,)
     valid = np.asarray(sol.valid)
     assert valid.any(axis=-1).all(), "the generating configuration must be among the branches"
-    T_back = np.asarray(kin.fk(arm, np.where(valid[..., None], sol.q, 0.0)))
-    T_rep = np.broadcast_to(np.asarray(T)[..., None, :, :], T_back.shape)
+    T_back = fk_flat(arm, np.where(valid[..., None], sol.q, 0.0))
+    T_rep = np.broadcast_to(T[..., None, :, :], T_back.shape)
     np.testing.assert_allclose(T_back[valid], T_rep[valid], atol=POS_TOL)
     assert np.isnan(np.asarray(sol.q)[~valid]).all()
     # The generating configuration itself is recovered by one branch (modulo 2π: joints
@@ -47,18 +63,19 @@ def test_elbow_branch_mask_matches_brute_force_check():
     # Mix reachable targets and targets ≥ 1 m from the base, beyond the 0.8 m reach of the
     # shoulder (0.1 m above the base).
     q = random_in_limits(arm, 150, seed=2)
-    T = np.array(kin.fk(arm, q))
+    T = fk_flat(arm, q)
     far = T[100:, :3, 3]
     T[100:, :3, 3] = far / np.linalg.norm(far, axis=-1, keepdims=True) * rng.uniform(1.0, 3.0, (50, 1))
-    raw = np.asarray(jax.vmap(lambda t: elbow_branches(arm, t))(T).q)  # unmasked angles
-    T_raw = np.asarray(kin.fk(arm, raw))
-    sol = kin.elbow_ik(arm, T)
+    raw = np.asarray(jax.jit(jax.vmap(elbow_branches, in_axes=(None, 0)))(arm, T).q)  # unmasked angles
+    T_raw = fk_flat(arm, raw)
+    # A (5, 30) batch: the compiled IK of the round-trip test's (5, 30) case.
+    valid = np.asarray(jit_elbow_ik(arm, T.reshape(5, 30, 4, 4)).valid).reshape(150, 8)
+    inside = np.all((raw >= lo) & (raw <= hi), axis=-1)  # (150, 8)
+    reaches = np.abs(T_raw - T[:, None]).max(axis=(-1, -2)) < 1e-7
     for i in range(len(T)):
         for b in range(8):
-            inside = np.all((raw[i, b] >= lo) & (raw[i, b] <= hi))
-            reaches = np.abs(T_raw[i, b] - T[i]).max() < 1e-7
-            assert bool(sol.valid[i, b]) == (inside and reaches), (i, b)
-    assert not np.asarray(sol.valid)[100:].any(), "targets beyond reach must have no valid branch"
+            assert bool(valid[i, b]) == (inside[i, b] and reaches[i, b]), (i, b)
+    assert not valid[100:].any(), "targets beyond reach must have no valid branch"
 
 
 def _mod_2pi_key(q):
@@ -70,13 +87,15 @@ def test_elbow_ik_finds_every_solution_numerical_ik_finds():
     random seeds (an independent algorithm) are all among the closed-form valid branches."""
     arm = kin.docking_arm()
     q = random_in_limits(arm, 12, seed=3)
-    T = np.asarray(kin.fk(arm, q))
+    T = fk_flat(arm, q)
     closed = kin.elbow_ik(arm, T)
     numeric = kin.numeric_ik(jax.random.key(0), arm, T, n_seeds=128, iterations=200, all_seeds=True)
+    closed_q, closed_valid = np.asarray(closed.q), np.asarray(closed.valid)
+    numeric_q, numeric_valid = np.asarray(numeric.q), np.asarray(numeric.valid)
     n_found = 0
     for i in range(len(T)):
-        branches = {_mod_2pi_key(x) for x in np.asarray(closed.q[i])[np.asarray(closed.valid[i])]}
-        for x in np.asarray(numeric.q[i])[np.asarray(numeric.valid[i])]:
+        branches = {_mod_2pi_key(x) for x in closed_q[i][closed_valid[i]]}
+        for x in numeric_q[i][numeric_valid[i]]:
             assert _mod_2pi_key(x) in branches, (i, x)
             n_found += 1
     assert n_found > 100  # the oracle actually found solutions
@@ -88,12 +107,12 @@ def test_numeric_ik_round_trip(model):
     q = random_in_limits(chain, 16, seed=4)
     if chain.name == "uvms12":
         q[:, :3] = np.clip(q[:, :3], -1.0, 1.0)
-    T = kin.fk(chain, q)
+    T = fk_flat(chain, q)
     sol = kin.numeric_ik(jax.random.key(1), chain, T, n_seeds=32, iterations=150)
     assert sol.q.shape == (16, chain.n_joints)
     valid = np.asarray(sol.valid)
     assert valid.mean() >= 0.9
-    np.testing.assert_allclose(np.asarray(kin.fk(chain, np.asarray(sol.q)[valid])), np.asarray(T)[valid], atol=1e-6)
+    np.testing.assert_allclose(fk_flat(chain, np.asarray(sol.q)[valid]), T[valid], atol=1e-6)
     assert np.all(np.asarray(sol.q)[valid] >= np.asarray(chain.lower)) and np.all(np.asarray(sol.q)[valid] <= np.asarray(chain.upper))
 
 

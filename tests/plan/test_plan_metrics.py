@@ -49,16 +49,16 @@ def test_two_point_metrics_by_hand(scene):
     f = np.array([0.0, 0.0, -1.2])  # base frame: along G's axis (z)
     jm, ee, tau = trajectory_metrics(chain, np.stack([q0, q1]), f, **WEIGHTLESS)
     assert jm == pytest.approx(delta, abs=ATOL)
-    frames = np.asarray(kin.kinematics(chain, q0).T_base_joint)
-    p = np.asarray(kin.fk(chain, q0))[:3, 3]
+    k0 = kin.kinematics(chain, q0)  # one compiled FK pass gives the joint frames and the tool
+    frames, p = np.asarray(k0.T_base_joint), np.asarray(k0.T_base_tool)[:3, 3]
     o_g, w_g = frames[0, :3, 3], frames[0, :3, 2]  # joint G's axis is ∓z of its frame
     r = np.linalg.norm(np.cross(p - o_g, w_g))
     assert ee == pytest.approx(2 * r * np.sin(delta / 2), abs=ATOL)
     axes = [np.array(j.axis) for j in kin.BRAVO7_JOINTS]
 
     def torques(q):
-        fr = np.asarray(kin.kinematics(chain, q).T_base_joint)
-        pt = np.asarray(kin.fk(chain, q))[:3, 3]
+        k = kin.kinematics(chain, q)
+        fr, pt = np.asarray(k.T_base_joint), np.asarray(k.T_base_tool)[:3, 3]
         return np.array([np.dot(np.cross(pt - fr[i, :3, 3], f), fr[i, :3, :3] @ axes[i]) for i in range(6)])
 
     t0, t1 = torques(q0), torques(q1)

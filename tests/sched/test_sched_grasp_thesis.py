@@ -13,6 +13,10 @@ from _sched_bruteforce import all_schedules
 
 COST_RTOL = 1e-5  # float32 sums in the kernel, float64 here
 
+# The local search over a batch of schedules, built once: a jit made per test would be a new
+# function to JAX, compiled again for every instance of the same sizes.
+LOCAL_SEARCH_BATCH = jax.jit(jax.vmap(sched.thesis_local_search, in_axes=(None, 0, 0)))
+
 
 def _algorithm_4(path, cost_of, neighbourhood=3):
     """Thesis Algorithm 4 on a node list: each position after the start swapped with each of
@@ -43,9 +47,8 @@ def test_thesis_local_search_matches_algorithm_4(seed):
     rng = np.random.default_rng(seed)
     every = list(feasible)
     starts = [list(every[i]) + [n] * (L - len(every[i])) for i in rng.permutation(len(every))[:40]]
-    ls = jax.jit(jax.vmap(sched.thesis_local_search, in_axes=(None, 0, 0)))
-    got_paths, got_costs = ls(p, jnp.asarray(starts, jnp.int32),
-                              jnp.asarray([cost_of(s) for s in starts], jnp.float32))
+    got_paths, got_costs = LOCAL_SEARCH_BATCH(p, jnp.asarray(starts, jnp.int32),
+                                              jnp.asarray([cost_of(s) for s in starts], jnp.float32))
     improved = 0
     for s, gp, gc in zip(starts, np.asarray(got_paths), np.asarray(got_costs)):
         want_path, want_cost = _algorithm_4(s, cost_of)

@@ -26,9 +26,15 @@ def chain():
     return kin.uvms12()
 
 
+def _d1(chain, key):
+    """The paper's D1 (KCI of the spatial form), N samples; every call shares one compile."""
+    return make_dataset(key, chain, Sampling(), N, "kci", jnp.float64, form=IndexForm("spatial"))
+
+
 @pytest.fixture(scope="module")
 def q(chain, x64):
-    return make_dataset(jax.random.key(1), chain, Sampling(), N, "w", jnp.float64).q
+    # The sampled q does not depend on the index labelled: this reuses the D1 test's compile.
+    return _d1(chain, jax.random.key(1)).q
 
 
 def _oracle(J, index):
@@ -74,7 +80,7 @@ def test_spatial_kci_depends_on_the_vehicle_joints_geometric_does_not(chain, q):
 def test_spatial_kci_dataset_varies_with_theta_1_to_4(chain):
     """The D1 of the paper's form: KCI is not a function of θ5…θ11 alone (two samples that share
     θ5…θ11 but not θ1…θ4 get different KCI)."""
-    d1 = make_dataset(jax.random.key(2), chain, Sampling(), N, "kci", jnp.float64, form=IndexForm("spatial"))
+    d1 = _d1(chain, jax.random.key(2))
     shifted = d1.q.at[:, :4].set(d1.q[::-1, :4])  # θ1…θ4 of other samples, θ5…θ12 kept
     k_shifted = analytic_index(chain, shifted, "kci", d1.form)
     assert float(jnp.max(jnp.abs(k_shifted - d1.y))) > 0.02

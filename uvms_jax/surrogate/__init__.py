@@ -37,6 +37,7 @@ from uvms_jax.surrogate._design import design_rbfn
 from uvms_jax.surrogate._design import max_relative_error
 from uvms_jax.surrogate._ffbn import FFBN
 from uvms_jax.surrogate._ffbn import MLP
+from uvms_jax.surrogate._ffbn import folded_layers
 from uvms_jax.surrogate._ffbn import init_ffbn
 from uvms_jax.surrogate._ffbn import mlp_apply
 from uvms_jax.surrogate._ffbn import pad_hidden

@@ -4,6 +4,12 @@ One hidden layer of ``tanh`` units and a linear output unit (a flax ``linen`` ML
 with min–max normalisation of inputs and output to [−1, 1]:
 
     S = y⁻¹( W2ᵀ tanh(W1ᵀ x̃ + b1) + b2 ),   x̃ = (x − x_offset) · x_scale.
+
+Training works on the normalised form; evaluation folds both scalers into the layers
+(:func:`folded_layers`) and writes the network out as scalar multiply-adds, one per weight,
+over whole columns of the batch: for a few units on a few inputs that is one elementwise loop
+over the batch, which reads each configuration once, with no gathered copy of the inputs and
+no small matrix products.
 """
 
 from __future__ import annotations
@@ -78,14 +84,49 @@ class FFBN(JointInputs):
         return self.hidden * (2 * self.n_inputs + 2 + TANH_OPS)
 
     def predict(self, x: Array) -> Array:
-        """Index estimate for network inputs ``x: (..., d)`` → ``(...)``, in the dtype of ``x``."""
-        return _predict(self, jnp.asarray(x))
+        """Index estimate for network inputs ``x: (..., d)`` → ``(...)``, in the dtype of ``x``.
+
+        Raises:
+          ValueError: ``x``'s last axis is not ``d`` long.
+        """
+        x = jnp.asarray(x)
+        if x.ndim == 0 or x.shape[-1] != self.n_inputs:
+            raise ValueError(f"x must have shape (..., {self.n_inputs}), got {x.shape}")
+        return _evaluate(self, x, tuple(range(self.n_inputs)))
+
+    def _from_joints(self, q: Array) -> Array:
+        return _evaluate(self, q, self.inputs)
 
 
-@jax.jit
-def _predict(net: FFBN, x: Array) -> Array:
-    params = jax.tree_util.tree_map(lambda p: p.astype(x.dtype), net.params)
-    return net.y_norm.inverse(mlp_apply(params, net.x_norm(x)))
+def folded_layers(net: FFBN) -> tuple[Array, Array, Array, Array]:
+    """The network on unscaled inputs and outputs, ``S(x) = v · tanh(Aᵀ x + c) + d``.
+
+    The input scaler's affine map folds into the hidden layer and the output scaler's into the
+    output layer (exact algebra; only round-off differs from the normalised form).
+
+    Returns:
+      ``A: (d, H)`` [1/joint unit], ``c: (H,)``, ``v: (H,)`` and ``d: ()`` [index units].
+    """
+    (W1, b1), (W2, b2) = ((net.params[k]["kernel"], net.params[k]["bias"]) for k in ("hidden", "output"))
+    x_scale, x_offset = jnp.broadcast_to(net.x_norm.scale, W1.shape[:1]), jnp.broadcast_to(net.x_norm.offset, W1.shape[:1])
+    A = x_scale[:, None] * W1
+    c = b1 - (x_offset * x_scale) @ W1
+    v = W2[:, 0] / net.y_norm.scale
+    return A, c, v, b2[0] / net.y_norm.scale + net.y_norm.offset
+
+
+@partial(jax.jit, static_argnames="columns")
+def _evaluate(net: FFBN, x: Array, columns: tuple[int, ...]) -> Array:
+    """``S`` at ``x: (..., m)`` whose entries ``columns`` (static) are the network's inputs, in order."""
+    A, c, v, d = (t.astype(x.dtype) for t in folded_layers(net))
+    xs = [x[..., i] for i in columns]
+    out = d
+    for j in range(A.shape[1]):
+        z = c[j]
+        for k, xk in enumerate(xs):
+            z = z + A[k, j] * xk
+        out = out + v[j] * jnp.tanh(z)
+    return jnp.broadcast_to(out, x.shape[:-1])
 
 
 @partial(jax.jit, static_argnums=2)

@@ -28,4 +28,9 @@ class JointInputs:
             raise ValueError(f"q must have shape (..., {self.n_joints}), got {q.shape}")
         if not jnp.issubdtype(q.dtype, jnp.floating):
             q = q.astype(jnp.float32)
+        return self._from_joints(q)
+
+    def _from_joints(self, q: Array) -> Array:
+        """The network at its inputs taken from ``q: (..., n_joints)``; a network may read the
+        columns of ``q`` directly instead of this gathered copy."""
         return self.predict(q[..., list(self.inputs)])
