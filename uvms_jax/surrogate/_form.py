@@ -107,14 +107,11 @@ def _fused(chain: kin.Chain, q: Array, index: str, form: IndexForm) -> Array:
 
 
 def index_fn(chain: kin.Chain, index: str, form: IndexForm = IndexForm()) -> Callable[[Array], Array]:
-    """``q: (..., n_joints) → (...)`` jitted analytic index of ``form`` (the fastest analytic path)."""
+    """``q: (..., n_joints) → (...)`` analytic index of ``form``, compiled (the fastest analytic path)."""
     if index not in ("w", "kci"):
         raise ValueError(f"unknown index {index!r}; expected 'w' or 'kci'")
     form.check_chain(chain)
-    return partial(_index_jit, chain, index=index, form=form)
-
-
-@partial(jax.jit, static_argnames=("index", "form"))
-def _index_jit(chain: kin.Chain, q: Array, index: str, form: IndexForm) -> Array:
-    # One module-level jit: every index_fn of the same (index, form, shape) shares its compile.
-    return index_of(chain, q, index, form)
+    # No jit around the chain here: index_of's own jitted paths take it as an argument (one
+    # compile per shape), and on a GPU a chain with known numbers takes the Pallas kernel of
+    # `indices`, which a traced chain would bypass.
+    return partial(index_of, chain, index=index, form=form)
