@@ -42,7 +42,7 @@ test-all: $(DEV)
 	$(PY) -m pytest -q -n 2
 
 # Every table and figure of the three papers, theirs beside ours: docs/reproduction.md and
-# docs/img/papers/ (about 4 min on 2 cores with a warm compilation cache, 25 min cold).
+# docs/img/papers/ (about 2 min on 2 cores with a warm compilation cache, 25 min cold).
 papers: $(DEV)
 	$(PY) experiments/papers.py
 
