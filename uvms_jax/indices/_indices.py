@@ -188,7 +188,7 @@ def _jacobi(A, vectors: bool) -> tuple[list, list | None]:
     m = len(A)
 
     def sweep(_, state):
-        A, V = [list(row) for row in state[0]], state[1] and [list(row) for row in state[1]]
+        A, V = ([list(row) for row in M] if M is not None else None for M in state)
         for p in range(m - 1):
             for q in range(p + 1, m):
                 apq, d = A[p][q], A[q][q] - A[p][p]
@@ -203,7 +203,7 @@ def _jacobi(A, vectors: bool) -> tuple[list, list | None]:
                         A[r][q] = A[q][r] = s * arp + c * arq
                 A[p][p], A[q][q] = A[p][p] - t * apq, A[q][q] + t * apq
                 A[p][q] = A[q][p] = jnp.zeros_like(apq)
-                if V:  # the same plane rotation, applied to the columns p and q of V
+                if V is not None:  # the same plane rotation, applied to the columns p and q of V
                     for r in range(m):
                         vrp, vrq = V[r][p], V[r][q]
                         V[r][p], V[r][q] = c * vrp - s * vrq, s * vrp + c * vrq
