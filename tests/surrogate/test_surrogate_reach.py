@@ -40,8 +40,9 @@ def test_terms_from_one_w_per_pose_equal_the_analytic_terms(problem):
     _, _, w = evo.arm_solutions_jit(problem, poses)
     ours = jax.jit(evo.arm_terms)(problem, poses, jnp.max(w, axis=-1)[..., None])  # one compile, not op by op
     ref = evo.evaluate_arm(problem, poses)
-    np.testing.assert_allclose(ours.fitness, ref.fitness, rtol=1e-6)
-    np.testing.assert_allclose(ours.M_a, ref.M_a, rtol=1e-6)
+    # float32 sums over the targets, fused differently in the two programs: a few ulp apart.
+    np.testing.assert_allclose(ours.fitness, ref.fitness, rtol=1e-5)
+    np.testing.assert_allclose(ours.M_a, ref.M_a, rtol=1e-5)
 
 
 def test_map_beats_the_mean_on_held_out_poses_and_docks(problem):
