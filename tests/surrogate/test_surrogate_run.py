@@ -85,6 +85,20 @@ def test_tile_batch_and_chunk_for():
         surrogate.tile_batch(q, 0)
 
 
+def test_time_index_fn_times_calls_back_to_back():
+    """A call much shorter than a timed run (here ~1 ms against 0.2 s) is repeated within each
+    run and the time divided by the calls: the function runs more than once per run, besides
+    the compile and the probe."""
+    calls = []
+    fn = lambda q: (jax.debug.callback(lambda: calls.append(1)), q.sum(-1))[1]
+    t = surrogate.time_index_fn(fn, jnp.ones((100, 3)), repeats=2, min_run_seconds=0.2)
+    assert len(calls) > 2 + 2 * 1
+    assert t["per_second"] == pytest.approx(100 / t["seconds"])
+    assert 0 < t["min_seconds"] <= t["seconds"]
+    with pytest.raises(ValueError, match="multiple"):
+        surrogate.time_index_fn(fn, jnp.ones((100, 3)), chunk=30)
+
+
 def _timing(speedup: float) -> dict:
     return {"100000": {"speedup": speedup}}
 
