@@ -86,7 +86,7 @@ def test_tile_batch_and_chunk_for():
 
 
 def test_time_index_fn_times_calls_back_to_back():
-    """A call much shorter than a timed run (here ~1 ms against 0.2 s) is repeated within each
+    """A call much shorter than a timed run (about a millisecond against 0.2 s) is repeated in each
     run and the time divided by the calls: the function runs more than once per run, besides
     the compile and the probe."""
     calls = []
