@@ -5,6 +5,9 @@ Format (version 1; JSON object)::
     {
       "version": 1,
       "joint_names": ["G", "F", "E", "D", "C", "B"],
+      "base_rpy": [3.14159, 0.0, 0.0],              # optional: the arm base's orientation in the
+                                                    # world the plan was made for (URDF roll,
+                                                    # pitch, yaw [rad]; sets gravity in simulation)
       "segments": [
         {"name": "0->2 pre-grasp",                  # free text, used in logs and errors
          "t": [0.0, 1.5, 3.0],                      # [s] from the segment's start, t[0] = 0, increasing
@@ -52,7 +55,7 @@ the file suffix, and :func:`load_plan` tells the two formats apart by their keys
   waypoint, or starts with a gripper step, cannot be written.
 - What a JointTrajectory cannot hold is lost: segment names and the boundaries between two
   motions (a plan read back has one motion segment between gripper steps, named after its
-  points) and the ``meta`` object. Times keep nanosecond resolution. The motion itself (every
+  points), ``base_rpy`` and the ``meta`` object. Times keep nanosecond resolution. The motion itself (every
   waypoint, the time between waypoints, every gripper step) survives the round trip.
 """
 
@@ -108,10 +111,19 @@ class Segment:
 
 @dataclasses.dataclass(frozen=True)
 class Plan:
-    """A parsed plan: joint names (arm joints, in order) and segments."""
+    """A parsed plan: joint names (arm joints, in order) and segments.
+
+    Attributes:
+      joint_names: arm joint letters, in the order of every waypoint's values.
+      segments: the segments, in execution order.
+      base_rpy: orientation of the arm's base in the world the plan was made for, URDF roll,
+        pitch, yaw [rad] (``(π, 0, 0)``: hanging under a vehicle); None where not recorded. The
+        simulated arm takes its gravity and buoyancy from it.
+    """
 
     joint_names: tuple[str, ...]
     segments: tuple[Segment, ...]
+    base_rpy: tuple[float, float, float] | None = None
 
     def waypoints(self) -> list[tuple[int, int, tuple[float, ...]]]:
         """All ``(segment index, waypoint index, q)`` in execution order."""
@@ -136,7 +148,7 @@ def parse_plan(obj: Mapping[str, Any]) -> Plan:
     version = obj.get("version", PLAN_VERSION)
     if version != PLAN_VERSION:
         raise PlanError(f"unsupported plan version {version!r} (expected {PLAN_VERSION})")
-    unknown = set(obj) - {"version", "joint_names", "segments", "meta"}
+    unknown = set(obj) - {"version", "joint_names", "segments", "base_rpy", "meta"}
     if unknown:
         raise PlanError(f"unknown plan keys {sorted(unknown)}")
     names = obj.get("joint_names")
@@ -174,7 +186,12 @@ def parse_plan(obj: Mapping[str, Any]) -> Plan:
         if not q and jaws is None:
             raise PlanError(f"{where}: neither waypoints nor a gripper step")
         out.append(Segment(name, t, q, jaws))
-    return Plan(tuple(names), tuple(out))
+    base_rpy = obj.get("base_rpy")
+    if base_rpy is not None:
+        base_rpy = _floats(base_rpy, "plan.base_rpy")
+        if len(base_rpy) != 3 or not all(math.isfinite(v) for v in base_rpy):
+            raise PlanError(f"plan.base_rpy: expected 3 finite angles (roll, pitch, yaw) [rad], got {list(base_rpy)}")
+    return Plan(tuple(names), tuple(out), base_rpy)
 
 
 _YAML_SUFFIXES = (".yaml", ".yml")
@@ -376,5 +393,6 @@ def plan_to_dict(plan: Plan) -> dict[str, Any]:
         motion = {"t": list(s.t), "q": [list(r) for r in s.q]} if s.q else {}
         return {"name": s.name, **motion, "gripper": None if s.jaws_mm is None else {"jaws_mm": s.jaws_mm}}
 
-    return {"version": PLAN_VERSION, "joint_names": list(plan.joint_names),
+    base = {} if plan.base_rpy is None else {"base_rpy": list(plan.base_rpy)}
+    return {"version": PLAN_VERSION, "joint_names": list(plan.joint_names), **base,
             "segments": [segment(s) for s in plan.segments]}

@@ -117,3 +117,10 @@ def test_cli_base_rpy_reaches_the_simulated_arm(plan_file, tmp_path, monkeypatch
     assert "base_rpy must be 3 finite angles" in capsys.readouterr().err
     assert cli.main(["run", str(plan_file), "--udp", "127.0.0.1:9", "--base-rpy", "3.1", "0", "0"]) == 2
     assert "need --sim" in capsys.readouterr().err
+    # A plan that records its base: simulated as recorded, unless --base-rpy says otherwise.
+    hanging_plan = tmp_path / "hanging.json"
+    hanging_plan.write_text(json.dumps({**plan_to_dict(short_plan()), "base_rpy": list(HANGING)}))
+    seen.clear()
+    for flags, want in (([], HANGING), (["--base-rpy", "0", "0.2", "0"], (0.0, 0.2, 0.0))):
+        assert cli.main(["run", str(hanging_plan), "--sim", *flags, "--no-plot", "--out", str(tmp_path / "o")]) == 0
+        assert seen[-1].base_rpy == tuple(want)

@@ -41,6 +41,10 @@ def test_good_plan_and_round_trip():
     s = check_plan(p)
     assert (s.n_segments, s.n_waypoints, s.n_gripper_steps) == (3, 4, 2)
     assert parse_plan(json.loads(json.dumps(plan_to_dict(p)))) == p
+    assert p.base_rpy is None and "base_rpy" not in plan_to_dict(p)
+    hanging = parse_plan({**GOOD, "base_rpy": [3.14159, 0, 0.5]})
+    assert hanging.base_rpy == (3.14159, 0.0, 0.5)
+    assert parse_plan(json.loads(json.dumps(plan_to_dict(hanging)))) == hanging
 
 
 @pytest.mark.parametrize(("path", "value", "message"), [
@@ -68,6 +72,9 @@ def test_bad_plans_refused_with_clear_message(path, value, message):
     (mutate(["segments", 0, "q", 0, 0], "1.0"), "expected numbers"),
     (mutate(["version"], 2), "unsupported plan version"),
     ({"joint_names": list("GFEDCB"), "segments": [{"name": "x"}]}, "neither waypoints nor a gripper"),
+    (mutate(["base_rpy"], [3.1, 0.0]), r"plan.base_rpy: expected 3 finite angles"),
+    (mutate(["base_rpy"], [3.1, float("inf"), 0.0]), r"plan.base_rpy: expected 3 finite angles"),
+    (mutate(["base_rpy"], "up"), r"plan.base_rpy: expected a list of numbers"),
     ([1, 2], "JSON object"),
 ])
 def test_malformed_plans(obj, message):

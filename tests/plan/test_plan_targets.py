@@ -118,6 +118,7 @@ def test_stage_run_and_files(setup, tmp_path):
     plan = plan_for_schedule(tp, "RRTConnect", settings.plan_json.sequence, settings)
     write_plan(plan, tmp_path)
     assert planfile.load_plan(tmp_path / "plan.json") == plan
+    assert plan.base_rpy == tuple(scene.spec.mount_rpy)  # the simulated run gets the planned gravity
     assert (tmp_path / "joints.png").stat().st_size > 0
     with pytest.raises(ValueError, match="was not run"):
         plan_for_schedule(tp, "PRM", settings.plan_json.sequence, settings)

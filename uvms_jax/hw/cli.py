@@ -99,7 +99,8 @@ def _sim_args(p: argparse.ArgumentParser) -> None:
     g.add_argument("--seed", type=int, help="fault-injection seed")
     g.add_argument("--base-rpy", type=float, nargs=3, metavar=("R", "P", "Y"),
                    help="orientation of the arm's base in the world, URDF roll pitch yaw [rad]: gravity "
-                        "along the world's -z, buoyancy +z (0 0 0: upright; 3.14159 0 0: hanging)")
+                        "along the world's -z, buoyancy +z (0 0 0: upright; 3.14159 0 0: hanging); "
+                        "default: the plan's base_rpy, else the --config sim section, else upright")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -188,6 +189,8 @@ def _run(args: argparse.Namespace) -> int:
     except PlanError as e:
         print(f"uvms-hw: {e}", file=sys.stderr)
         return EXIT_REFUSED
+    if args.base_rpy is None and plan.base_rpy is not None:  # simulate the base the plan was made for
+        sim_cfg = dataclasses.replace(sim_cfg, base_rpy=plan.base_rpy)
     print(f"plan ok: {summary.n_segments} segments, {summary.n_waypoints} waypoints, "
           f"{summary.n_gripper_steps} gripper steps, ~{summary.estimated_s:.1f} s of motion", file=sys.stderr)
     if args.dry_run:

@@ -266,8 +266,7 @@ def execute(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
     else:
         raise ValueError("the hw stage needs a plan: run the plan and schedule stages, or set hw.plan")
     # The simulated arm's gravity and buoyancy follow the base the plan was made for.
-    spec = flow.task_plan.scene.spec if flow.task_plan is not None else None
-    sim = hs.sim if spec is None else dataclasses.replace(hs.sim, base_rpy=spec.mount_rpy)
+    sim = hs.sim if the_plan.base_rpy is None else dataclasses.replace(hs.sim, base_rpy=the_plan.base_rpy)
     with progress.bar(total=len(the_plan.segments), desc="hw", unit="seg") as bar:
         run = hw.run_plan(the_plan, link=hs.link, config=hs.executor, sim=sim,
                           progress=lambda i, n, name: bar.update(i - bar.n))  # i: segments finished

@@ -209,7 +209,8 @@ def plan_from_edges(
     For every move of ``sequence`` (e.g. ``[0, 2, 5, 4, 8, 0, 1, 6, 3, 7, 9]``) it emits the
     edge's motion, then at an object: ``open``, ``grasp`` (down), ``close``, ``post-grasp``
     (up); at a base: ``final`` (down), ``release`` (open), ``post-final`` (up). Pre-grasp and
-    pre-final are the ends of the edge motions.
+    pre-final are the ends of the edge motions. The plan records the scene's base orientation
+    (``base_rpy``), so a simulated run of it has the gravity it was planned under.
 
     Args:
       scene, targets: the scene and its node targets.
@@ -251,4 +252,5 @@ def plan_from_edges(
             segments += [_motion(f"final on {names[dst]}", down),
                          _gripper(f"release on {names[dst]}", jaws_open_mm),
                          _motion(f"post-final {names[dst]}", up)]
-    return planfile.Plan(tuple(j.name for j in bravo7.ARM_JOINTS), tuple(segments))
+    return planfile.Plan(tuple(j.name for j in bravo7.ARM_JOINTS), tuple(segments),
+                         base_rpy=tuple(float(v) for v in scene.spec.mount_rpy))
