@@ -96,7 +96,8 @@ def main() -> None:
         for name in nets:
             row[name]["speedup_vs_analytic"] = row[f"analytic_{name.split('_')[1]}"]["seconds"] / row[name]["seconds"]
         results[str(n)] = row
-    grid = None if args.grid is None else _time_grid(int(args.grid), base, fns["analytic_w"], nets["ffbn_w"], args.repeats)
+    grid = (None if args.grid is None
+            else _time_grid(int(args.grid), base, fns["analytic_w"], nets["ffbn_w"], args.repeats))
     sizes = {name: (net.hidden if name.startswith("ffbn") else net.n_centres) for name, net in nets.items()}
     print(json.dumps({
         "benchmark": "surrogate", "device": jax.devices()[0].device_kind, "platform": jax.devices()[0].platform,

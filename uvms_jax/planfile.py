@@ -55,8 +55,9 @@ the file suffix, and :func:`load_plan` tells the two formats apart by their keys
   waypoint, or starts with a gripper step, cannot be written.
 - What a JointTrajectory cannot hold is lost: segment names and the boundaries between two
   motions (a plan read back has one motion segment between gripper steps, named after its
-  points), ``base_rpy`` and the ``meta`` object. Times keep nanosecond resolution. The motion itself (every
-  waypoint, the time between waypoints, every gripper step) survives the round trip.
+  points), ``base_rpy`` and the ``meta`` object. Times keep nanosecond resolution. The motion
+  itself (every waypoint, the time between waypoints, every gripper step) survives the round
+  trip.
 """
 
 from __future__ import annotations
