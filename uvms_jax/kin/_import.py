@@ -42,6 +42,8 @@ class _Joint:
     lower: float
     upper: float
     speed: float
+    link: str = ""  # the link (URDF) or body (MJCF) it moves
+    effort: float = 0.0  # [N·m or N]; 0 where the file gives none
 
 
 def _unit(axis, joint: str) -> np.ndarray:
@@ -120,10 +122,14 @@ def from_urdf(source, base_link: str | None = None, tip_link: str | None = None,
       ValueError: unknown links, a tip not below the base, and on the path: mimic, floating or
         planar joints, a revolute/prismatic joint without ``<limit>``, or a zero axis.
     """
-    try:
-        import yourdfpy  # the URDF parser: an optional dependency, needed only here
-    except ImportError as err:
-        raise ImportError("kin.from_urdf needs yourdfpy: pip install 'uvms-jax[urdf]'") from err
+    urdf = read_urdf(source)
+    joints, T_base_tool, _ = urdf_path_joints(urdf, base_link, tip_link)
+    return _build(joints, T_base_tool, urdf.robot.name if name is None else name)
+
+
+def read_urdf(source):
+    """A parsed URDF (``yourdfpy.URDF``, meshes not loaded) from a path or the URDF text."""
+    import yourdfpy  # the URDF parser; imported here, as only robot files need it
 
     if _is_text(source):
         handle = io.BytesIO(source.encode())
@@ -131,7 +137,13 @@ def from_urdf(source, base_link: str | None = None, tip_link: str | None = None,
         handle = os.fspath(source)
         if not os.path.isfile(handle):
             raise ValueError(f"URDF file not found: {handle}")
-    urdf = yourdfpy.URDF.load(handle, build_scene_graph=False, load_meshes=False, load_collision_meshes=False)
+    return yourdfpy.URDF.load(handle, build_scene_graph=False, load_meshes=False, load_collision_meshes=False)
+
+
+def urdf_path_joints(urdf, base_link: str | None, tip_link: str | None) -> tuple[list[_Joint], np.ndarray, str]:
+    """The moving joints from ``base_link`` to ``tip_link`` of a parsed URDF (see
+    :func:`from_urdf`), the tip's pose in the base frame at ``q = 0`` ``(4, 4)``, and the base
+    link's name."""
     robot = urdf.robot
     links = {link.name for link in robot.links}
     joint_of = {j.child: j for j in robot.joints}
@@ -151,28 +163,34 @@ def from_urdf(source, base_link: str | None = None, tip_link: str | None = None,
         T = T @ (np.eye(4) if j.origin is None else np.asarray(j.origin, dtype=np.float64))
         if j.type == "fixed":
             continue
-        if j.type == "continuous":
-            lower, upper = CONTINUOUS_LIMITS
-        elif j.limit is None or j.limit.lower is None or j.limit.upper is None:
-            raise ValueError(f"{j.type} joint {j.name!r} needs <limit lower=… upper=…>")
-        else:
-            lower, upper = float(j.limit.lower), float(j.limit.upper)
-            if not lower < upper:
-                raise ValueError(f"joint {j.name!r}: limits [{lower}, {upper}] are inverted or empty")
-        speed = j.limit.velocity if j.limit is not None and j.limit.velocity else None
-        joints.append(
-            _Joint(
-                name=j.name,
-                kind=PRISMATIC if j.type == "prismatic" else REVOLUTE,
-                axis=T[:3, :3] @ _unit(j.axis, j.name),
-                point=T[:3, 3].copy(),
-                frame=T.copy(),
-                lower=lower,
-                upper=upper,
-                speed=float(speed) if speed and speed > 0 else DEFAULT_SPEED,
-            )
-        )
-    return _build(joints, T, robot.name if name is None else name)
+        joints.append(_urdf_joint(j, T, link))
+    return joints, T, base
+
+
+def _urdf_joint(j, T: np.ndarray, link: str) -> _Joint:
+    """A moving URDF joint whose child ``link`` has the pose ``T (4, 4)`` at ``q = 0``."""
+    if j.type == "continuous":
+        lower, upper = CONTINUOUS_LIMITS
+    elif j.limit is None or j.limit.lower is None or j.limit.upper is None:
+        raise ValueError(f"{j.type} joint {j.name!r} needs <limit lower=… upper=…>")
+    else:
+        lower, upper = float(j.limit.lower), float(j.limit.upper)
+        if not lower < upper:
+            raise ValueError(f"joint {j.name!r}: limits [{lower}, {upper}] are inverted or empty")
+    speed = j.limit.velocity if j.limit is not None and j.limit.velocity else None
+    effort = j.limit.effort if j.limit is not None and j.limit.effort else 0.0
+    return _Joint(
+        name=j.name,
+        kind=PRISMATIC if j.type == "prismatic" else REVOLUTE,
+        axis=T[:3, :3] @ _unit(j.axis, j.name),
+        point=T[:3, 3].copy(),
+        frame=T.copy(),
+        lower=lower,
+        upper=upper,
+        speed=float(speed) if speed and speed > 0 else DEFAULT_SPEED,
+        link=link,
+        effort=float(effort),
+    )
 
 
 def _pose(p, xmat) -> np.ndarray:
@@ -212,6 +230,15 @@ def from_mjcf(
       ValueError: unknown names, a tip not below the base, and on the path: ball or free
         joints, an unlimited slide, or a joint coupled to another by an equality constraint.
     """
+    joints, T_base_tool, model_name = mjcf_path_joints(source, base_body, tip_body, tip_site)
+    return _build(joints, T_base_tool, model_name if name is None else name)
+
+
+def mjcf_path_joints(source, base_body: str | None, tip_body: str | None,
+                     tip_site: str | None) -> tuple[list[_Joint], np.ndarray, str]:
+    """The moving joints from the base body to the tip of an MJCF model (see
+    :func:`from_mjcf`), the tip's pose in the base frame at ``q = 0`` ``(4, 4)``, and the
+    model's name."""
     if tip_body is not None and tip_site is not None:
         raise ValueError("give tip_body or tip_site, not both")
     if _is_text(source):
@@ -281,7 +308,8 @@ def from_mjcf(
                     lower=lower,
                     upper=upper,
                     speed=DEFAULT_SPEED,
+                    link=body,
+                    effort=float(model.jnt_actfrcrange[j, 1]) if model.jnt_actfrclimited[j] else 0.0,
                 )
             )
-    model_name = spec.modelname or "mjcf"
-    return _build(joints, T_base_world @ T_world_tool, model_name if name is None else name)
+    return joints, T_base_world @ T_world_tool, spec.modelname or "mjcf"

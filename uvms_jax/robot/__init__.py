@@ -1,0 +1,26 @@
+"""The robot model: one arm as data that flows through every stage.
+
+``load_robot`` reads a URDF or MJCF description (the format told by its content) into a
+:class:`Robot`: the kinematic chain with its limits, the bodies' mass properties, the gripper
+and, for a real arm, its hardware profile; ``robot_from_config`` does the same from an arm's
+config (``configs/arm/``). ``mjcf_body`` builds the one MuJoCo model of the arm that the
+planning scene and the simulated arm both use; ``self_collision_pairs`` finds the link pairs
+to leave out of self-collision checks. See docs/robots.md.
+"""
+
+from uvms_jax.robot._load import DESCRIPTIONS
+from uvms_jax.robot._load import PACKAGE_PREFIX
+from uvms_jax.robot._load import description_path
+from uvms_jax.robot._load import load_robot
+from uvms_jax.robot._load import robot_from_config
+from uvms_jax.robot._mjcf import TOOL_SITE
+from uvms_jax.robot._mjcf import base_body
+from uvms_jax.robot._mjcf import geom_name
+from uvms_jax.robot._mjcf import mjcf_body
+from uvms_jax.robot._mjcf import robot_mjcf
+from uvms_jax.robot._mjcf import self_collision_pairs
+from uvms_jax.robot._model import BASE
+from uvms_jax.robot._model import BodyInertial
+from uvms_jax.robot._model import Gripper
+from uvms_jax.robot._model import Hardware
+from uvms_jax.robot._model import Robot

@@ -1,0 +1,270 @@
+"""Loading a :class:`Robot` from a URDF or MJCF description, the format told by the content.
+
+What comes from the file: the chain from the base to the tip (joint kinds, axes, frames,
+position and velocity limits, efforts), the gripper joint's limits, and every link's mass,
+centre of mass and inertia (URDF ``<inertial>``, MJCF body inertia), each folded into the
+moving body it is fixed to. What comes from the caller (the arm's config): the capsule radius
+of the collision model, the fingers' size, the displaced volumes (no description format has
+them) and the hardware profile.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import xml.etree.ElementTree as ET
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import mujoco
+import numpy as np
+
+from uvms_jax.kin import _import
+from uvms_jax.robot._model import BASE, BodyInertial, Gripper, Hardware, Robot
+
+__all__ = ["DESCRIPTIONS", "PACKAGE_PREFIX", "description_path", "load_robot", "robot_from_config"]
+
+#: The description files shipped with the package (the Reach Bravo 7, ...).
+DESCRIPTIONS = Path(__file__).parent / "descriptions"
+
+
+def _read(description) -> tuple[bytes, str, Path | None]:
+    """``(bytes, source label, path or None)`` of a path or of the description's text."""
+    if isinstance(description, (str, os.PathLike)) and not (isinstance(description, str) and
+                                                             description.lstrip().startswith("<")):
+        if isinstance(description, str) and not description.strip():
+            raise ValueError("robot description is an empty string: give a URDF/MJCF path or its text")
+        path = Path(description)
+        if not path.is_file():
+            raise ValueError(f"robot description not found: {path}")
+        return path.read_bytes(), str(path), path
+    if isinstance(description, str):
+        return description.encode(), "<text>", None
+    raise TypeError(f"robot description must be a path or the XML text, got {type(description).__name__}")
+
+
+def _format(data: bytes, source: str) -> str:
+    """``"urdf"`` or ``"mjcf"`` from the root element; a clear error for anything else."""
+    try:
+        root = ET.fromstring(data)
+    except ET.ParseError as err:
+        raise ValueError(f"robot description {source} is not well-formed XML: {err}") from None
+    if root.tag == "robot":
+        return "urdf"
+    if root.tag == "mujoco":
+        return "mjcf"
+    raise ValueError(f"robot description {source} has root <{root.tag}>: expected <robot> (URDF) or <mujoco> (MJCF)")
+
+
+def _inertia_matrix(xx, yy, zz, xy, xz, yz) -> np.ndarray:
+    return np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
+
+
+def _fold(T_base_part: np.ndarray, mass: float, I_part: np.ndarray, T_base_body: np.ndarray,
+          body: int, volume: float = 0.0, cob_part=None) -> BodyInertial:
+    """Mass properties given in a part's centre-of-mass frame ``T_base_part`` (at q = 0),
+    expressed in the frame of the body they are fixed to."""
+    T = np.linalg.inv(T_base_body) @ T_base_part
+    R, p = T[:3, :3], T[:3, 3]
+    I = R @ I_part @ R.T
+    cob = p if cob_part is None else p + R @ np.asarray(cob_part, float)
+    return BodyInertial(body, float(mass), tuple(map(float, p)),
+                        (float(I[0, 0]), float(I[1, 1]), float(I[2, 2]), float(I[0, 1]), float(I[0, 2]),
+                         float(I[1, 2])), float(volume), tuple(map(float, cob)))
+
+
+def _body_of(name: str, parent_of: Mapping[str, str], bodies: Mapping[str, int]) -> int | None:
+    """The body a link/body is fixed to: itself or its nearest ancestor that is a body; None
+    above the base (joints off the path, e.g. the gripper's, are taken at q = 0)."""
+    while name not in bodies:
+        if name not in parent_of:
+            return None
+        name = parent_of[name]
+    return bodies[name]
+
+
+def _urdf_robot(urdf, base: str | None, tip: str | None, gripper: str | None):
+    joints, T_base_tool, base_link = _import.urdf_path_joints(urdf, base, tip)
+    robot = urdf.robot
+    joint_of = {j.child: j for j in robot.joints}
+    # Every link's frame at q = 0 below the base (a breadth-first walk of the tree).
+    frames, todo = {base_link: np.eye(4)}, [base_link]
+    while todo:
+        parent = todo.pop()
+        for j in robot.joints:
+            if j.parent == parent:
+                frames[j.child] = frames[parent] @ (np.eye(4) if j.origin is None else np.asarray(j.origin, float))
+                todo.append(j.child)
+    bodies = {base_link: BASE, **{j.link: i for i, j in enumerate(joints)}}
+    body_frames = {BASE: np.eye(4), **{i: j.frame for i, j in enumerate(joints)}}
+    parent_of = {c: j.parent for c, j in joint_of.items()}
+    inertials = []
+    for link in robot.links:
+        body = _body_of(link.name, parent_of, bodies)
+        if link.inertial is None or body is None or link.name not in frames:
+            continue
+        origin = np.eye(4) if link.inertial.origin is None else np.asarray(link.inertial.origin, float)
+        I = np.asarray(link.inertial.inertia, float) if link.inertial.inertia is not None else np.zeros((3, 3))
+        inertials.append((link.name, frames[link.name] @ origin, float(link.inertial.mass or 0.0), I, body))
+    grip = None
+    if gripper is not None:
+        found = [j for j in robot.joints if j.name == gripper]
+        if not found:
+            raise ValueError(f"gripper joint {gripper!r} not in the URDF (joints: {sorted(j.name for j in robot.joints)})")
+        g = _import._urdf_joint(found[0], np.eye(4), found[0].child)
+        if g.kind != "prismatic":
+            raise ValueError(f"gripper joint {gripper!r} must be prismatic (its opening in metres), it is {g.kind}")
+        grip = (g.lower, g.upper, g.speed, g.effort)
+    return joints, T_base_tool, base_link, robot.name, inertials, body_frames, frames, grip
+
+
+def _mjcf_robot(source, base: str | None, tip: str | None, gripper: str | None):
+    text = source.read_text() if isinstance(source, Path) else source
+    sites = {s.get("name") for s in ET.fromstring(text).iter("site")}
+    tip_site, tip_body = (tip, None) if tip in sites else (None, tip)
+    joints, T_base_tool, name = _import.mjcf_path_joints(source, base, tip_body, tip_site)
+    spec = mujoco.MjSpec.from_file(str(source)) if isinstance(source, Path) else mujoco.MjSpec.from_string(source)
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    data.qpos[:] = 0.0
+    mujoco.mj_kinematics(model, data)
+    names = [model.body(b).name or f"body{b}" for b in range(model.nbody)]
+    base_name = names[0] if base is None else base
+
+    def world(p, xmat):
+        T = np.eye(4)
+        T[:3, :3] = np.asarray(xmat).reshape(3, 3)
+        T[:3, 3] = p
+        return T
+
+    T_base_world = np.linalg.inv(world(data.xpos[names.index(base_name)], data.xmat[names.index(base_name)]))
+    bodies = {base_name: BASE, **{j.link: i for i, j in enumerate(joints)}}
+    body_frames = {BASE: np.eye(4), **{i: j.frame for i, j in enumerate(joints)}}
+    parent_of = {names[b]: names[int(model.body_parentid[b])] for b in range(1, model.nbody)}
+    inertials = []
+    for b in range(1, model.nbody):
+        body = _body_of(names[b], parent_of, bodies)
+        if body is None or model.body_mass[b] <= 0:
+            continue
+        T_com = T_base_world @ world(data.xipos[b], data.ximat[b])  # principal axes of inertia
+        inertials.append((names[b], T_com, float(model.body_mass[b]), np.diag(model.body_inertia[b]), body))
+    grip = None
+    if gripper is not None:
+        jid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, gripper)
+        if jid < 0:
+            raise ValueError(f"gripper joint {gripper!r} not in the MJCF model")
+        if int(model.jnt_type[jid]) != int(mujoco.mjtJoint.mjJNT_SLIDE) or not model.jnt_limited[jid]:
+            raise ValueError(f"gripper joint {gripper!r} must be a slide joint with a range (its opening in metres)")
+        effort = float(model.jnt_actfrcrange[jid, 1]) if model.jnt_actfrclimited[jid] else 0.0
+        grip = (float(model.jnt_range[jid, 0]), float(model.jnt_range[jid, 1]), None, effort)
+    frames = {n: T_base_world @ world(data.xpos[b], data.xmat[b]) for b, n in enumerate(names)}
+    return joints, T_base_tool, base_name, name, inertials, body_frames, frames, grip
+
+
+def load_robot(
+    description,
+    *,
+    tip: str | None = None,
+    base: str | None = None,
+    gripper: str | None = None,
+    gripper_velocity: float | None = None,
+    finger_size=(0.016, 0.03, 0.08),
+    link_radius: float = 0.04,
+    buoyancy: Mapping[str, Mapping[str, Any]] | None = None,
+    hardware: Mapping[str, Any] | None = None,
+    name: str | None = None,
+) -> Robot:
+    """A :class:`Robot` from a URDF or MJCF file (or its text); the format is read from the
+    root element, not the file name.
+
+    Args:
+      description: path to the file, or the XML text.
+      tip: the tool frame: a URDF link, an MJCF body or site (default: the only leaf).
+      base: the base: a URDF link or an MJCF body (default: the root link / the world body).
+      gripper: name of the prismatic (URDF) or slide (MJCF) joint that opens the jaws, below
+        the tip; its limits [m] are read from the file. None: no gripper.
+      gripper_velocity: the gripper's speed limit [m/s] where the file gives none (MJCF).
+      finger_size: full edges of one finger box [m] (the fingers' collision shape).
+      link_radius: capsule radius of the links' collision model [m].
+      buoyancy: link/body name → ``{"volume": m³, "cob": [x, y, z] m in that link's frame}``.
+      hardware: ``{"protocol": "bpl", "device_ids": {joint: id, ...}}``, or None.
+      name: the robot's name (default: the file's).
+
+    Raises:
+      ValueError: a missing file, text that is not URDF or MJCF, unknown names, and every
+        error of :func:`uvms_jax.kin.from_urdf` / :func:`uvms_jax.kin.from_mjcf`.
+    """
+    data, source, path = _read(description)
+    fmt = _format(data, source)
+    if fmt == "urdf":
+        urdf = _import.read_urdf(path if path is not None else data.decode())
+        parts = _urdf_robot(urdf, base, tip, gripper)
+    else:
+        parts = _mjcf_robot(path if path is not None else data.decode(), base, tip, gripper)
+    joints, T_base_tool, base_link, file_name, raw_inertials, body_frames, frames, grip = parts
+    chain = _import._build(joints, T_base_tool, file_name if name is None else name)
+    buoyancy = dict(buoyancy or {})
+    unknown = sorted(set(buoyancy) - set(frames))
+    if unknown:
+        raise ValueError(f"buoyancy names links not in the description: {unknown}")
+    inertials = []
+    for link, T_com, mass, I, body in raw_inertials:
+        b = buoyancy.pop(link, None)
+        volume, cob = (0.0, None) if b is None else (float(b["volume"]), np.asarray(b["cob"], float))
+        cob_com = None if cob is None else np.linalg.inv(T_com) @ frames[link] @ np.r_[cob, 1.0]
+        inertials.append(_fold(T_com, mass, I, body_frames[body], body, volume, None if cob is None else cob_com[:3]))
+    if buoyancy:  # links named that carry no mass properties in the file
+        raise ValueError(f"buoyancy of links {sorted(buoyancy)}: the description gives them no mass properties")
+    gripper_model = None
+    if grip is not None:
+        lower, upper, speed, effort = grip
+        speed = speed if gripper_velocity is None else gripper_velocity
+        if speed is None:
+            raise ValueError(f"gripper {gripper!r}: the file gives no speed limit; set gripper_velocity [m/s]")
+        gripper_model = Gripper(gripper, lower, upper, float(speed), effort, tuple(float(v) for v in finger_size))
+    hw = None
+    if hardware is not None:
+        hw = Hardware(str(hardware["protocol"]), tuple((str(k), int(v)) for k, v in dict(hardware["device_ids"]).items()))
+    return Robot(
+        name=chain.name,
+        chain=chain,
+        base_link=base_link,
+        link_names=tuple(j.link for j in joints),
+        effort_limits=tuple(j.effort for j in joints),
+        link_radius=float(link_radius),
+        inertials=tuple(inertials),
+        gripper=gripper_model,
+        hardware=hw,
+        source=source,
+        digest=hashlib.sha256(data).hexdigest(),
+    )
+
+
+
+#: The prefix of a description shipped with the package: ``uvms_jax://bravo7.urdf``.
+PACKAGE_PREFIX = "uvms_jax://"
+
+_CONFIG_KEYS = {"description", "tip", "base", "gripper", "gripper_velocity", "finger_size", "link_radius",
+                "buoyancy", "hardware", "name"}
+
+
+def description_path(description: str) -> Path:
+    """A description path of a config: ``uvms_jax://NAME`` is a file of :data:`DESCRIPTIONS`;
+    anything else a path (relative to the working directory)."""
+    if description.startswith(PACKAGE_PREFIX):
+        return DESCRIPTIONS / description.removeprefix(PACKAGE_PREFIX)
+    return Path(description)
+
+
+def robot_from_config(cfg: Mapping[str, Any]) -> Robot:
+    """A :class:`Robot` from an arm's config mapping (``configs/arm/*.yaml``): ``description``
+    (a path, or ``uvms_jax://FILE`` for a shipped one) and the keyword arguments of
+    :func:`load_robot` by name; unknown keys are refused."""
+    unknown = sorted(set(cfg) - _CONFIG_KEYS)
+    if unknown:
+        raise ValueError(f"arm config: unknown keys {unknown} (known: {sorted(_CONFIG_KEYS)})")
+    if not cfg.get("description"):
+        raise ValueError("arm config needs `description`: a URDF or MJCF file (or uvms_jax://FILE)")
+    kwargs = {k: v for k, v in cfg.items() if k != "description" and v is not None}
+    return load_robot(description_path(str(cfg["description"])), **kwargs)
