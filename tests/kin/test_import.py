@@ -10,7 +10,7 @@ import pytest
 import pytorch_kinematics as pk
 import torch
 
-from uvms_jax import kin
+from uvms_jax import kin, robot
 
 N_RANDOM = 1000
 ATOL_ORACLE = 1e-6  # pytorch-kinematics parses URDF numbers as float32 before casting to float64
@@ -31,43 +31,8 @@ ARMS = {
     "tiago": ("tiago_description/robots/tiago.urdf", None, "arm_4_link"),  # prismatic torso + 4R
 }
 
-# Reach Alpha 5 (4 DOF + jaws), numbers from the public alpha_description URDF
-# (github.com/Robotic-Decision-Making-Lab/alpha, alpha_description/urdf/alpha.urdf.xacro, MIT):
-# joint origins, axes and limits of axes E, D, C, B, the fixed ee_base_link 99.75 mm beyond B
-# and the prismatic jaws A. Written here as plain URDF without meshes.
-ALPHA5_URDF = """<?xml version="1.0"?>
-<robot name="alpha_5">
-  <link name="base_link"/> <link name="m3_inline_link"/> <link name="m2_1_1_link"/>
-  <link name="m2_joint_link"/> <link name="m2_1_2_link"/> <link name="m1_link"/>
-  <link name="ee_base_link"/> <link name="push_rod"/>
-  <joint name="base_link_joint" type="fixed">
-    <parent link="base_link"/><child link="m3_inline_link"/><origin rpy="0 0 0"/>
-  </joint>
-  <joint name="axis_e" type="revolute">
-    <parent link="m3_inline_link"/><child link="m2_1_1_link"/><origin xyz="0 0 0.014"/>
-    <axis xyz="0 0 1"/><limit effort="9.0" lower="0.0" upper="6.10" velocity="0.5"/>
-  </joint>
-  <joint name="axis_d" type="revolute">
-    <parent link="m2_1_1_link"/><child link="m2_joint_link"/><origin xyz="-0.02 0 0.033"/>
-    <axis xyz="0 1 0"/><limit effort="9.0" lower="0.0" upper="3.49" velocity="0.5"/>
-  </joint>
-  <joint name="axis_c" type="revolute">
-    <parent link="m2_joint_link"/><child link="m2_1_2_link"/><origin xyz="-0.04 0 -0.1453" rpy="0 0 3.14159"/>
-    <axis xyz="0 1 0"/><limit effort="9.0" lower="0.0" upper="3.22" velocity="0.5"/>
-  </joint>
-  <joint name="axis_b" type="revolute">
-    <parent link="m2_1_2_link"/><child link="m1_link"/><origin xyz="0.02 0 0.033" rpy="0 0 2.09439"/>
-    <axis xyz="0 0 -1"/><limit effort="9.0" lower="0.0" upper="3.22" velocity="0.5"/>
-  </joint>
-  <joint name="ee_joint" type="fixed">
-    <parent link="m1_link"/><child link="ee_base_link"/><origin rpy="0 0 0" xyz="0 0 0.09975"/>
-  </joint>
-  <joint name="axis_a" type="prismatic">
-    <parent link="ee_base_link"/><child link="push_rod"/><origin rpy="0 0 0" xyz="0 0 0.009"/>
-    <axis xyz="0 0 1"/><limit effort="10" lower="0" upper="0.015" velocity="10"/>
-  </joint>
-</robot>
-"""
+# Reach Alpha 5 (4 DOF + jaws), the package's description (public alpha_description numbers).
+ALPHA5_URDF = (robot.DESCRIPTIONS / "alpha5.urdf").read_text()
 
 
 def _anonymous(chain):

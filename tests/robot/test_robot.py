@@ -1,16 +1,12 @@
 """The robot model: loading by content, the shipped Bravo 7 against the manufacturer's tables,
 the MuJoCo builder against the POE kinematics, and the computed self-collision pairs."""
 
-from pathlib import Path
-
 import mujoco
 import numpy as np
 import pytest
-import yaml
 
 from uvms_jax import bravo7, kin, robot
 
-ARM_CONFIGS = Path(__file__).parents[2] / "configs" / "arm"
 ATOL_TEXT = 1e-8  # numbers written to a file with 10 significant digits and read back
 N_RANDOM = 50
 ATOL_MJ = 1e-9  # MuJoCo and the POE chain in float64: round-off only
@@ -35,7 +31,7 @@ SMALL_MJCF = """<mujoco model="two_link">
 
 
 def bravo7_robot() -> robot.Robot:
-    return robot.robot_from_config(yaml.safe_load((ARM_CONFIGS / "bravo7.yaml").read_text()))
+    return robot.load_arm("bravo7")
 
 
 def test_bravo7_description_matches_the_manufacturers_tables():
@@ -108,9 +104,11 @@ def test_bad_descriptions_say_what_is_wrong(text, message):
 
 
 def test_config_errors_name_the_problem():
-    cfg = yaml.safe_load((ARM_CONFIGS / "bravo7.yaml").read_text())
+    cfg = {"card": "bravo7"}
     with pytest.raises(ValueError, match=r"unknown keys \['colour'\]"):
         robot.robot_from_config({**cfg, "colour": "orange"})
+    with pytest.raises(ValueError, match="neither a shipped arm"):
+        robot.robot_from_config({"card": "bravo8"})
     with pytest.raises(ValueError, match="no device id for joint 'A'"):
         robot.robot_from_config({**cfg, "hardware": {"protocol": "bpl", "device_ids": {j: 2 + i for i, j in
                                                                                      enumerate("BCDEFG")}}})

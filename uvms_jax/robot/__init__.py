@@ -2,17 +2,18 @@
 
 ``load_robot`` reads a URDF or MJCF description (the format told by its content) into a
 :class:`Robot`: the kinematic chain with its limits, the bodies' mass properties, the gripper
-and, for a real arm, its hardware profile; ``robot_from_config`` does the same from an arm's
-config (``configs/arm/``). ``mjcf_body`` builds the one MuJoCo model of the arm that the
+and, for a real arm, its hardware profile. An arm card (YAML: the description file and what no
+description format holds) names the rest: ``load_arm("bravo7")`` loads a shipped card
+(:func:`shipped_arms`), ``robot_from_config`` a card with overrides or settings alone. ``mjcf_body`` builds the one MuJoCo model of the arm that the
 planning scene and the simulated arm both use; ``self_collision_pairs`` finds the link pairs
 to leave out of self-collision checks. See docs/robots.md.
 """
 
 from uvms_jax.robot._load import DESCRIPTIONS
-from uvms_jax.robot._load import PACKAGE_PREFIX
-from uvms_jax.robot._load import description_path
+from uvms_jax.robot._load import load_arm
 from uvms_jax.robot._load import load_robot
 from uvms_jax.robot._load import robot_from_config
+from uvms_jax.robot._load import shipped_arms
 from uvms_jax.robot._mjcf import TOOL_SITE
 from uvms_jax.robot._mjcf import base_body
 from uvms_jax.robot._mjcf import geom_name

@@ -19,11 +19,12 @@ from typing import Any
 
 import mujoco
 import numpy as np
+import yaml
 
 from uvms_jax.kin import _import
 from uvms_jax.robot._model import BASE, BodyInertial, Gripper, Hardware, Robot
 
-__all__ = ["DESCRIPTIONS", "PACKAGE_PREFIX", "description_path", "load_robot", "robot_from_config"]
+__all__ = ["DESCRIPTIONS", "load_arm", "load_robot", "robot_from_config", "shipped_arms"]
 
 #: The description files shipped with the package (the Reach Bravo 7, ...).
 DESCRIPTIONS = Path(__file__).parent / "descriptions"
@@ -184,7 +185,7 @@ def load_robot(
       base: the base: a URDF link or an MJCF body (default: the root link / the world body).
       gripper: name of the prismatic (URDF) or slide (MJCF) joint that opens the jaws, below
         the tip; its limits [m] are read from the file. None: no gripper.
-      gripper_velocity: the gripper's speed limit [m/s] where the file gives none (MJCF).
+      gripper_velocity: the gripper's speed limit [m/s]; default: the file's (an MJCF has none).
       finger_size: full edges of one finger box [m] (the fingers' collision shape).
       link_radius: capsule radius of the links' collision model [m].
       buoyancy: link/body name → ``{"volume": m³, "cob": [x, y, z] m in that link's frame}``.
@@ -242,29 +243,54 @@ def load_robot(
 
 
 
-#: The prefix of a description shipped with the package: ``uvms_jax://bravo7.urdf``.
-PACKAGE_PREFIX = "uvms_jax://"
-
-_CONFIG_KEYS = {"description", "tip", "base", "gripper", "gripper_velocity", "finger_size", "link_radius",
+_CONFIG_KEYS = {"card", "description", "tip", "base", "gripper", "gripper_velocity", "finger_size", "link_radius",
                 "buoyancy", "hardware", "name"}
 
 
-def description_path(description: str) -> Path:
-    """A description path of a config: ``uvms_jax://NAME`` is a file of :data:`DESCRIPTIONS`;
-    anything else a path (relative to the working directory)."""
-    if description.startswith(PACKAGE_PREFIX):
-        return DESCRIPTIONS / description.removeprefix(PACKAGE_PREFIX)
-    return Path(description)
+def shipped_arms() -> list[str]:
+    """Names of the arm cards shipped with the package (``uvms_jax/robot/descriptions/*.yaml``)."""
+    return sorted(p.stem for p in DESCRIPTIONS.glob("*.yaml"))
+
+
+def _card(card: str) -> tuple[dict, Path]:
+    """An arm card's mapping and its folder: a shipped name or a path to a YAML file."""
+    path = DESCRIPTIONS / f"{card}.yaml" if card in shipped_arms() else Path(card)
+    if not path.is_file():
+        raise ValueError(f"arm card {card!r}: neither a shipped arm ({', '.join(shipped_arms())}) nor a YAML file")
+    try:
+        mapping = yaml.safe_load(path.read_text())
+    except yaml.YAMLError as err:
+        raise ValueError(f"arm card {path} is not valid YAML: {err}") from None
+    if not isinstance(mapping, dict):
+        raise ValueError(f"arm card {path} must be a mapping of arm settings, got {type(mapping).__name__}")
+    if "card" in mapping:
+        raise ValueError(f"arm card {path} must not name another card")
+    return mapping, path.parent
 
 
 def robot_from_config(cfg: Mapping[str, Any]) -> Robot:
-    """A :class:`Robot` from an arm's config mapping (``configs/arm/*.yaml``): ``description``
-    (a path, or ``uvms_jax://FILE`` for a shipped one) and the keyword arguments of
-    :func:`load_robot` by name; unknown keys are refused."""
+    """A :class:`Robot` from an arm's settings: ``card`` (a shipped arm's name, e.g.
+    ``bravo7``, or a YAML file of these settings) and/or ``description`` (a URDF or MJCF file;
+    in a card, relative to the card) with the keyword arguments of :func:`load_robot` by
+    name; keys given beside a card override the card's. Unknown keys are refused."""
+    cfg = dict(cfg)
     unknown = sorted(set(cfg) - _CONFIG_KEYS)
     if unknown:
-        raise ValueError(f"arm config: unknown keys {unknown} (known: {sorted(_CONFIG_KEYS)})")
+        raise ValueError(f"arm settings: unknown keys {unknown} (known: {sorted(_CONFIG_KEYS)})")
+    folder = Path.cwd()
+    if cfg.get("card") is not None:
+        card, folder = _card(str(cfg.pop("card")))
+        unknown = sorted(set(card) - _CONFIG_KEYS)
+        if unknown:
+            raise ValueError(f"arm card: unknown keys {unknown} (known: {sorted(_CONFIG_KEYS - {'card'})})")
+        cfg = {**card, **{k: v for k, v in cfg.items() if v is not None}}
+    cfg.pop("card", None)
     if not cfg.get("description"):
-        raise ValueError("arm config needs `description`: a URDF or MJCF file (or uvms_jax://FILE)")
+        raise ValueError("arm settings need `card` (a shipped arm or a YAML card) or `description` (a URDF/MJCF file)")
     kwargs = {k: v for k, v in cfg.items() if k != "description" and v is not None}
-    return load_robot(description_path(str(cfg["description"])), **kwargs)
+    return load_robot(folder / str(cfg["description"]), **kwargs)
+
+
+def load_arm(card: str) -> Robot:
+    """A :class:`Robot` from an arm card: a shipped arm's name (:func:`shipped_arms`) or a path."""
+    return robot_from_config({"card": card})
