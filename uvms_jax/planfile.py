@@ -5,6 +5,9 @@ Format (version 1; JSON object)::
     {
       "version": 1,
       "joint_names": ["G", "F", "E", "D", "C", "B"],
+      "arm": {"name": "my_arm", "dof": 6,           # optional: the arm the plan was made for
+              "joint_names": [...], "gripper": {"joint": "A", "lower_m": 0.0, "upper_m": 0.035,
+              "velocity_mps": 0.1}, "source": "...", "sha256": "..."},   # (uvms_jax.robot.Robot.record)
       "base_rpy": [3.14159, 0.0, 0.0],              # optional: the arm base's orientation in the
                                                     # world the plan was made for (URDF roll,
                                                     # pitch, yaw [rad]; sets gravity in simulation)
@@ -21,19 +24,23 @@ Semantics: segments run in order. A motion visits every waypoint; between two wa
 joints move together (synchronised arrival) within the velocity and acceleration limits, taking
 at least the planned time; at every waypoint the executor waits until every encoder is within
 the gate threshold (thesis 4.6) before going on. After the motion, ``gripper`` (if given) drives
-the jaws [mm, 0 … 35] and waits for them the same way. A segment's first waypoint must repeat
+the jaws [mm, within the gripper's limits] and waits for them the same way. A segment's first waypoint must repeat
 the previous segment's last one (continuity); the plan's first waypoint is where the arm must
-already be. Joint angles are in rad, within the limits of docs/theory.md §1.3.
+already be. Joint angles are in rad, within the arm's limits.
 
-The hardware runner checks a plan against the arm's limits before any motion
-(:func:`uvms_jax.hw.check_plan`).
+``arm`` (optional; plans written before it existed have none) is the ``record()`` of the
+:class:`uvms_jax.robot.Robot` the plan was made for: its name, joint names (equal to the plan's),
+gripper (joint name, opening limits [m], speed [m/s]; null for none), description source and
+SHA-256. The hardware runner refuses to run a plan on another arm, and checks a plan against
+the arm's limits before any motion (:func:`uvms_jax.hw.check_plan`).
 
 **ROS-shaped trajectories.** :func:`to_joint_trajectory` writes a plan as a plain object shaped
 like ``trajectory_msgs/JointTrajectory`` (no ROS needed) and :func:`from_joint_trajectory`
 reads one back; :func:`load_plan` and :func:`save_plan` pick YAML (``.yaml``/``.yml``) or JSON by
 the file suffix, and :func:`load_plan` tells the two formats apart by their keys::
 
-    joint_names: [G, F, E, D, C, B, A]          # "A" (the jaws) only if the plan has gripper steps
+    joint_names: [G, F, E, D, C, B, A]          # the gripper's joint (here A) only if the
+                                                # plan has gripper steps
     points:
       - positions: [...rad..., jaws m]          # one value per joint name
         velocities: [0, 0, 0, 0, 0, 0, 0]       # [rad/s, m/s]
@@ -46,18 +53,23 @@ the file suffix, and :func:`load_plan` tells the two formats apart by their keys
   and the executor stops at each gate). A controller that interpolates with these velocities
   (cubic or quintic splines) therefore stays on the straight joint-space line between
   waypoints, the line the planner collision-checked.
-- Gripper steps: the jaws are the prismatic joint "A" in metres (``bravo7.JAWS``; the plan
-  speaks millimetres). A gripper step is a point where the arm stands still and "A" moves to
-  the new opening, ``(upper - lower) / velocity`` of the jaws later (their full travel at their
-  speed limit, 0.35 s; the executor waits for the jaws' gate anyway). Before the first gripper
-  step "A" holds ``jaws_start_mm`` (by default the first step's opening). Reading back, a point
-  where the arm stands still is a gripper step; so a plan that stands still at a motion
-  waypoint, or starts with a gripper step, cannot be written.
+- Gripper steps: the jaws are the gripper's prismatic joint in metres (the plan speaks
+  millimetres); its name, limits and speed come from the plan's ``arm["gripper"]`` or from a
+  gripper passed in (a :class:`uvms_jax.robot.Gripper`, a robot, or an ``arm["gripper"]``
+  record). A gripper step is a point where the arm stands still and the jaws joint moves to
+  the new opening, ``(upper - lower) / velocity`` of the jaws later (their full travel at
+  their speed limit, e.g. 35 mm at 0.1 m/s: 0.35 s; the executor waits for the jaws' gate
+  anyway).
+  Before the first gripper step the jaws hold ``jaws_start_mm`` (by default the first step's
+  opening). Reading back, a point where the arm stands still is a gripper step; so a plan that
+  stands still at a motion waypoint, or starts with a gripper step, cannot be written. A plan
+  with gripper steps and no gripper known cannot be written; read back without a gripper
+  known, every joint is an arm joint.
 - What a JointTrajectory cannot hold is lost: segment names and the boundaries between two
   motions (a plan read back has one motion segment between gripper steps, named after its
-  points), ``base_rpy`` and the ``meta`` object. Times keep nanosecond resolution. The motion
-  itself (every waypoint, the time between waypoints, every gripper step) survives the round
-  trip.
+  points), ``base_rpy``, ``arm`` (unless a robot is passed in) and the ``meta`` object. Times
+  keep nanosecond resolution. The motion itself (every waypoint, the time between waypoints,
+  every gripper step) survives the round trip.
 """
 
 from __future__ import annotations
@@ -71,8 +83,6 @@ from typing import Any
 
 import yaml
 
-from uvms_jax import bravo7
-
 __all__ = [
     "PLAN_VERSION",
     "Plan",
@@ -80,6 +90,7 @@ __all__ = [
     "Segment",
     "from_joint_trajectory",
     "load_plan",
+    "parse_arm",
     "parse_plan",
     "plan_to_dict",
     "save_plan",
@@ -120,11 +131,18 @@ class Plan:
       base_rpy: orientation of the arm's base in the world the plan was made for, URDF roll,
         pitch, yaw [rad] (``(π, 0, 0)``: hanging under a vehicle); None where not recorded. The
         simulated arm takes its gravity and buoyancy from it.
+      arm: the ``record()`` of the robot the plan was made for (module docstring), or None
+        where not recorded.
     """
 
     joint_names: tuple[str, ...]
     segments: tuple[Segment, ...]
     base_rpy: tuple[float, float, float] | None = None
+    arm: dict | None = None
+
+    def __post_init__(self) -> None:
+        if self.arm is not None:  # checked, and kept as plan.json holds it
+            object.__setattr__(self, "arm", parse_arm(self.arm, self.joint_names))
 
     def waypoints(self) -> list[tuple[int, int, tuple[float, ...]]]:
         """All ``(segment index, waypoint index, q)`` in execution order."""
@@ -149,7 +167,7 @@ def parse_plan(obj: Mapping[str, Any]) -> Plan:
     version = obj.get("version", PLAN_VERSION)
     if version != PLAN_VERSION:
         raise PlanError(f"unsupported plan version {version!r} (expected {PLAN_VERSION})")
-    unknown = set(obj) - {"version", "joint_names", "segments", "base_rpy", "meta"}
+    unknown = set(obj) - {"version", "joint_names", "segments", "base_rpy", "arm", "meta"}
     if unknown:
         raise PlanError(f"unknown plan keys {sorted(unknown)}")
     names = obj.get("joint_names")
@@ -192,24 +210,82 @@ def parse_plan(obj: Mapping[str, Any]) -> Plan:
         base_rpy = _floats(base_rpy, "plan.base_rpy")
         if len(base_rpy) != 3 or not all(math.isfinite(v) for v in base_rpy):
             raise PlanError(f"plan.base_rpy: expected 3 finite angles (roll, pitch, yaw) [rad], got {list(base_rpy)}")
-    return Plan(tuple(names), tuple(out), base_rpy)
+    return Plan(tuple(names), tuple(out), base_rpy, parse_arm(obj.get("arm"), tuple(names)))
+
+
+_ARM_KEYS = {"name", "dof", "joint_names", "gripper", "source", "sha256"}
+_GRIPPER_KEYS = {"joint", "lower_m", "upper_m", "velocity_mps"}
+
+
+def parse_arm(arm: Any, joint_names: Sequence[str] | None = None) -> dict | None:
+    """Check a plan's ``arm`` record (``Robot.record()``) and return it as a plain dict.
+
+    Raises:
+      PlanError: not a mapping with exactly the record's keys, wrong types, a gripper record
+        without a finite opening interval and a positive speed, or joint names other than
+        ``joint_names`` (the plan's).
+    """
+    if arm is None:
+        return None
+    if not isinstance(arm, Mapping) or set(arm) != _ARM_KEYS:
+        got = sorted(arm) if isinstance(arm, Mapping) else type(arm).__name__
+        raise PlanError(f"plan.arm: expected an object with keys {sorted(_ARM_KEYS)}, got {got}")
+    names = arm["joint_names"]
+    if not isinstance(names, Sequence) or isinstance(names, str) or not all(isinstance(n, str) for n in names):
+        raise PlanError("plan.arm.joint_names must be a list of joint names")
+    if not all(isinstance(arm[k], str) for k in ("name", "source", "sha256")):
+        raise PlanError("plan.arm: name, source and sha256 must be strings")
+    if isinstance(arm["dof"], bool) or arm["dof"] != len(names):
+        raise PlanError(f"plan.arm.dof {arm['dof']!r} is not the number of its joint names ({len(names)})")
+    if joint_names is not None and tuple(names) != tuple(joint_names):
+        raise PlanError(f"plan.arm.joint_names {list(names)} differ from plan.joint_names {list(joint_names)}")
+    g = arm["gripper"]
+    if g is not None:
+        if not isinstance(g, Mapping) or set(g) != _GRIPPER_KEYS or not isinstance(g["joint"], str):
+            raise PlanError(f"plan.arm.gripper: expected null or an object with keys {sorted(_GRIPPER_KEYS)}")
+        lo, hi, v = _floats([g["lower_m"], g["upper_m"], g["velocity_mps"]], "plan.arm.gripper")
+        if not (all(map(math.isfinite, (lo, hi, v))) and lo < hi and v > 0):
+            raise PlanError(f"plan.arm.gripper: needs finite lower_m < upper_m and velocity_mps > 0, got {dict(g)}")
+        g = {"joint": g["joint"], "lower_m": lo, "upper_m": hi, "velocity_mps": v}
+    return {"name": arm["name"], "dof": int(arm["dof"]), "joint_names": list(names), "gripper": g,
+            "source": arm["source"], "sha256": arm["sha256"]}
+
+
+def _gripper_record(gripper: Any) -> dict | None:
+    """``arm["gripper"]``'s record of a gripper given as a record (mapping), a
+    :class:`uvms_jax.robot.Gripper` or a robot (its ``gripper``); None for None."""
+    if gripper is None or isinstance(gripper, Mapping):
+        return None if gripper is None else parse_arm(
+            {"name": "", "dof": 0, "joint_names": [], "gripper": gripper, "source": "", "sha256": ""})["gripper"]
+    if hasattr(gripper, "record") and hasattr(gripper, "gripper"):  # a robot
+        return gripper.record()["gripper"]
+    if all(hasattr(gripper, k) for k in ("joint", "lower", "upper", "velocity")):  # a Gripper
+        return {"joint": gripper.joint, "lower_m": float(gripper.lower), "upper_m": float(gripper.upper),
+                "velocity_mps": float(gripper.velocity)}
+    raise TypeError(f"gripper must be a Gripper, a robot or an arm gripper record, got {type(gripper).__name__}")
 
 
 _YAML_SUFFIXES = (".yaml", ".yml")
 _NS_PER_S = 1_000_000_000
 _MM_PER_M = 1000.0
-# time between the point before a gripper step and the step's point: the jaws' full travel at
-# their speed limit [s]
-_JAWS_STEP_S = (bravo7.JAWS.upper - bravo7.JAWS.lower) / bravo7.JAWS.velocity
+
+
+def _jaws_step_s(g: Mapping[str, Any]) -> float:
+    """Time between the point before a gripper step and the step's point: the jaws' full
+    travel at their speed limit [s]."""
+    return (g["upper_m"] - g["lower_m"]) / g["velocity_mps"]
 
 
 def _is_joint_trajectory(obj: Any) -> bool:
     return isinstance(obj, Mapping) and "points" in obj and "segments" not in obj
 
 
-def load_plan(path: str | Path) -> Plan:
+def load_plan(path: str | Path, gripper: Any = None) -> Plan:
     """Read a plan file: ``plan.json`` or a JointTrajectory object (see the module docstring),
     as YAML (``.yaml``/``.yml``) or JSON (any other suffix).
+
+    ``gripper`` (a Gripper, a robot, or an ``arm["gripper"]`` record) names the jaws' joint of
+    a JointTrajectory (:func:`from_joint_trajectory`); a ``plan.json`` records its own.
 
     Raises:
       PlanError: unreadable file, malformed YAML/JSON, or a malformed plan or trajectory.
@@ -220,20 +296,20 @@ def load_plan(path: str | Path) -> Plan:
         obj = yaml.safe_load(text) if path.suffix.lower() in _YAML_SUFFIXES else json.loads(text)
     except (OSError, UnicodeDecodeError, json.JSONDecodeError, yaml.YAMLError) as e:
         raise PlanError(f"cannot read plan {path}: {e}") from e
-    return from_joint_trajectory(obj) if _is_joint_trajectory(obj) else parse_plan(obj)
+    return from_joint_trajectory(obj, gripper) if _is_joint_trajectory(obj) else parse_plan(obj)
 
 
 def save_plan(plan: Plan, path: str | Path, *, joint_trajectory: bool = False,
-              jaws_start_mm: float | None = None) -> None:
+              jaws_start_mm: float | None = None, gripper: Any = None) -> None:
     """Write ``plan`` to ``path`` as ``plan.json``'s object or, with ``joint_trajectory``, as a
-    JointTrajectory object (:func:`to_joint_trajectory`); YAML for ``.yaml``/``.yml``, JSON
-    otherwise.
+    JointTrajectory object (:func:`to_joint_trajectory`, with ``jaws_start_mm`` and
+    ``gripper``); YAML for ``.yaml``/``.yml``, JSON otherwise.
 
     Raises:
       PlanError: the plan cannot be written as a JointTrajectory (see :func:`to_joint_trajectory`).
     """
     path = Path(path)
-    obj = to_joint_trajectory(plan, jaws_start_mm) if joint_trajectory else plan_to_dict(plan)
+    obj = to_joint_trajectory(plan, jaws_start_mm, gripper) if joint_trajectory else plan_to_dict(plan)
     if path.suffix.lower() in _YAML_SUFFIXES:
         path.write_text(yaml.safe_dump(obj, sort_keys=False, default_flow_style=None))
     else:
@@ -246,32 +322,40 @@ def _duration(t: float) -> dict[str, int]:
     return {"sec": ns // _NS_PER_S, "nanosec": ns % _NS_PER_S}
 
 
-def to_joint_trajectory(plan: Plan, jaws_start_mm: float | None = None) -> dict[str, Any]:
+def to_joint_trajectory(plan: Plan, jaws_start_mm: float | None = None, gripper: Any = None) -> dict[str, Any]:
     """``plan`` as a ``trajectory_msgs/JointTrajectory``-shaped object (module docstring).
 
     Args:
       plan: the plan; its segment times must increase strictly (as ``hw.check_plan`` asks).
       jaws_start_mm: jaws opening before the first gripper step [mm]; None: that step's opening.
+      gripper: the jaws (a Gripper, a robot, or an ``arm["gripper"]`` record); None: the
+        plan's ``arm["gripper"]``. Needed only if the plan has gripper steps.
 
     Returns:
       ``{"joint_names": [...], "points": [{"positions", "velocities", "time_from_start"}]}``;
-      positions in rad (arm) and m (jaws "A"), velocities all zero, times ``{sec, nanosec}``.
+      ``(n + 1,)`` positions per point (``n`` without gripper steps) in rad (arm) and m (the
+      jaws, last), velocities all zero, times ``{sec, nanosec}``.
 
     Raises:
       PlanError: a plan that starts with a gripper step, stands still at a motion waypoint,
         is not continuous between segments, has non-increasing times, already names a joint
-        "A", or a ``jaws_start_mm`` outside the jaws' travel.
+        as the jaws, has gripper steps but no gripper known, or a ``jaws_start_mm`` outside
+        the jaws' travel.
     """
     jaws = [s.jaws_mm for s in plan.segments if s.jaws_mm is not None]
     names = list(plan.joint_names)
+    g = _gripper_record(gripper) if gripper is not None else (plan.arm or {}).get("gripper")
     if jaws:
-        if bravo7.JAWS.name in names:
-            raise PlanError(f"plan already has a joint {bravo7.JAWS.name!r}, the jaws' name")
-        names.append(bravo7.JAWS.name)
+        if g is None:
+            arm = "no arm record" if plan.arm is None else f"arm {plan.arm['name']!r} has no gripper"
+            raise PlanError(f"plan has gripper steps but no gripper is known ({arm}): pass the gripper or robot")
+        if g["joint"] in names:
+            raise PlanError(f"plan already has a joint {g['joint']!r}, the jaws' name")
+        names.append(g["joint"])
     jaws_m = (jaws[0] if jaws_start_mm is None else jaws_start_mm) / _MM_PER_M if jaws else None
-    if jaws and not bravo7.JAWS.lower <= jaws_m <= bravo7.JAWS.upper:
-        raise PlanError(f"jaws_start_mm {jaws_start_mm} outside [{bravo7.JAWS.lower * _MM_PER_M}, "
-                        f"{bravo7.JAWS.upper * _MM_PER_M}] mm")
+    if jaws and not g["lower_m"] <= jaws_m <= g["upper_m"]:
+        raise PlanError(f"jaws_start_mm {jaws_start_mm} outside [{g['lower_m'] * _MM_PER_M}, "
+                        f"{g['upper_m'] * _MM_PER_M}] mm")
     points: list[dict[str, Any]] = []
     q_last: tuple[float, ...] | None = None
     t_last = 0.0  # time from the plan's start of the last point [s]
@@ -303,7 +387,7 @@ def to_joint_trajectory(plan: Plan, jaws_start_mm: float | None = None) -> dict[
             if q_last is None:
                 raise PlanError(f"{where}: the plan starts with a gripper step, before any arm position")
             jaws_m = s.jaws_mm / _MM_PER_M
-            add(q_last, t_last + _JAWS_STEP_S)
+            add(q_last, t_last + _jaws_step_s(g))
     return {"joint_names": names, "points": points}
 
 
@@ -316,12 +400,14 @@ def _nanoseconds(d: Any, where: str) -> int:
     return sec * _NS_PER_S + nsec
 
 
-def from_joint_trajectory(obj: Mapping[str, Any]) -> Plan:
+def from_joint_trajectory(obj: Mapping[str, Any], gripper: Any = None) -> Plan:
     """A :class:`Plan` from a ``trajectory_msgs/JointTrajectory``-shaped object (module docstring).
 
-    Joint "A", if present, is the jaws [m]; every other name is an arm joint, in the given
-    order. Velocities, accelerations and efforts are checked for length and otherwise ignored:
-    the executor times every move itself. ``header`` is ignored.
+    The gripper's joint (``gripper``: a Gripper, a robot, or an ``arm["gripper"]`` record), if
+    present, is the jaws [m]; every other name is an arm joint, in the given order. Without a
+    gripper every name is an arm joint. Given a robot, the plan records it as its ``arm``.
+    Velocities, accelerations and efforts are checked for length and otherwise ignored: the
+    executor times every move itself. ``header`` is ignored.
 
     Raises:
       PlanError: a malformed object (missing or unknown keys, wrong lengths, non-numbers,
@@ -340,7 +426,8 @@ def from_joint_trajectory(obj: Mapping[str, Any]) -> Plan:
     if not isinstance(pts, Sequence) or isinstance(pts, (str, bytes)) or not pts:
         raise PlanError("JointTrajectory.points must be a non-empty list")
     names = list(names)
-    i_jaws = names.index(bravo7.JAWS.name) if bravo7.JAWS.name in names else None
+    g = _gripper_record(gripper)
+    i_jaws = names.index(g["joint"]) if g is not None and g["joint"] in names else None
     arm = [i for i in range(len(names)) if i != i_jaws]
     if not arm:
         raise PlanError("JointTrajectory.joint_names has no arm joint")
@@ -383,7 +470,12 @@ def from_joint_trajectory(obj: Mapping[str, Any]) -> Plan:
             run = run or [k - 1]  # a motion after a jaws step starts where the arm stands
             run.append(k)
     close_motion()
-    return Plan(tuple(names[i] for i in arm), tuple(segments))
+    joint_names = tuple(names[i] for i in arm)
+    record = gripper.record() if hasattr(gripper, "record") else None
+    if record is not None and tuple(record["joint_names"]) != joint_names:
+        raise PlanError(f"JointTrajectory arm joints {list(joint_names)} are not robot "
+                        f"{record['name']!r}'s {record['joint_names']}")
+    return Plan(joint_names, tuple(segments), arm=parse_arm(record, joint_names))
 
 
 def plan_to_dict(plan: Plan) -> dict[str, Any]:
@@ -395,5 +487,6 @@ def plan_to_dict(plan: Plan) -> dict[str, Any]:
         return {"name": s.name, **motion, "gripper": None if s.jaws_mm is None else {"jaws_mm": s.jaws_mm}}
 
     base = {} if plan.base_rpy is None else {"base_rpy": list(plan.base_rpy)}
-    return {"version": PLAN_VERSION, "joint_names": list(plan.joint_names), **base,
+    arm = {} if plan.arm is None else {"arm": parse_arm(plan.arm, plan.joint_names)}
+    return {"version": PLAN_VERSION, "joint_names": list(plan.joint_names), **arm, **base,
             "segments": [segment(s) for s in plan.segments]}

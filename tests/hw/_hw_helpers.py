@@ -2,11 +2,26 @@
 
 from __future__ import annotations
 
-from uvms_jax.hw import (BRAVO7, Bravo7, Executor, HwConfig, LoopbackTransport, PacketID, PacketReader,
-                         SimArm, SimConfig, SimLink, VirtualClock, decode_float, parse_plan)
+import enum
+
+from uvms_jax.hw import (BROADCAST, Executor, HwConfig, LoopbackTransport, PacketID, PacketReader, ReachArm, SimArm,
+                         SimConfig, SimLink, VirtualClock, decode_float, joint_specs, parse_plan)
+from uvms_jax.robot import load_arm
+
+BRAVO = load_arm("bravo7")  # the robot the hardware tests drive
+BRAVO7 = joint_specs(BRAVO)  # its joint table: G … B [rad], jaws A [mm]
+JAWS = BRAVO7[-1]
+# The Bravo 7's device ids by joint letter (A = jaws 0x01 … G = 0x07), and broadcast.
+DeviceID = enum.IntEnum("DeviceID", sorted(((j.name, j.device_id) for j in BRAVO7), key=lambda p: p[1])
+                        + [("BROADCAST", BROADCAST)])
 
 Q0 = [1.0, 1.5, 1.5, 2.0, 1.5, 2.0]
 Q1 = [1.2, 1.3, 1.7, 2.0, 1.4, 2.3]
+
+
+def bravo7_client(transport, **kw) -> ReachArm:
+    """A client of the Bravo 7's joint table over ``transport``."""
+    return ReachArm(transport, BRAVO7, **kw)
 
 
 def short_plan(q0=Q0, q1=Q1):
@@ -23,12 +38,12 @@ def short_plan(q0=Q0, q1=Q1):
 class SimRun:
     """A client + executor wired to a simulated arm on a virtual clock."""
 
-    def __init__(self, sim: SimConfig = SimConfig(), hw: HwConfig = HwConfig(), q0=Q0, jaws=0.0):
+    def __init__(self, sim: SimConfig = SimConfig(), hw: HwConfig = HwConfig(), q0=Q0, jaws=0.0, robot=BRAVO):
         self.clock = VirtualClock()
-        self.arm = SimArm(sim, list(q0) + [jaws])
+        self.arm = SimArm(robot, sim, list(q0) + [jaws])
         self.link = SimLink(self.arm)
         self.transport = LoopbackTransport(self.link, self.clock)
-        self.client = Bravo7(self.transport, clock=self.clock.now)
+        self.client = ReachArm(self.transport, self.arm.joints, clock=self.clock.now)
         self.executor = Executor(self.client, hw, sleep=self.clock.sleep)
 
     def sent_packets(self):

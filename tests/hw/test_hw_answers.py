@@ -7,10 +7,10 @@ import struct
 import numpy as np
 import pytest
 
-from uvms_jax.hw import (ANSWER_FORMATS, BASE_COMPUTER, BROADCAST, DeviceID, HardwareStatus, PacketID,
+from uvms_jax.hw import (ANSWER_FORMATS, BASE_COMPUTER, BROADCAST, HardwareStatus, PacketID,
                          PacketReader, SimArm, SimConfig, SimLink, decode_answer, encode_packet)
 
-from _hw_helpers import Q0, SimRun, urdf_link_frames, ypr_matrix
+from _hw_helpers import BRAVO, DeviceID, Q0, SimRun, urdf_link_frames, ypr_matrix
 
 # Data sizes of the answers, from the protocol listing (docs/hardware.md), in bytes.
 LISTED_SIZE = {
@@ -71,7 +71,7 @@ def test_units_of_the_answers():
 
 
 def _datagrams_for(request: bytes, config: SimConfig = SimConfig()) -> list[bytes]:
-    link = SimLink(SimArm(config, Q0 + [0.0]))
+    link = SimLink(SimArm(BRAVO, config, Q0 + [0.0]))
     link.receive(request, 0.0)
     return link.pop_due(0.0)
 
@@ -94,7 +94,7 @@ def test_coalesced_replies_are_one_datagram_and_the_client_reads_them_all():
 
 
 def test_unknown_ids_are_ignored_and_counted():
-    arm = SimArm(SimConfig(), Q0 + [0.0])
+    arm = SimArm(BRAVO, SimConfig(), Q0 + [0.0])
     link = SimLink(arm)
     link.receive(encode_packet(BROADCAST, PacketID.REQUEST, bytes([0x63, PacketID.KM_END_POS])), 0.0)
     assert link.pop_due(0.0) == [] and arm.unanswered == 14  # joints do not answer the pose
@@ -118,7 +118,7 @@ def test_end_pose_is_the_urdf_forward_kinematics(rng):
 def test_end_velocity_is_the_derivative_of_the_pose(rng):
     q = np.array([1.0, 1.4, 1.7, 2.0, 1.2, 0.7])
     qd = rng.uniform(-0.4, 0.4, 6)
-    arm = SimArm(SimConfig(), list(q) + [0.0])
+    arm = SimArm(BRAVO, SimConfig(), list(q) + [0.0])
     arm.data.qvel[arm._dadr[:6]] = qd
     got = np.array(decode_answer(PacketID.KM_END_VEL, arm.answer(BASE_COMPUTER, PacketID.KM_END_VEL)))
 

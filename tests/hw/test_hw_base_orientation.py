@@ -11,7 +11,7 @@ import math
 import numpy as np
 import pytest
 
-from _hw_helpers import Q0, SimRun, assert_within_limits, short_plan
+from _hw_helpers import BRAVO, Q0, SimRun, assert_within_limits, short_plan
 from uvms_jax.hw import HwConfig, SimArm, SimConfig, config_from_mapping, plan_to_dict
 from uvms_jax.hw import cli
 
@@ -23,7 +23,7 @@ SATURATED_MA = 0.9 * 4000.0  # near the drives' current limit: a pose they may n
 def holding_currents(config, q):
     """(7,) currents [mA] of the arm at rest at ``q`` (G…B [rad], jaws [mm]) after
     ``SETTLE_S``, checking that the drives held it there unless they saturate."""
-    arm = SimArm(config, q)
+    arm = SimArm(BRAVO, config, q)
     arm.step_to(SETTLE_S)
     currents = arm.currents()
     if np.all(np.abs(currents) < SATURATED_MA):
@@ -104,9 +104,9 @@ def test_cli_base_rpy_reaches_the_simulated_arm(plan_file, tmp_path, monkeypatch
     (run here on the in-process link, not over UDP in real time)."""
     seen = []
 
-    def run_plan(plan, *, link, config, sim, **kw):
+    def run_plan(plan, robot, *, link, config, sim, **kw):
         seen.append(sim)
-        return real_run_plan(plan, link="loopback", config=config, sim=sim, **kw)
+        return real_run_plan(plan, robot, link="loopback", config=config, sim=sim, **kw)
 
     real_run_plan = cli.run_plan
     monkeypatch.setattr(cli, "run_plan", run_plan)

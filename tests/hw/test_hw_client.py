@@ -6,11 +6,11 @@ import time
 
 import pytest
 
-from uvms_jax.hw import (BROADCAST, Bravo7, DeviceID, HardwareStatus, LimitError, LinkError, Mode, PacketID,
+from uvms_jax.hw import (BROADCAST, HardwareStatus, LimitError, LinkError, Mode, PacketID,
                          PacketReader, SerialTransport, SimArm, SimConfig, SimServer, UdpTransport, encode_floats,
                          parse_host_port)
 
-from _hw_helpers import Q0, Recorder, SimRun
+from _hw_helpers import BRAVO, DeviceID, Q0, Recorder, SimRun, bravo7_client
 
 
 class Broken(Recorder):
@@ -22,7 +22,7 @@ class Broken(Recorder):
                                                (DeviceID.A, 35.5), (DeviceID.A, -1.0), (DeviceID.B, float("nan"))])
 def test_guard_refuses_positions_outside_limits(device, value):
     t = Recorder()
-    c = Bravo7(t)
+    c = bravo7_client(t)
     with pytest.raises((LimitError, ValueError)):
         c.set_positions([(DeviceID.E, 1.0), (device, value)])
     assert t.sent == []  # nothing of the batch went out
@@ -30,13 +30,13 @@ def test_guard_refuses_positions_outside_limits(device, value):
 
 def test_guard_accepts_limit_edges_as_float32():
     t = Recorder()
-    c = Bravo7(t)
+    c = bravo7_client(t)
     c.set_positions([(DeviceID.G, 0.0), (DeviceID.G, 6.3), (DeviceID.A, 35.0), (DeviceID.F, 3.5)])
     assert len(t.sent) == 1
 
 
 def test_guard_velocity_broadcast_and_packet_ids():
-    c = Bravo7(Recorder())
+    c = bravo7_client(Recorder())
     with pytest.raises(LimitError, match="exceeds"):
         c.set_velocities([(DeviceID.D, 0.51)])
     with pytest.raises(LimitError, match="broadcast"):
@@ -52,15 +52,15 @@ def test_guard_velocity_broadcast_and_packet_ids():
 
 
 def test_hold_never_raises():
-    assert Bravo7(Broken()).hold() is False
+    assert bravo7_client(Broken()).hold() is False
     t = Recorder()
-    assert Bravo7(t).hold(repeats=2) is True
+    assert bravo7_client(t).hold(repeats=2) is True
     pkts = [p for d in t.sent for p in PacketReader().feed(d)]
     assert len(pkts) == 14 and all(p.packet_id == PacketID.VELOCITY and p.data == encode_floats(0.0) for p in pkts)
 
 
 def test_request_timeout_names_missing():
-    c = Bravo7(Recorder(), request_timeout=0.001)
+    c = bravo7_client(Recorder(), request_timeout=0.001)
     with pytest.raises(LinkError, match="POSITION@0x07"):
         c.read_state([DeviceID.G])
 
@@ -123,8 +123,8 @@ def test_stream_state_replaces_polling():
 
 
 def test_udp_round_trip_with_server():
-    with SimServer(SimArm(SimConfig(), Q0 + [5.0])) as server:
-        with Bravo7(UdpTransport(*server.address), request_timeout=0.2) as c:
+    with SimServer(SimArm(BRAVO, SimConfig(), Q0 + [5.0])) as server:
+        with bravo7_client(UdpTransport(*server.address), request_timeout=0.2) as c:
             s = c.read_state()
             assert s.positions[-1] == pytest.approx(5.0, abs=1e-4)
             c.set_positions([(DeviceID.A, 8.0)])

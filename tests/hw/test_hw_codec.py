@@ -12,7 +12,8 @@ from hypothesis import given, settings
 from crc import Calculator
 from hypothesis import strategies as st
 
-from uvms_jax.hw import (CRC8_CONFIG, DeviceID, Mode, Packet, PacketID, PacketReader, crc8, decode_float, decode_floats,
+from _hw_helpers import DeviceID
+from uvms_jax.hw import (CRC8_CONFIG, Mode, Packet, PacketID, PacketReader, crc8, decode_float, decode_floats,
                          decode_frame, encode_floats, encode_packet)
 
 _CRC8 = Calculator(CRC8_CONFIG, optimized=True)  # the crc library itself, as the codec configures it

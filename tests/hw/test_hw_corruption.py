@@ -10,10 +10,10 @@ import struct
 
 import numpy as np
 
-from uvms_jax.hw import (BRAVO7, HwConfig, PacketID, PacketReader, SimConfig, crc8, decode_float,
+from uvms_jax.hw import (HwConfig, PacketID, PacketReader, SimConfig, crc8, decode_float,
                          encode_packet)
 
-from _hw_helpers import SimRun, assert_within_limits, short_plan
+from _hw_helpers import BRAVO7, SimRun, assert_within_limits, short_plan
 
 GATE = HwConfig().gate_threshold_rad
 

@@ -12,8 +12,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from _hw_helpers import Q0, Q1, SimRun, assert_within_limits, short_plan
-from uvms_jax.hw import (Bravo7, Executor, HardwareStatus, HwConfig, PacketID, PacketReader, PlanError, SimArm,
+from _hw_helpers import BRAVO, Q0, Q1, SimRun, assert_within_limits, bravo7_client, short_plan
+from uvms_jax.hw import (Executor, HardwareStatus, HwConfig, PacketID, PacketReader, PlanError, SimArm,
                          SimConfig, SimServer, UdpTransport, decode_float, load_plan, parse_plan,
                          synchronised_move)
 
@@ -158,8 +158,8 @@ def test_property_no_command_outside_limits(start, deltas, slack, jaws, drop):
 def _udp_run(sim: SimConfig):
     # Real time over a socket: a generous link timeout keeps a busy test machine (another test
     # worker compiling) from reading as a lost link; the fault tests cover the short one.
-    with SimServer(SimArm(sim, Q0 + [0.0])) as server:
-        with Bravo7(UdpTransport(*server.address)) as client:
+    with SimServer(SimArm(BRAVO, sim, Q0 + [0.0])) as server:
+        with bravo7_client(UdpTransport(*server.address)) as client:
             res = Executor(client, HwConfig(link_timeout_s=3.0)).run(short_plan())
         assert server.error is None
     return res, server

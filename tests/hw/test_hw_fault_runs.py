@@ -12,8 +12,8 @@ import time
 
 import pytest
 
-from _hw_helpers import short_plan
-from uvms_jax.hw import BRAVO7, encode_packet, PacketID, plan_to_dict
+from _hw_helpers import BRAVO7, short_plan
+from uvms_jax.hw import encode_packet, PacketID, plan_to_dict
 from uvms_jax.hw.cli import main
 
 # The served simulator (``uvms-hw sim``) starts mid-range with the jaws at 0 mm.

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import pytest
 
+from _hw_helpers import BRAVO
 from uvms_jax.hw import HwConfig, PlanError, check_plan, load_plan, parse_plan, plan_to_dict
 
 EXAMPLE = Path(__file__).parents[2] / "examples" / "thesis_plan.json"
@@ -31,14 +32,14 @@ def mutate(path, value):
 
 
 def test_example_plan_passes():
-    s = check_plan(load_plan(EXAMPLE))
+    s = check_plan(load_plan(EXAMPLE), BRAVO)
     assert s.n_segments > 20 and s.n_gripper_steps > 5 and s.max_speed_ratio <= 1
     assert s.estimated_s >= s.planned_s
 
 
 def test_good_plan_and_round_trip():
     p = parse_plan(GOOD)
-    s = check_plan(p)
+    s = check_plan(p, BRAVO)
     assert (s.n_segments, s.n_waypoints, s.n_gripper_steps) == (3, 4, 2)
     assert parse_plan(json.loads(json.dumps(plan_to_dict(p)))) == p
     assert p.base_rpy is None and "base_rpy" not in plan_to_dict(p)
@@ -59,7 +60,7 @@ def test_good_plan_and_round_trip():
 ])
 def test_bad_plans_refused_with_clear_message(path, value, message):
     with pytest.raises(PlanError, match="plan refused") as e:
-        check_plan(parse_plan(mutate(path, value)))
+        check_plan(parse_plan(mutate(path, value)), BRAVO)
     assert message in str(e.value)
 
 
@@ -84,9 +85,9 @@ def test_malformed_plans(obj, message):
 
 def test_joint_order_and_speed_scale():
     with pytest.raises(PlanError, match="must be"):
-        check_plan(parse_plan(mutate(["joint_names"], list("BCDEFG"))))
+        check_plan(parse_plan(mutate(["joint_names"], list("BCDEFG"))), BRAVO)
     with pytest.raises(PlanError, match="needs"):  # 0.25 rad/s over a 0.1 × 0.5 rad/s budget
-        check_plan(parse_plan(GOOD), HwConfig(speed_scale=0.1))
+        check_plan(parse_plan(GOOD), BRAVO, HwConfig(speed_scale=0.1))
 
 
 def test_many_problems_listed_and_capped():
@@ -94,7 +95,7 @@ def test_many_problems_listed_and_capped():
     for seg in obj["segments"][:2]:
         seg["q"] = [[9.0] * 6, [9.0] * 6]
     with pytest.raises(PlanError) as e:
-        check_plan(parse_plan(obj), max_problems=5)
+        check_plan(parse_plan(obj), BRAVO, max_problems=5)
     assert "more" in str(e.value) and str(e.value).count("outside") == 5
 
 

@@ -8,13 +8,14 @@ from pathlib import Path
 import pytest
 import yaml
 
-from _hw_helpers import Q0, Q1, short_plan
+from _hw_helpers import BRAVO, Q0, Q1, short_plan
 from uvms_jax.hw import check_plan
 from uvms_jax.hw.cli import main
 from uvms_jax.planfile import (PlanError, from_joint_trajectory, load_plan, parse_plan, plan_to_dict, save_plan,
                                to_joint_trajectory)
 
 ROOT = Path(__file__).parents[2]
+GRIPPER = BRAVO.gripper  # the jaws A: 0 … 35 mm at 0.1 m/s
 EXAMPLE = ROOT / "examples" / "thesis_plan.json"
 TIME_ATOL = 2e-9  # time_from_start keeps nanoseconds: one rounding on the way out, one on the way back
 JAWS_STEP_S = 0.035 / 0.1  # the jaws' full travel at their speed limit (docs/theory.md §1.3)
@@ -54,7 +55,7 @@ def seconds(d):
 
 def test_thesis_plan_round_trip():
     plan = load_plan(EXAMPLE)
-    jt = to_joint_trajectory(plan)
+    jt = to_joint_trajectory(plan, gripper=GRIPPER)
     assert jt["joint_names"] == list("GFEDCBA")
     n_moves = sum(1 for e in events(plan) if e[0] == "move")
     n_jaws = sum(1 for s in plan.segments if s.jaws_mm is not None)
@@ -70,11 +71,11 @@ def test_thesis_plan_round_trip():
     assert jt["points"][0]["positions"][6] == pytest.approx(jaws[0] / 1000)
     assert jt["points"][-1]["positions"][6] == pytest.approx(jaws[-1] / 1000)
 
-    back = from_joint_trajectory(jt)
+    back = from_joint_trajectory(jt, GRIPPER)
     assert_same_motion(plan, back)
-    assert to_joint_trajectory(back) == jt  # a plan read from a trajectory writes the same trajectory
+    assert to_joint_trajectory(back, gripper=GRIPPER) == jt  # a plan read from a trajectory writes the same trajectory
     # the executor's view is unchanged: same checks pass, same estimated motion time
-    s0, s1 = check_plan(plan), check_plan(back)
+    s0, s1 = check_plan(plan, BRAVO), check_plan(back, BRAVO)
     assert s1.n_gripper_steps == s0.n_gripper_steps and s1.estimated_s == pytest.approx(s0.estimated_s)
 
 
@@ -82,12 +83,12 @@ def test_thesis_plan_round_trip():
 def test_files_by_suffix(tmp_path, suffix):
     plan = short_plan()
     path = tmp_path / f"traj{suffix}"
-    save_plan(plan, path, joint_trajectory=True, jaws_start_mm=20.0)
+    save_plan(plan, path, joint_trajectory=True, jaws_start_mm=20.0, gripper=GRIPPER)
     text = path.read_text()
     obj = json.loads(text) if suffix == ".json" else yaml.safe_load(text)
-    assert obj == to_joint_trajectory(plan, 20.0)
+    assert obj == to_joint_trajectory(plan, 20.0, GRIPPER)
     assert obj["points"][0]["positions"][-1] == pytest.approx(0.020)
-    assert_same_motion(plan, load_plan(path))
+    assert_same_motion(plan, load_plan(path, GRIPPER))
     # plan.json's own format still round-trips through save_plan
     save_plan(plan, tmp_path / f"plan{suffix}")
     assert load_plan(tmp_path / f"plan{suffix}") == plan
@@ -96,7 +97,7 @@ def test_files_by_suffix(tmp_path, suffix):
 def test_plan_without_gripper_has_no_jaws_joint():
     plan = parse_plan({"joint_names": list("GFEDCB"),
                        "segments": [{"t": [0.0, 1.0, 2.5], "q": [Q0, Q1, Q0]}]})
-    jt = to_joint_trajectory(plan)
+    jt = to_joint_trajectory(plan, gripper=GRIPPER)
     assert jt["joint_names"] == list("GFEDCB")
     assert [seconds(p["time_from_start"]) for p in jt["points"]] == [0.0, 1.0, 2.5]
     assert from_joint_trajectory(jt) == parse_plan({"joint_names": list("GFEDCB"), "segments": [
@@ -104,11 +105,11 @@ def test_plan_without_gripper_has_no_jaws_joint():
 
 
 def test_time_origin_and_header_are_ignored():
-    jt = to_joint_trajectory(short_plan())
+    jt = to_joint_trajectory(short_plan(), gripper=GRIPPER)
     jt["header"] = {"frame_id": "base_link", "stamp": {"sec": 5, "nanosec": 0}}
     for p in jt["points"]:
         p["time_from_start"]["sec"] += 3
-    assert_same_motion(short_plan(), from_joint_trajectory(jt))
+    assert_same_motion(short_plan(), from_joint_trajectory(jt, GRIPPER))
 
 
 def test_unwritable_plans_are_refused():
@@ -116,7 +117,7 @@ def test_unwritable_plans_are_refused():
         return parse_plan({"joint_names": list("GFEDCB"), "segments": list(segments)})
 
     with pytest.raises(PlanError, match="starts with a gripper step"):
-        to_joint_trajectory(plan({"gripper": {"jaws_mm": 5.0}}, {"t": [0.0, 1.0], "q": [Q0, Q1]}))
+        to_joint_trajectory(plan({"gripper": {"jaws_mm": 5.0}}, {"t": [0.0, 1.0], "q": [Q0, Q1]}), gripper=GRIPPER)
     with pytest.raises(PlanError, match="stands still"):
         to_joint_trajectory(plan({"t": [0.0, 1.0, 2.0], "q": [Q0, Q1, Q1]}))
     with pytest.raises(PlanError, match="does not repeat the previous"):
@@ -124,11 +125,11 @@ def test_unwritable_plans_are_refused():
     with pytest.raises(PlanError, match="increase strictly"):
         to_joint_trajectory(plan({"t": [0.0, 0.0], "q": [Q0, Q1]}))
     with pytest.raises(PlanError, match=r"jaws_start_mm 40.0 outside \[0.0, 35.0\] mm"):
-        to_joint_trajectory(short_plan(), jaws_start_mm=40.0)
+        to_joint_trajectory(short_plan(), jaws_start_mm=40.0, gripper=GRIPPER)
 
 
 def _with(mutate):
-    jt = to_joint_trajectory(short_plan())
+    jt = to_joint_trajectory(short_plan(), gripper=GRIPPER)
     mutate(jt)
     return jt
 
@@ -147,7 +148,7 @@ def _with(mutate):
 ])
 def test_malformed_trajectories(mutate, message):
     with pytest.raises(PlanError, match=message):
-        from_joint_trajectory(_with(mutate))
+        from_joint_trajectory(_with(mutate), GRIPPER)
 
 
 def test_load_detects_format_and_reports_bad_files(tmp_path):
@@ -164,7 +165,7 @@ def test_load_detects_format_and_reports_bad_files(tmp_path):
 def test_cli_export_then_run(tmp_path, capsys):
     ros = tmp_path / "thesis.yaml"
     assert main(["export", str(EXAMPLE), "--ros", str(ros)]) == 0
-    assert_same_motion(load_plan(EXAMPLE), load_plan(ros))
+    assert_same_motion(load_plan(EXAMPLE), load_plan(ros, GRIPPER))
     assert main(["run", str(ros), "--dry-run"]) == 0
     assert "plan ok: " in capsys.readouterr().err
     # refused exports exit 2 with one line naming the problem
@@ -176,7 +177,7 @@ def test_cli_export_then_run(tmp_path, capsys):
 
 def test_cli_runs_a_trajectory_on_the_sim(tmp_path, capsys):
     ros = tmp_path / "short.json"
-    save_plan(short_plan(), ros, joint_trajectory=True)
+    save_plan(short_plan(), ros, joint_trajectory=True, gripper=GRIPPER)
     out = tmp_path / "out"
     assert main(["run", str(ros), "--sim", "--no-plot", "--out", str(out)]) == 0
     res = json.loads(capsys.readouterr().out.strip().splitlines()[-1])

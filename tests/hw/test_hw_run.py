@@ -8,9 +8,9 @@ import math
 import numpy as np
 import pytest
 
-from _hw_helpers import Q0, SimRun, short_plan
+from _hw_helpers import BRAVO, BRAVO7, JAWS, DeviceID, Q0, SimRun, bravo7_client, short_plan
 from uvms_jax import bravo7
-from uvms_jax.hw import (BRAVO7, JAWS, Bravo7, DeviceID, HwConfig, HwRun, PlanError, SimArm, SimConfig, SimServer,
+from uvms_jax.hw import (HwConfig, HwRun, PlanError, SimArm, SimConfig, SimServer,
                          UdpTransport, plan_to_dict, parse_plan, run_plan, run_report, sim_spec, write_run)
 
 REPORT_KEYS = {"ok", "reason", "gates", "max_gate_error_rad", "max_gate_error_mm", "grips", "duration_s",
@@ -19,7 +19,7 @@ REPORT_KEYS = {"ok", "reason", "gates", "max_gate_error_rad", "max_gate_error_mm
 
 def test_loopback_run_is_the_executor_run():
     """run_plan on the loopback link is exactly the hand-wired executor on a virtual clock."""
-    run = run_plan(short_plan())
+    run = run_plan(short_plan(), BRAVO)
     assert isinstance(run, HwRun) and run.ok and run.link == "loopback"
     ref = SimRun().executor.run(short_plan())
     assert run.result.gates == ref.gates and run.result.ticks == ref.ticks
@@ -30,7 +30,7 @@ def test_loopback_run_is_the_executor_run():
 
 
 def test_write_run_files_and_report(tmp_path):
-    run = run_plan(short_plan(), sim=SimConfig(drop=0.02, seed=3))
+    run = run_plan(short_plan(), BRAVO, sim=SimConfig(drop=0.02, seed=3))
     out = tmp_path / "a" / "b"
     report = write_run(run, out, plan_path="plan.json")
     assert {p.name for p in out.iterdir()} == {"run.csv", "run.png", "result.json"}
@@ -46,7 +46,7 @@ def test_write_run_files_and_report(tmp_path):
 
 
 def test_aborted_run_is_a_result_not_an_exception(tmp_path):
-    run = run_plan(short_plan(), config=HwConfig(gate_timeout_s=0.5), sim=SimConfig(stuck_joint="B"))
+    run = run_plan(short_plan(), BRAVO, config=HwConfig(gate_timeout_s=0.5), sim=SimConfig(stuck_joint="B"))
     assert not run.ok and "joint B" in run.result.reason
     report = run_report(run)
     assert not report["ok"] and report["abort_after_s"] is not None and "out" not in report
@@ -57,19 +57,19 @@ def test_refused_plan_and_bad_link_raise_before_anything_starts():
     obj = plan_to_dict(short_plan())
     obj["segments"][0]["q"][1][0] = 9.0
     with pytest.raises(PlanError, match="joint G = 9.0000 rad outside"):
-        run_plan(parse_plan(obj), link="udp")
+        run_plan(parse_plan(obj), BRAVO, link="udp")
     with pytest.raises(ValueError, match="link must be one of"):
-        run_plan(short_plan(), link="serial")
+        run_plan(short_plan(), BRAVO, link="serial")
 
 
 def test_udp_simulated_and_client_links():
     """``"udp"`` serves a simulated arm; a client link is the caller's (a real arm's path)."""
-    run = run_plan(short_plan(), link="udp")
+    run = run_plan(short_plan(), BRAVO, link="udp")
     assert run.ok, run.result.reason
     assert run.link == "udp" and run.sim.limit_violations == 0
-    with SimServer(SimArm(SimConfig(), [*Q0, 0.0])) as server:
-        with Bravo7(UdpTransport(*server.address)) as client:
-            run = run_plan(short_plan(), link=client)
+    with SimServer(SimArm(BRAVO, SimConfig(), [*Q0, 0.0])) as server:
+        with bravo7_client(UdpTransport(*server.address)) as client:
+            run = run_plan(short_plan(), BRAVO, link=client)
     assert run.ok, run.result.reason
     assert run.sim is None and run.link == f"udp 127.0.0.1:{server.address[1]}"
     assert "sim" not in run_report(run)
@@ -87,14 +87,15 @@ def test_hw_joints_are_the_bravo7_module():
 
 
 def test_sim_model_geometry_is_the_bravo7_module():
-    """The MjSpec-built simulator: joint origins, axes, limits and link radius from uvms_jax.bravo7."""
+    """The simulator built on the robot's MuJoCo model: joint origins, axes, limits and link
+    radius as in uvms_jax.bravo7 (origins to the float32 of the robot's chain)."""
     import mujoco
 
-    model = sim_spec().compile()
+    model = sim_spec(BRAVO).compile()
     data = mujoco.MjData(model)
     for joint in bravo7.ARM_JOINTS:
         body = model.body(f"link_{joint.name}")
-        np.testing.assert_allclose(body.pos, joint.xyz, atol=1e-12)
+        np.testing.assert_allclose(body.pos, joint.xyz, atol=1e-7)
         j = model.joint(joint.name)
         np.testing.assert_allclose(model.jnt_range[j.id], (joint.lower, joint.upper))
         np.testing.assert_allclose(model.geom_size[model.body_geomadr[body.id], 0], bravo7.LINK_RADIUS)
@@ -103,7 +104,7 @@ def test_sim_model_geometry_is_the_bravo7_module():
     mujoco.mj_kinematics(model, data)
     axis_b = data.xaxis[model.joint("B").id]
     np.testing.assert_allclose(axis_b, [0.0, 0.0, 1.0], atol=1e-5)
-    jaws = model.body("jaws")
-    np.testing.assert_allclose(jaws.pos, np.add(bravo7.TOOL_XYZ, bravo7.JAWS.xyz), atol=1e-12)
+    jaws = model.body("jaws")  # the jaws' slide hangs at the tool frame
+    np.testing.assert_allclose(jaws.pos, bravo7.TOOL_XYZ, atol=1e-7)
     assert model.jnt_range[model.joint("A").id][1] == pytest.approx(bravo7.JAWS.upper)
     assert model.nu == 2 * len(bravo7.JOINTS) and math.isclose(model.opt.timestep, 0.002)  # velocity + integral

@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from uvms_jax import bravo7
-from uvms_jax.hw import DeviceID, Mode, PacketID, SimArm, SimConfig
+from uvms_jax.hw import Mode, PacketID, SimArm, SimConfig
 
-from _hw_helpers import SimRun, urdf_link_frames, ypr_matrix
+from _hw_helpers import BRAVO, DeviceID, SimRun, urdf_link_frames, ypr_matrix
 
 G = 9.81
 K_T = np.array([j.effort for j in bravo7.JOINTS[:6]]) / 2.0  # N·m per A: the effort at 2000 mA
@@ -64,7 +64,7 @@ def test_water_carries_part_of_the_load():
     currents = {}
     for name, config in (("water", SimConfig()), ("air", SimConfig(water_density=0.0)),
                          ("weightless", SimConfig(dynamics=False))):
-        arm = SimArm(config, q)
+        arm = SimArm(BRAVO, config, q)
         arm.step_to(0.2)
         currents[name] = np.abs(arm.currents())
     assert currents["air"][1] > currents["water"][1] > 1000  # mA at the shoulder F
@@ -76,7 +76,7 @@ def test_the_arm_sags_while_it_moves_a_load():
     air than in water; a weightless arm only lags by its servo."""
 
     def lag(config):
-        arm = SimArm(config, [3.15, 1.0, 2.5, 3.15, 1.75, 3.15, 0.0])
+        arm = SimArm(BRAVO, config, [3.15, 1.0, 2.5, 3.15, 1.75, 3.15, 0.0])
         worst = 0.0
         arm.mode[1] = Mode.VELOCITY
         arm.vel_target[1] = 0.5  # lifting: against gravity

@@ -7,10 +7,10 @@ import struct
 import numpy as np
 import pytest
 
-from uvms_jax.hw import (BRAVO7, Bravo7, DeviceID, LimitError, PacketID, PacketReader, encode_packet,
+from uvms_jax.hw import (LimitError, PacketID, PacketReader, encode_packet,
                          synchronised_move, wire_position)
 
-from _hw_helpers import Recorder, assert_within_limits
+from _hw_helpers import BRAVO7, DeviceID, Recorder, assert_within_limits, bravo7_client
 
 
 LOWER = np.array([j.lower for j in BRAVO7])
@@ -33,7 +33,7 @@ def test_raw_float32_above_a_limit_is_refused():
     t = Recorder()
     above = struct.pack("<f", 6.3)  # float32 nearest 6.3 is 6.3000002
     with pytest.raises(LimitError, match="outside limits"):
-        Bravo7(t).send([(DeviceID.G, PacketID.POSITION, above)])
+        bravo7_client(t).send([(DeviceID.G, PacketID.POSITION, above)])
     assert t.sent == []
 
 
@@ -52,7 +52,7 @@ def _count_outside(n_plans: int, seed: int) -> tuple[int, int]:
     rng = np.random.default_rng(seed)
     measured, start, goal = _values(rng, n_plans), _values(rng, n_plans), _values(rng, n_plans)
     t = Recorder()
-    client = Bravo7(t)
+    client = bravo7_client(t)
     for k in range(n_plans):
         for a, b in ((measured[k], start[k]), (start[k], goal[k])):
             move = synchronised_move(a, b, VMAX, AMAX)

@@ -1,27 +1,32 @@
-"""Hardware runner for the Reach Bravo 7 (docs/theory.md §6, thesis 4.6).
+"""Hardware runner for Reach arms (Blueprint Lab's BPL protocol; docs/theory.md §6, thesis 4.6).
+
+Every stage takes the arm as a :class:`uvms_jax.robot.Robot` (``robot.load_arm("bravo7")``,
+``"alpha5"``, or any card with a gripper and revolute joints): its limits, device ids and model
+come from it; nothing here knows a particular arm.
 
 Layers, from the wire up (impurity — sockets, ports, clocks, files — stays in the transports,
 the simulator server, the executor loop, :func:`write_run` and the CLI):
 
 * protocol: :func:`encode_packet`, :class:`PacketReader` (streaming, never raises; one
   datagram at a time with any number of packets), :func:`crc8`, float helpers, typed ids
-  :class:`PacketID`, :class:`Mode`, :class:`DeviceID`, :class:`HardwareStatus` (4 bytes);
+  :class:`PacketID`, :class:`Mode`, :class:`HardwareStatus` (4 bytes), :data:`BROADCAST`;
   what each request is answered with: :data:`ANSWER_FORMATS`, :func:`decode_answer`;
-* joints: :data:`BRAVO7` limits (G…B rad, jaws A mm; from :mod:`uvms_jax.bravo7`),
-  :class:`LimitError`, and the float32 that goes on the wire (:func:`wire_position`);
+* joints: :func:`joint_specs` of a robot (arm joints in rad, jaws in mm; device ids from its
+  hardware profile, :func:`device_ids`), :class:`LimitError`, and the float32 that goes on
+  the wire (:func:`wire_position`);
 * transports: :class:`UdpTransport`, :class:`SerialTransport` (timeouts; :class:`LinkError`);
-* client: :class:`Bravo7` — modes, position/velocity demands behind a send guard that raises
+* client: :class:`ReachArm` — modes, position/velocity demands behind a send guard that raises
   on anything outside the limits (checked on the float32 sent), requests and decoded reads,
   heartbeat streaming of the state, hardware status and limits;
 * plans: ``plan.json`` (:mod:`uvms_jax.planfile` documents the format), :func:`load_plan`,
-  :func:`check_plan` (the dry run);
+  :func:`check_arm` (the plan was made for this arm), :func:`check_plan` (the dry run);
 * execution: :func:`synchronised_move`, :class:`Executor` (reached-gate, hold on any fault),
   :class:`RunLog` (CSV + PNG);
-* simulation: :class:`SimArm` (MuJoCo, :func:`sim_spec`; answers every request of the
+* simulation: :class:`SimArm` (MuJoCo, :func:`sim_spec` on the robot's own model; answers every request of the
   protocol listing, one packet per datagram), :class:`SimServer` (UDP),
   :class:`LoopbackTransport` on a :class:`VirtualClock`, with fault injection
   (:class:`SimConfig`);
-* the stage: :func:`run_plan` (dry run, then execution on a simulated or real link) →
+* the stage: :func:`run_plan` (arm check and dry run, then execution on a simulated or real link) →
   :class:`HwRun`; :func:`write_run` writes ``run.csv``, ``run.png`` and ``result.json``;
 * entry point: ``uvms-hw`` (:mod:`uvms_jax.hw.cli`).
 """
@@ -39,9 +44,10 @@ from ._answers import ANSWER_FORMATS
 from ._answers import AnswerFormat
 from ._answers import decode_answer
 from ._check import PlanSummary
+from ._check import check_arm
 from ._check import check_plan
-from ._client import Bravo7
 from ._client import JointState
+from ._client import ReachArm
 from ._codec import CRC8_CONFIG
 from ._codec import MAX_PACKET_LEN
 from ._codec import Packet
@@ -64,15 +70,13 @@ from ._executor import RunResult
 from ._ids import BASE_COMPUTER
 from ._ids import BASE_ROUTER
 from ._ids import BROADCAST
-from ._ids import DeviceID
 from ._ids import HardwareStatus
 from ._ids import Mode
 from ._ids import PacketID
-from ._joints import ARM_JOINTS
-from ._joints import BRAVO7
-from ._joints import JAWS
 from ._joints import JointSpec
 from ._joints import LimitError
+from ._joints import device_ids
+from ._joints import joint_specs
 from ._joints import wire_position
 from ._joints import wire_velocity
 from ._run import SIM_LINKS
@@ -82,12 +86,12 @@ from ._run import run_plan
 from ._run import run_report
 from ._run import write_run
 from ._runlog import RunLog
-from ._sim import LoopbackTransport
 from ._sim import SimArm
-from ._sim import SimLink
-from ._sim import SimServer
-from ._sim import VirtualClock
-from ._sim import sim_spec
+from ._sim_link import LoopbackTransport
+from ._sim_link import SimLink
+from ._sim_link import SimServer
+from ._sim_link import VirtualClock
+from ._sim_model import sim_spec
 from ._transport import LinkError
 from ._transport import SerialTransport
 from ._transport import Transport
@@ -96,19 +100,14 @@ from ._transport import parse_host_port
 
 __all__ = [
     "ANSWER_FORMATS",
-    "ARM_JOINTS",
     "BASE_COMPUTER",
     "BASE_ROUTER",
-    "BRAVO7",
     "BROADCAST",
     "CRC8_CONFIG",
-    "JAWS",
     "MAX_PACKET_LEN",
     "SIM_LINKS",
     "AbortRun",
     "AnswerFormat",
-    "Bravo7",
-    "DeviceID",
     "Executor",
     "GateRecord",
     "HardwareStatus",
@@ -128,6 +127,7 @@ __all__ = [
     "Plan",
     "PlanError",
     "PlanSummary",
+    "ReachArm",
     "ReaderStats",
     "RunLog",
     "RunResult",
@@ -141,6 +141,7 @@ __all__ = [
     "Transport",
     "UdpTransport",
     "VirtualClock",
+    "check_arm",
     "check_plan",
     "config_from_mapping",
     "crc8",
@@ -148,8 +149,10 @@ __all__ = [
     "decode_float",
     "decode_floats",
     "decode_frame",
+    "device_ids",
     "encode_floats",
     "encode_packet",
+    "joint_specs",
     "load_plan",
     "parse_host_port",
     "parse_plan",

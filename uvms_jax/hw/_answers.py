@@ -1,4 +1,4 @@
-"""What a Bravo 7 answers to a REQUEST, and how to read it (docs/hardware.md).
+"""What a Reach arm's devices answer to a REQUEST, and how to read it (docs/hardware.md).
 
 :data:`ANSWER_FORMATS` maps each answerable packet id to the ``struct`` layout of its data
 (little-endian) and its units; :func:`decode_answer` turns an answer's bytes into numbers.

@@ -1,5 +1,6 @@
 """The dry-run check that guards the hardware runner: a ``plan.json`` (:mod:`uvms_jax.planfile`)
-is refused, with every problem listed, for wrong joint names, malformed rows, non-finite values,
+is refused for another arm than the one it runs on (:func:`check_arm`), and, with every problem
+listed, for wrong joint names, malformed rows, non-finite values,
 times not starting at 0 or not increasing, positions or jaws outside limits, discontinuities
 between segments, and average speeds between waypoints above the velocity limit.
 """
@@ -15,10 +16,10 @@ import numpy as np
 from uvms_jax.motion import synchronised_move
 from uvms_jax.planfile import Plan, PlanError
 
-from ._joints import ARM_JOINTS, JAWS, JointSpec
 from ._config import HwConfig
+from ._joints import JointSpec, joint_specs
 
-__all__ = ["PlanSummary", "check_plan"]
+__all__ = ["PlanSummary", "check_arm", "check_plan", "specs_of"]
 
 _SPEED_TOL = 1e-6  # relative slack on the average-speed check (JSON round-off of times)
 
@@ -43,19 +44,60 @@ class PlanSummary:
     max_speed_ratio: float
 
 
+def specs_of(robot) -> tuple[JointSpec, ...]:
+    """``(n + 1,)`` joint specs (arm joints, then the jaws) of a robot, or the specs themselves."""
+    if isinstance(robot, Sequence) and all(isinstance(j, JointSpec) for j in robot):
+        return tuple(robot)
+    if hasattr(robot, "chain") and hasattr(robot, "record"):
+        return joint_specs(robot)
+    raise TypeError(f"expected a uvms_jax.robot.Robot or its joint specs, got {type(robot).__name__}")
+
+
+def _describe(arm: dict) -> str:
+    return f"{arm['name']!r} (joints {list(arm['joint_names'])}, sha256 {arm['sha256'][:12] or '-'})"
+
+
+def check_arm(plan: Plan, robot) -> None:
+    """Refuse a plan made for another arm: its ``arm`` record must name ``robot`` (same name,
+    joint names and description digest); a plan without a record must have the robot's joint
+    names.
+
+    Raises:
+      PlanError: (a ValueError) one line naming both arms.
+    """
+    mine = robot.record()
+    if plan.arm is None:
+        if tuple(plan.joint_names) != tuple(mine["joint_names"]):
+            raise PlanError(f"plan joint_names {list(plan.joint_names)} must be those of arm {_describe(mine)} "
+                            "(in this order; the plan has no arm record)")
+        return
+    if any(plan.arm[k] != mine[k] for k in ("name", "joint_names", "sha256")):
+        raise PlanError(f"plan was made for arm {_describe(plan.arm)}, not for arm {_describe(mine)}")
+
+
 def check_plan(
     plan: Plan,
+    robot,
     config: HwConfig = HwConfig(),
-    joints: Sequence[JointSpec] = ARM_JOINTS,
-    jaws: JointSpec = JAWS,
     max_problems: int = 20,
 ) -> PlanSummary:
     """Dry-run check: refuse a bad plan before any motion.
 
+    Args:
+      plan: the plan (joint angles [rad], jaws [mm]).
+      robot: the arm it is to run on (a :class:`uvms_jax.robot.Robot`, whose plan record is
+        checked first, :func:`check_arm`), or its ``(n + 1,)`` joint specs (arm, then jaws).
+      config: speed scale and continuity tolerance.
+      max_problems: most problems listed.
+
     Raises:
-      PlanError: listing (up to ``max_problems``) every limit, continuity, timing and speed
-        problem, with segment, waypoint and joint named.
+      PlanError: a plan for another arm (one line), or listing (up to ``max_problems``) every
+        limit, continuity, timing and speed problem, with segment, waypoint and joint named.
     """
+    specs = specs_of(robot)
+    if not isinstance(robot, Sequence):
+        check_arm(plan, robot)
+    joints, jaws = specs[:-1], specs[-1]
     problems: list[str] = []
     names = tuple(j.name for j in joints)
     if plan.joint_names != names:

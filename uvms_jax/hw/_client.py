@@ -1,11 +1,12 @@
-"""``Bravo7``: a safe client of the BPL protocol over any :class:`Transport`.
+"""``ReachArm``: a safe client of the BPL protocol over any :class:`Transport`, for any Reach
+arm (its joint table: :func:`~uvms_jax.hw.joint_specs` of its robot).
 
-Every outgoing packet goes through :meth:`Bravo7.send`, the lowest send layer, which refuses
+Every outgoing packet goes through :meth:`ReachArm.send`, the lowest send layer, which refuses
 (raises :class:`LimitError`, never clips) a POSITION demand outside the joint's limits, a
 VELOCITY demand above its speed limit, a broadcast motion demand, and any packet id other than
 the few the runner needs (no limit writes, no open-loop or current drive). It checks the
 float32 that goes on the wire, exactly: a demand of 6.3 rad, which float32 rounds up past the
-limit, is sent as the float32 just inside it (:meth:`Bravo7.set_positions`), and raw bytes
+limit, is sent as the float32 just inside it (:meth:`ReachArm.set_positions`), and raw bytes
 holding the float32 above it are refused.
 """
 
@@ -18,11 +19,11 @@ from collections.abc import Callable, Iterable, Sequence
 from ._answers import decode_answer
 from ._codec import Packet, PacketReader, decode_float, decode_floats, encode_floats, encode_packet
 from ._ids import BROADCAST, HardwareStatus, Mode, PacketID
-from ._joints import (BRAVO7, JointSpec, LimitError, check_position, check_velocity, spec_for_device, wire_position,
+from ._joints import (JointSpec, LimitError, check_position, check_velocity, spec_for_device, wire_position,
                       wire_velocity)
 from ._transport import LinkError, Transport
 
-__all__ = ["Bravo7", "JointState", "SENDABLE"]
+__all__ = ["JointState", "ReachArm", "SENDABLE"]
 
 # What the runner may send. Everything else (limit writes, SAVE, open-loop, current, relative
 # and indexed position) could move the arm or change its limits behind the guard's back.
@@ -69,12 +70,13 @@ def guard_packet(device_id: int, packet_id: int, data: bytes, joints: Sequence[J
             raise ValueError(f"mode payload {data.hex()} is not one of {sorted(m.name for m in _SAFE_MODES)}")
 
 
-class Bravo7:
-    """Client of one Bravo 7 (or its simulator) over ``transport``.
+class ReachArm:
+    """Client of one Reach arm (or its simulator) over ``transport``.
 
     Args:
       transport: byte link (UDP, serial, or the in-process simulator link).
-      joints: joint limits the guard enforces (default: the Bravo 7, docs/theory.md §1.3).
+      joints: ``(n + 1,)`` the joint table the guard enforces and the client reads: the arm's
+        joints, then the jaws (``joint_specs(robot)``).
       request_timeout: default wait for the answers to one REQUEST [s].
       clock: monotonic clock [s] (injectable for simulated time).
     """
@@ -82,13 +84,15 @@ class Bravo7:
     def __init__(
         self,
         transport: Transport,
-        joints: Sequence[JointSpec] = BRAVO7,
+        joints: Sequence[JointSpec],
         *,
         request_timeout: float = 0.05,
         clock: Callable[[], float] = time.monotonic,
     ) -> None:
         self.transport = transport
         self.joints = tuple(joints)
+        if not self.joints or not all(isinstance(j, JointSpec) for j in self.joints):
+            raise TypeError("joints must be a non-empty sequence of JointSpec (hw.joint_specs(robot))")
         self.request_timeout = request_timeout
         self.clock = clock
         self.reader = PacketReader()
@@ -338,7 +342,7 @@ class Bravo7:
         """Close the transport."""
         self.transport.close()
 
-    def __enter__(self) -> Bravo7:
+    def __enter__(self) -> ReachArm:
         return self
 
     def __exit__(self, *exc: object) -> None:

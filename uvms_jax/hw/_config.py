@@ -98,7 +98,7 @@ class HwConfig:
 
 @dataclasses.dataclass(frozen=True)
 class SimConfig:
-    """Simulated Bravo 7: servo, physics and fault injection.
+    """Simulated arm: servo, physics and fault injection.
 
     Attributes:
       physics_dt: MuJoCo time step [s].
@@ -107,16 +107,18 @@ class SimConfig:
       drop: probability that an incoming or outgoing datagram is lost.
       corrupt: probability that an outgoing datagram has one byte changed.
       latency_s: delay added to every response [s].
-      stuck_joint: letter of a joint that does not move ("" = none).
-      fault_joint: letter of a joint that reports ``fault_bits`` ("" = none).
+      stuck_joint: name of a joint that does not move ("" = none; case ignored, checked
+        against the arm by :class:`~uvms_jax.hw.SimArm`).
+      fault_joint: name of a joint that reports ``fault_bits`` ("" = none; as ``stuck_joint``).
       fault_bits: hardware-status bits reported by ``fault_joint`` (bytes A–D little-endian,
         :class:`~uvms_jax.hw.HardwareStatus`).
       fault_after_s: simulated time after which the fault appears [s].
       object_width_mm: an object between the jaws: closing jaws stop at this opening, as a
         real gripper stalls on what it grasps [mm] (0 = nothing to grasp).
-      dynamics: the links carry the manufacturer's masses and inertias under gravity and
-        buoyancy (along the world's z, see ``base_rpy``), so the arm sags under load and its
-        currents show it; False: weightless links.
+      dynamics: the links carry the robot's masses and inertias (its description's, e.g. the
+        manufacturer's for the Bravo 7) under gravity and buoyancy (along the world's z, see
+        ``base_rpy``), so the arm sags under load and its currents show it; False, or an arm
+        whose description has none: weightless links.
       water_density: density of the water around the arm for buoyancy [kg/m³] (0: in air).
       base_rpy: orientation of the arm's base frame in the world (whose z is up) as URDF
         roll, pitch, yaw about the fixed x, y, z axes, R = Rz(yaw) Ry(pitch) Rx(roll) [rad];
@@ -152,8 +154,8 @@ class SimConfig:
         if not (self.physics_dt > 0 and self.servo_gain > 0):
             raise ValueError("SimConfig physics_dt and servo_gain must be positive")
         for name in ("stuck_joint", "fault_joint"):
-            if getattr(self, name) not in ("", "A", "B", "C", "D", "E", "F", "G"):
-                raise ValueError(f"SimConfig.{name} must be a joint letter A..G or empty")
+            if not isinstance(getattr(self, name), str):
+                raise ValueError(f"SimConfig.{name} must be a joint name or empty, got {getattr(self, name)!r}")
         if not 0 <= self.fault_bits <= 0xFFFFFFFF:
             raise ValueError("SimConfig.fault_bits must fit in the 4 status bytes")
         try:

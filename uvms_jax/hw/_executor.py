@@ -1,4 +1,4 @@
-"""Trajectory executor: runs a checked plan on a Bravo 7 with the thesis 4.6 controller.
+"""Trajectory executor: runs a checked plan on a Reach arm with the thesis 4.6 controller.
 
 Per move (waypoint to waypoint, or a jaws step) the executor streams POSITION demands of a
 synchronised, velocity- and acceleration-limited profile at ``rate_hz``, reads the measured
@@ -25,7 +25,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 
 import numpy as np
 
@@ -33,10 +33,10 @@ from uvms_jax.motion import Move, synchronised_move
 from uvms_jax.planfile import Plan
 
 from ._check import PlanSummary, check_plan
-from ._client import Bravo7, JointState
+from ._client import JointState, ReachArm
 from ._config import HwConfig
 from ._ids import HardwareStatus, Mode
-from ._joints import ARM_JOINTS, JAWS, JointSpec, LimitError
+from ._joints import LimitError
 from ._runlog import RunLog
 from ._transport import LinkError
 
@@ -110,35 +110,34 @@ class RunResult:
 
 
 class Executor:
-    """Runs plans through a :class:`Bravo7` client.
+    """Runs plans through a :class:`ReachArm` client, on the client's joint table.
 
     Args:
-      client: connected client; its clock is the executor's clock.
+      client: connected client; its clock is the executor's clock, its ``joints`` (the arm's
+        joints, then the jaws; ``joint_specs(robot)``) the limits the executor runs within.
       config: rates, thresholds and timeouts.
       sleep: how to wait [s] (``time.sleep``, or a virtual clock's ``sleep``).
       log: where commanded/measured states go (a fresh :class:`RunLog` by default).
-      arm_joints, jaws: joint specs (the Bravo 7 by default, docs/theory.md §1.3).
       progress: optional callback ``(segment index, n_segments, name)`` for progress display.
     """
 
     def __init__(
         self,
-        client: Bravo7,
+        client: ReachArm,
         config: HwConfig = HwConfig(),
         *,
         sleep: Callable[[float], None] = time.sleep,
         log: RunLog | None = None,
-        arm_joints: Sequence[JointSpec] = ARM_JOINTS,
-        jaws: JointSpec = JAWS,
         progress: Callable[[int, int, str], None] | None = None,
     ) -> None:
         self.client = client
         self.config = config
         self.clock = client.clock
         self.sleep = sleep
-        self.arm_joints = tuple(arm_joints)
-        self.jaws = jaws
-        self.joints = self.arm_joints + (jaws,)
+        self.joints = tuple(client.joints)
+        self.arm_joints, self.jaws = self.joints[:-1], self.joints[-1]
+        if self.jaws.unit != "mm":
+            raise ValueError(f"the client's last joint must be the jaws (mm), got {self.jaws.name} in {self.jaws.unit}")
         self.devices = tuple(j.device_id for j in self.joints)
         self.log = log if log is not None else RunLog(tuple(j.name for j in self.joints))
         self.progress = progress
@@ -172,7 +171,7 @@ class Executor:
         Raises:
           PlanError: the dry-run check refused the plan (nothing was sent).
         """
-        summary = check_plan(plan, self.config, self.arm_joints, self.jaws)
+        summary = check_plan(plan, self.joints, self.config)
         t0 = self._t0 = self.clock()
         gates: list[GateRecord] = []
         self._move_start = t0

@@ -1,16 +1,16 @@
 """Typed identifiers of the Reach/Blueprint Lab "BPL" protocol (docs/theory.md §6).
 
-Packet ids, device modes, Bravo 7 device ids and hardware-status bits, as integer enums so
-that they print by name and compare equal to the bytes on the wire.
+Packet ids, device modes and hardware-status bits, as integer enums so that they print by name
+and compare equal to the bytes on the wire, and the protocol's fixed device ids (broadcast, the
+base's router and computer). An arm's joint device ids are the arm's: its robot's hardware
+profile (:func:`uvms_jax.hw.device_ids`).
 """
 
 from __future__ import annotations
 
 import enum
 
-from uvms_jax import bravo7
-
-__all__ = ["BASE_COMPUTER", "BASE_ROUTER", "BROADCAST", "DeviceID", "HardwareStatus", "Mode", "PacketID"]
+__all__ = ["BASE_COMPUTER", "BASE_ROUTER", "BROADCAST", "HardwareStatus", "Mode", "PacketID"]
 
 
 class PacketID(enum.IntEnum):
@@ -55,17 +55,12 @@ class Mode(enum.IntEnum):
     ZERO_VELOCITY = 0x15
 
 
-# The Bravo 7's device ids come from its one home, uvms_jax.bravo7; 0xFF addresses every device.
-DeviceID = enum.IntEnum("DeviceID", [(j.name, j.device_id) for j in sorted(bravo7.JOINTS, key=lambda j: j.device_id)]
-                        + [("BROADCAST", 0xFF)], module=__name__)
-DeviceID.__doc__ = "Bravo 7 device ids: A = jaws (0x01) … G = base rotate (0x07); 0xFF = broadcast."
+# 0xFF addresses every device.
+BROADCAST = 0xFF
 
 # The base's two devices; the base computer answers the end-effector pose and velocity.
 BASE_ROUTER = 0x0D
 BASE_COMPUTER = 0x0E
-
-
-BROADCAST = DeviceID.BROADCAST
 
 
 class HardwareStatus(enum.IntFlag):

@@ -1,9 +1,10 @@
-"""Bravo 7 joint table for the hardware path and the send-side limit guard.
+"""An arm's joint table for the hardware path (:func:`joint_specs`) and the send-side limit guard.
 
-The limits are those of :mod:`uvms_jax.bravo7` (docs/theory.md §1.3), in wire units: joint
-order everywhere in ``uvms_jax.hw`` (plans, executor, logs) is G, F, E, D, C, B — device ids
-0x07 … 0x02 — then the jaws A (0x01). Revolute joints in rad and rad/s, the jaws in mm and
-mm/s, exactly as they travel on the wire.
+The limits are the robot's (:class:`uvms_jax.robot.Robot`), in wire units: joint order
+everywhere in ``uvms_jax.hw`` (plans, executor, logs) is the arm's chain order, then the
+gripper; device ids come from the robot's hardware profile (the Bravo 7: G … B = 0x07 …
+0x02, jaws A = 0x01). Revolute joints in rad and rad/s, the jaws in mm and mm/s, exactly as
+they travel on the wire.
 """
 
 from __future__ import annotations
@@ -14,19 +15,14 @@ import struct
 
 import numpy as np
 
-from uvms_jax import bravo7
-
-from ._ids import DeviceID
-
 __all__ = [
-    "ARM_JOINTS",
-    "BRAVO7",
-    "JAWS",
     "JointSpec",
     "LimitError",
     "MM_PER_M",
     "check_position",
     "check_velocity",
+    "device_ids",
+    "joint_specs",
     "spec_for_device",
     "to_f32",
     "wire_position",
@@ -43,12 +39,12 @@ class JointSpec:
     """Limits of one actuator.
 
     Attributes:
-      name: Bravo 7 letter ("A" … "G").
+      name: the joint's name in the robot model (and in plans).
       device_id: BPL device id.
       lower, upper: position limits [rad, or mm for the jaws].
       max_velocity: speed limit [rad/s, or mm/s for the jaws].
       max_acceleration: acceleration limit used by the executor [rad/s², or mm/s²]
-        (**default**: the URDF gives none).
+        (**default**: descriptions give none).
       unit: "rad" or "mm".
     """
 
@@ -75,22 +71,61 @@ class JointSpec:
         return self.lower <= value <= self.upper
 
 
-MM_PER_M = 1e3  # the jaws travel in metres in the URDF, in millimetres on the wire
+MM_PER_M = 1e3  # the jaws travel in metres in the robot model, in millimetres on the wire
 
-# The executor's acceleration limit of the revolute joints [rad/s²]: the URDF gives none (default).
+# The executor's acceleration limit of the revolute joints [rad/s²]: descriptions give none (default).
 _ACCELERATION = 1.0
-# The jaws' speed and acceleration on the wire [mm/s, mm/s²]: defaults of the runner, slower
-# than the URDF's speed limit.
+# The jaws' speed and acceleration on the wire [mm/s, mm/s²]: defaults of the runner, at most
+# the gripper's speed limit (the Bravo 7's 100 mm/s, the Alpha 5's 50 mm/s: both run at 20).
 _JAWS_VELOCITY_MM = 20.0
 _JAWS_ACCELERATION_MM = 40.0
 
-# In plan order G, F, E, D, C, B.
-ARM_JOINTS: tuple[JointSpec, ...] = tuple(
-    JointSpec(j.name, DeviceID(j.device_id), j.lower, j.upper, j.velocity, _ACCELERATION)
-    for j in bravo7.ARM_JOINTS)
-JAWS = JointSpec(bravo7.JAWS.name, DeviceID(bravo7.JAWS.device_id), bravo7.JAWS.lower * MM_PER_M,
-                 bravo7.JAWS.upper * MM_PER_M, _JAWS_VELOCITY_MM, _JAWS_ACCELERATION_MM, unit="mm")
-BRAVO7: tuple[JointSpec, ...] = ARM_JOINTS + (JAWS,)
+
+def _as_written(value) -> float:
+    """A limit as the description writes it: the shortest decimal that the chain's float32
+    holds (6.3, not 6.300000190734863), so that the guard compares with the arm's own number."""
+    return float(str(np.float32(value)))
+
+
+def device_ids(robot) -> dict[str, int]:
+    """BPL device id of every actuator of ``robot`` (arm joints, then the gripper), by name.
+
+    From ``robot.hardware``; an arm without a hardware profile gets the Reach convention's
+    consecutive ids, the first joint highest and the gripper 1 (``n + 1 … 1``), good for the
+    simulated links only (:func:`uvms_jax.hw.run_plan` refuses it a real link).
+    """
+    names = robot.actuators
+    if robot.hardware is None:
+        return {name: len(names) - k for k, name in enumerate(names)}
+    return {name: robot.hardware.device_id(name) for name in names}
+
+
+def joint_specs(robot) -> tuple[JointSpec, ...]:
+    """The hardware path's joint table of ``robot`` (a :class:`uvms_jax.robot.Robot`), in wire units.
+
+    Returns:
+      ``(n + 1,)`` specs: the arm joints in chain order (rad, rad/s; acceleration 1 rad/s²,
+      a default: descriptions give none), then the gripper (mm, mm/s: its limits × 1000, speed
+      ``min(20 mm/s, its limit)``, acceleration 40 mm/s²), device ids from :func:`device_ids`.
+
+    Raises:
+      ValueError: an arm with no gripper or with a prismatic arm joint (the runner drives
+        revolute joints and one gripper), or without BPL as its protocol.
+    """
+    from uvms_jax.kin._chain import REVOLUTE  # the chain's kinds; kin is imported with the robot
+
+    if robot.gripper is None:
+        raise ValueError(f"robot {robot.name!r} has no gripper: the hardware runner drives an arm and its jaws")
+    linear = [n for n, k in zip(robot.joint_names, robot.chain.kinds) if k != REVOLUTE]
+    if linear:
+        raise ValueError(f"robot {robot.name!r}: the hardware runner drives revolute arm joints, {linear} are not")
+    ids = device_ids(robot)
+    arm = tuple(JointSpec(name, ids[name], _as_written(lo), _as_written(hi), _as_written(v), _ACCELERATION)
+                for name, lo, hi, v in zip(robot.joint_names, robot.lower, robot.upper, robot.velocity_limits))
+    g = robot.gripper
+    jaws = JointSpec(g.joint, ids[g.joint], g.lower * MM_PER_M, g.upper * MM_PER_M,
+                     min(_JAWS_VELOCITY_MM, g.velocity * MM_PER_M), _JAWS_ACCELERATION_MM, unit="mm")
+    return arm + (jaws,)
 
 
 def to_f32(value: float) -> float:
@@ -135,7 +170,7 @@ def wire_velocity(spec: JointSpec, value: float) -> float:
     return _f32_inside(check_velocity(spec, value), -spec.max_velocity, spec.max_velocity)
 
 
-def spec_for_device(device_id: int, joints: tuple[JointSpec, ...] = BRAVO7) -> JointSpec:
+def spec_for_device(device_id: int, joints: tuple[JointSpec, ...]) -> JointSpec:
     """The spec of ``device_id``; raises LimitError for a device with no known limits."""
     for j in joints:
         if j.device_id == device_id:

@@ -17,13 +17,14 @@ from typing import Any
 
 from uvms_jax.planfile import Plan
 
-from ._check import PlanSummary, check_plan
-from ._client import Bravo7
+from ._check import PlanSummary, check_arm, check_plan
+from ._client import ReachArm
 from ._config import HwConfig, SimConfig
 from ._executor import Executor, RunResult
-from ._joints import BRAVO7
+from ._joints import joint_specs
 from ._runlog import RunLog
-from ._sim import LoopbackTransport, SimArm, SimLink, SimServer, VirtualClock
+from ._sim import SimArm
+from ._sim_link import LoopbackTransport, SimLink, SimServer, VirtualClock
 from ._transport import UdpTransport
 
 __all__ = ["SIM_LINKS", "HwRun", "SimCounts", "run_plan", "run_report", "write_run"]
@@ -80,20 +81,26 @@ class HwRun:
 
 def run_plan(
     plan: Plan,
+    robot,
     *,
-    link: str | Bravo7 = "loopback",
+    link: str | ReachArm = "loopback",
     config: HwConfig = HwConfig(),
     sim: SimConfig = SimConfig(),
     progress: Callable[[int, int, str], None] | None = None,
 ) -> HwRun:
-    """Dry-run check ``plan``, then execute it on ``link``.
+    """Check that ``plan`` was made for ``robot``, dry-run check it, then execute it on ``link``.
 
     Args:
-      plan: joint waypoints G…B [rad] and jaws steps [mm].
+      plan: joint waypoints in the robot's joint order [rad] and jaws steps [mm].
+      robot: the arm (:class:`uvms_jax.robot.Robot`): the plan's ``arm`` record must name it
+        (same name, joint names and description digest); a plan with no record must have its
+        joint names.
       link: ``"loopback"``: a simulated arm in this process on a virtual clock;
         ``"udp"``: a simulated arm served on 127.0.0.1 over UDP, in real time; or an open
-        :class:`Bravo7` client (a real arm in real time; the caller closes it). A simulated
-        arm starts at the plan's first waypoint with the jaws at 0 mm.
+        :class:`ReachArm` client of the robot's joint table (:func:`joint_specs`; a real arm
+        in real time; the caller closes it). A simulated arm starts at the plan's first
+        waypoint with the jaws at their lower limit. A robot without a hardware profile runs
+        on the simulated links only.
       config: executor, safety and link settings.
       sim: the simulated arm and its faults (ignored for a client).
       progress: called ``(segment index, n_segments, segment name)`` as segments start.
@@ -103,42 +110,52 @@ def run_plan(
       not an exception.
 
     Raises:
-      PlanError: the dry run refused the plan; nothing was started or sent.
-      ValueError: ``link`` is neither a simulated link name nor a client.
+      PlanError: the plan was made for another arm (one line naming both), or the dry run
+        refused it; nothing was started or sent.
+      ValueError: ``link`` is neither a simulated link name nor a client, a client of another
+        joint table, or a real link for a robot without a hardware profile.
     """
-    if not (isinstance(link, Bravo7) or link in SIM_LINKS):
-        raise ValueError(f"link must be one of {list(SIM_LINKS)} or an open Bravo7 client, got {link!r}")
-    check_plan(plan, config)  # before any simulator exists: a refused plan starts nothing
-    log = RunLog(tuple(j.name for j in BRAVO7))
+    if not (isinstance(link, ReachArm) or link in SIM_LINKS):
+        raise ValueError(f"link must be one of {list(SIM_LINKS)} or an open ReachArm client, got {link!r}")
+    check_arm(plan, robot)
+    specs = joint_specs(robot)
+    if isinstance(link, ReachArm):
+        if robot.hardware is None:
+            raise ValueError(f"robot {robot.name!r} has no hardware profile (device ids): it runs on the "
+                             f"simulated links {list(SIM_LINKS)} only")
+        if tuple(link.joints) != specs:
+            raise ValueError(f"the client's joint table is not robot {robot.name!r}'s (hw.joint_specs(robot))")
+    check_plan(plan, robot, config)  # before any simulator exists: a refused plan starts nothing
+    log = RunLog(tuple(j.name for j in specs))
     t0 = time.perf_counter()
-    if isinstance(link, Bravo7):
+    if isinstance(link, ReachArm):
         result = Executor(link, config, log=log, progress=progress).run(plan)
         return HwRun(result, log, _link_name(link), time.perf_counter() - t0)
-    with _simulated(link, plan, config, sim) as (client, sleep, sim_link):
+    with _simulated(link, plan, robot, config, sim) as (client, sleep, sim_link):
         result = Executor(client, config, sleep=sleep, log=log, progress=progress).run(plan)
     counts = SimCounts(sim_link.arm.limit_violations, sim_link.dropped, sim_link.corrupted)
     return HwRun(result, log, link, time.perf_counter() - t0, counts)
 
 
 @contextlib.contextmanager
-def _simulated(link: str, plan: Plan, config: HwConfig,
-               sim: SimConfig) -> Iterator[tuple[Bravo7, Callable[[float], None], SimLink]]:
-    """A client of a simulated arm at the plan's start: ``(client, sleep, link)``."""
+def _simulated(link: str, plan: Plan, robot, config: HwConfig,
+               sim: SimConfig) -> Iterator[tuple[ReachArm, Callable[[float], None], SimLink]]:
+    """A client of a simulated ``robot`` at the plan's start: ``(client, sleep, link)``."""
     start = next(s.q[0] for s in plan.segments if s.q)  # the dry run ensured there is one
-    arm = SimArm(sim, [*start, 0.0])
+    arm = SimArm(robot, sim, [*start, joint_specs(robot)[-1].lower])  # the jaws at their lower limit
     if link == "loopback":
         clock = VirtualClock()
         sim_link = SimLink(arm)
-        with Bravo7(LoopbackTransport(sim_link, clock), clock=clock.now,
-                    request_timeout=config.request_timeout_s) as client:
+        with ReachArm(LoopbackTransport(sim_link, clock), arm.joints, clock=clock.now,
+                      request_timeout=config.request_timeout_s) as client:
             yield client, clock.sleep, sim_link
     else:
-        with SimServer(arm) as server, Bravo7(UdpTransport(*server.address),
-                                              request_timeout=config.request_timeout_s) as client:
+        with SimServer(arm) as server, ReachArm(UdpTransport(*server.address), arm.joints,
+                                                request_timeout=config.request_timeout_s) as client:
             yield client, time.sleep, server.link
 
 
-def _link_name(client: Bravo7) -> str:
+def _link_name(client: ReachArm) -> str:
     return getattr(client.transport, "name", type(client.transport).__name__)
 
 

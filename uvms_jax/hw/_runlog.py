@@ -45,7 +45,7 @@ class RunLog:
             w.writerows(self.rows)
         return path
 
-    def plot(self, path: str | Path, title: str = "Bravo 7 run: commanded vs measured") -> Path:
+    def plot(self, path: str | Path, title: str = "arm run: commanded vs measured") -> Path:
         """One panel per joint, commanded (dashed) over measured (solid); PNG at ``path``."""
         plt = pyplot()
         path = Path(path)

@@ -1,66 +1,43 @@
-"""Simulated Bravo 7 speaking BPL, backed by MuJoCo joint-space physics, with fault injection.
+"""Simulated Reach arm speaking BPL, backed by MuJoCo joint-space physics, with device faults.
 
-The physics model is deliberately small and private to ``hw`` (it does not depend on
-``uvms_jax.kin``): the six revolute joints of :mod:`uvms_jax.bravo7` (origins, axes and limits
-of the public URDF, docs/theory.md §1.3) with capsule links carrying the manufacturer's masses
-and inertias under gravity and buoyancy (docs/hardware.md §3), and the jaws as one slide joint.
-The physics runs in the arm's base frame; the base's orientation in the world
-(``SimConfig.base_rpy``: upright, or hanging under a vehicle) turns gravity and buoyancy.
+The physics model is the robot's own (:func:`~uvms_jax.hw.sim_spec`, built on
+:func:`uvms_jax.robot.mjcf_body`): its joints, links and mass properties under gravity and
+buoyancy (docs/hardware.md §3), the jaws as one slide joint. The physics runs in the arm's base
+frame; the base's orientation in the world (``SimConfig.base_rpy``: upright, or hanging under a
+vehicle) turns gravity and buoyancy. An arm whose description has no mass properties is
+simulated weightless (gravity compensated, no buoyancy): servoed kinematically.
 The device firmware is modelled as a servo that turns the demand into a joint speed every
 physics step — POSITION mode ``v = clip(gain·(q* - q), ±v_max)``, VELOCITY mode
 ``v = clip(v*, ±v_max)``, other modes ``v = 0`` — tracked by a MuJoCo velocity actuator plus an
 integral of the speed error (a second, torque actuator) that carries the load.
 
 The devices answer every request of the protocol listing (docs/hardware.md §1), each answer
-in its own datagram.
-
-Layers:
-  * :class:`SimArm` — the device: physics, modes, demands, BPL request answers, heartbeats.
-    Demands outside the limits are ignored and counted (``limit_violations``), never obeyed.
-  * :class:`SimLink` — the arm plus faults (drop, corruption, latency), shared by
-  * :class:`SimServer` — a UDP server thread on 127.0.0.1 (ephemeral port by default), and
-  * :class:`LoopbackTransport` — an in-process :class:`~uvms_jax.hw.Transport` on a
-    :class:`VirtualClock`, so tests run a whole plan in simulated time without sockets.
+in its own datagram. :class:`SimArm` is the device: physics, modes, demands, BPL request
+answers, heartbeats. Demands outside the limits are ignored and counted
+(``limit_violations``), never obeyed. The links it is reached by are in
+:mod:`uvms_jax.hw._sim_link`.
 """
 
 from __future__ import annotations
 
-import collections
-import heapq
 import math
-import random
-import socket
-import threading
-import time
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
 
 import numpy as np
 
-from uvms_jax import bravo7
-
-from ._codec import Packet, PacketReader, decode_float, encode_floats, encode_packet
+from ._codec import Packet, decode_float, encode_floats, encode_packet
 from ._config import SimConfig
 from ._ids import BASE_COMPUTER, BASE_ROUTER, BROADCAST, HardwareStatus, Mode, PacketID
-from ._joints import BRAVO7, MM_PER_M, JointSpec
+from ._joints import MM_PER_M, joint_specs
+from ._sim_model import GRAVITY, massive_bodies, sim_spec, world_up
 
-if TYPE_CHECKING:
-    import mujoco
-
-__all__ = ["LoopbackTransport", "SimArm", "SimLink", "SimServer", "VirtualClock", "sim_spec"]
+__all__ = ["SimArm"]
 
 _MM = 1.0 / MM_PER_M  # jaws: mm on the wire, m in MuJoCo
 
-# Physics of the simulated device (not Bravo 7 data): rotor inertia and damping per joint
-# [kg·m², N·m·s/rad; jaws kg, N·s/m], the jaws' fingers box [m, kg], the velocity servo gain
-# and the integral gain of the velocity loop [N·m/rad; N/m], which holds a load (gravity less
+# The integral gain of the velocity loop [N·m/rad; N/m], which holds a load (gravity less
 # buoyancy) with no steady speed error: the arm sags while the integral builds, then recovers.
-_HINGE_ARMATURE, _HINGE_DAMPING = 0.05, 0.1
-_JAWS_ARMATURE, _JAWS_DAMPING = 0.5, 1.0
-_JAWS_HALF_SIZE, _JAWS_MASS = (0.01, 0.02, 0.02), 0.2
-_KV = 30.0
 _KI = 300.0
-_GRAVITY = 9.81  # [m/s²]
 
 # What the simulated devices report about themselves (the simulator's values, not a real
 # arm's): serial number = base + device id, model number, software version (major, sub-major,
@@ -69,135 +46,48 @@ _SERIAL_BASE = 7000.0
 _MODEL_NUMBER = 7.0
 _SOFTWARE_VERSION = (0, 1, 0)
 _TEMPERATURE_C, _HUMIDITY_PCT, _PRESSURE_BAR, _VOLTAGE_V = 20.0, 15.0, 1.0, 24.0
-# Motor current model: the URDF effort (9 N·m; jaws 10 N) takes this current, and the drive
-# stops at the current limit (torque saturates there).
+# Motor current model: a joint's effort limit (the description's; 10 N·m or N where it gives
+# none) takes this current, and the drive stops at the current limit (torque saturates there).
 _EFFORT_CURRENT_MA = 2000.0
 _CURRENT_LIMIT_MA = 4000.0
+_DEFAULT_EFFORT = 10.0
 _HEARTBEAT_SLOTS = 10  # HEARTBEAT_SET carries 10 packet ids; a REQUEST lists at most 10
 _BASE_DEVICES = (BASE_ROUTER, BASE_COMPUTER)
 
 
-def _world_up(base_rpy: Sequence[float] = SimConfig.base_rpy) -> np.ndarray:
-    """(3,) unit vector of the world's up (+z) in the arm's base frame, ``R^T e_z`` for the base
-    orientation R = Rz(yaw) Ry(pitch) Rx(roll) of ``base_rpy`` (URDF roll, pitch, yaw [rad]).
-
-    Gravity acts along minus this vector, buoyancy along it; (0, 0, 0) gives exactly
-    (0, 0, 1) (the upright base), (π, 0, 0) about (0, 0, -1) (the base hanging).
-    """
-    import mujoco  # imported here: the protocol layer must not need MuJoCo
-
-    q = np.zeros(4)
-    mujoco.mju_euler2Quat(q, np.asarray(base_rpy, dtype=float), "XYZ")  # as the URDF origins below
-    mujoco.mju_negQuat(q, q)  # the inverse rotation: world → base
-    up = np.zeros(3)
-    mujoco.mju_rotVecQuat(up, np.array([0.0, 0.0, 1.0]), q)
-    return up
-
-
-def sim_spec(joints: Sequence[JointSpec] = BRAVO7, kv: float = _KV,
-             physics_dt: float = SimConfig.physics_dt, dynamics: bool = True,
-             base_rpy: Sequence[float] = SimConfig.base_rpy) -> mujoco.MjSpec:
-    """MuJoCo model of the simulated arm: six hinges G…B, jaws slide A, a velocity actuator and
-    an integral-torque motor on each.
-
-    Geometry from :mod:`uvms_jax.bravo7` (URDF joint origins and axes, tool frame, link
-    radius); position limits from ``joints`` (wire units: rad, jaws mm). Links are capsules
-    from each joint to the next (no contacts). With ``dynamics`` each link carries the
-    manufacturer's mass, centre of mass and inertia (:func:`uvms_jax.bravo7.urdf_inertials`;
-    the closed jaws' as a body fixed to link B at the tool frame, ``"jaws_housing"``) under
-    gravity along the world's -z (:func:`_world_up`: the base's -z when upright); buoyancy is
-    applied by :class:`SimArm`. MuJoCo's world is the arm's base frame. Without it the
-    capsules have the density of water and are gravity compensated. The jaws' fingers (the
-    slide) are light and gravity compensated either way.
-
-    Args:
-      joints: limits of G…B then A, by name.
-      kv: velocity actuator gain [N·m·s/rad; N·s/m for the jaws].
-      physics_dt: time step [s].
-      dynamics: the manufacturer's mass properties, gravity on.
-      base_rpy: orientation of the base in the world, URDF roll, pitch, yaw [rad]
-        (:attr:`SimConfig.base_rpy`); it sets the gravity vector.
-
-    Returns:
-      an uncompiled ``mujoco.MjSpec`` (``.compile()`` gives the ``MjModel``).
-    """
-    import mujoco  # imported here: the protocol layer must not need MuJoCo
-
-    limits = {j.name: j for j in joints}
-    spec = mujoco.MjSpec()
-    spec.modelname = "bravo7_hw_sim"
-    spec.compiler.degree = False
-    spec.compiler.eulerseq = "XYZ"  # URDF rpy: extrinsic roll, pitch, yaw
-    spec.option.timestep = physics_dt
-    spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
-    spec.option.gravity = -_GRAVITY * _world_up(base_rpy)
-    spec.default.geom.contype = 0  # joint-space physics: nothing collides
-    spec.default.geom.conaffinity = 0
-    spec.default.geom.density = 1000.0
-    inertials = dict(zip(bravo7.INERTIAL_BODIES, bravo7.urdf_inertials())) if dynamics else {}
-
-    def place(frame, xyz, rpy) -> None:
-        frame.pos = xyz
-        frame.alt.type = mujoco.mjtOrientation.mjORIENTATION_EULER
-        frame.alt.euler = rpy
-
-    def carry(body, inertial) -> None:
-        body.explicitinertial = True
-        body.mass = inertial.mass
-        body.ipos = inertial.com
-        body.fullinertia = inertial.inertia
-
-    parent = spec.worldbody
-    chain = bravo7.ARM_JOINTS
-    for k, joint in enumerate(chain):
-        body = parent.add_body(name=f"link_{joint.name}", gravcomp=0.0 if dynamics else 1.0)
-        place(body, joint.xyz, joint.rpy)
-        if dynamics:
-            carry(body, inertials[joint.name])
-        lim = limits[joint.name]
-        body.add_joint(name=joint.name, type=mujoco.mjtJoint.mjJNT_HINGE, axis=joint.axis,
-                       range=[lim.lower, lim.upper], limited=mujoco.mjtLimited.mjLIMITED_TRUE,
-                       armature=_HINGE_ARMATURE, damping=_HINGE_DAMPING)
-        end = chain[k + 1].xyz if k + 1 < len(chain) else bravo7.TOOL_XYZ
-        body.add_geom(type=mujoco.mjtGeom.mjGEOM_CAPSULE, fromto=[0, 0, 0, *end], size=[bravo7.LINK_RADIUS, 0, 0])
-        parent = body
-    tool = parent.add_frame()
-    place(tool, bravo7.TOOL_XYZ, bravo7.TOOL_RPY)
-    tool.add_site(name="tool")  # the tool frame: what KM_END_POS reports
-    if dynamics:  # the closed jaws' mass, rigid on link B
-        carry(tool.add_body(name="jaws_housing"), inertials["tool"])
-    jaws = tool.add_body(name="jaws", gravcomp=1.0)
-    place(jaws, bravo7.JAWS.xyz, bravo7.JAWS.rpy)
-    lim = limits[bravo7.JAWS.name]
-    jaws.add_joint(name=bravo7.JAWS.name, type=mujoco.mjtJoint.mjJNT_SLIDE, axis=bravo7.JAWS.axis,
-                   range=[lim.lower * _MM, lim.upper * _MM], limited=mujoco.mjtLimited.mjLIMITED_TRUE,
-                   armature=_JAWS_ARMATURE, damping=_JAWS_DAMPING)
-    jaws.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=_JAWS_HALF_SIZE, mass=_JAWS_MASS)
-    for joint in bravo7.JOINTS:
-        act = spec.add_actuator(name=f"v_{joint.name}", target=joint.name, trntype=mujoco.mjtTrn.mjTRN_JOINT)
-        act.set_to_velocity(kv=kv)
-        spec.add_actuator(name=f"i_{joint.name}", target=joint.name, trntype=mujoco.mjtTrn.mjTRN_JOINT)
-    return spec
+def _joint_index(names: Sequence[str], name: str, what: str) -> int:
+    """Index of joint ``name`` in ``names`` (exact, else the one equal ignoring case); -1 for ""."""
+    if not name:
+        return -1
+    if name in names:
+        return list(names).index(name)
+    folded = [k for k, n in enumerate(names) if n.lower() == name.lower()]
+    if len(folded) != 1:
+        raise ValueError(f"SimConfig.{what} {name!r} is not a joint of the arm ({', '.join(names)})")
+    return folded[0]
 
 
 class SimArm:
     """The simulated device: MuJoCo physics plus BPL behaviour.
 
     Args:
-      config: servo, physics and the device-side faults (stuck joint, hardware status).
-      q0: initial positions in plan order G, F, E, D, C, B, A [rad …, mm]; default mid-range
-        arm and jaws at 0 mm.
-      joints: joint specs (limits, speed limits).
+      robot: the arm (:class:`uvms_jax.robot.Robot` with a gripper); its joint table, device
+        ids included, is :func:`~uvms_jax.hw.joint_specs` of it (an arm without a hardware
+        profile: consecutive ids, the gripper 1).
+      config: servo, physics and the device-side faults (stuck joint, hardware status; joints
+        named as the robot names them, case ignored).
+      q0: ``(n + 1,)`` initial positions in plan order, the arm's joints then the jaws [rad …,
+        mm]; default mid-range arm and jaws at their lower limit.
     """
 
-    def __init__(self, config: SimConfig = SimConfig(), q0: Sequence[float] | None = None,
-                 joints: Sequence[JointSpec] = BRAVO7) -> None:
+    def __init__(self, robot, config: SimConfig = SimConfig(), q0: Sequence[float] | None = None) -> None:
         import mujoco  # imported here: the protocol layer must not need MuJoCo
 
         self._mj = mujoco
+        self.robot = robot
         self.config = config
-        self.joints = tuple(joints)
-        self.model = sim_spec(self.joints, physics_dt=config.physics_dt, dynamics=config.dynamics,
+        self.joints = joint_specs(robot)
+        self.model = sim_spec(robot, physics_dt=config.physics_dt, dynamics=config.dynamics,
                               base_rpy=config.base_rpy).compile()
         self.data = mujoco.MjData(self.model)
         names = [j.name for j in self.joints]
@@ -209,29 +99,26 @@ class SimArm:
         self._vmax = np.array([j.max_velocity for j in self.joints])
         self._index = {j.device_id: i for i, j in enumerate(self.joints)}
         if q0 is None:
-            q0 = [0.0 if j.unit == "mm" else 0.5 * (j.lower + j.upper) for j in self.joints]
+            q0 = [j.lower if j.unit == "mm" else 0.5 * (j.lower + j.upper) for j in self.joints]
         q0 = np.asarray(q0, dtype=float)
         if q0.shape != (len(self.joints),):
-            raise ValueError(f"q0 must have {len(self.joints)} values (G…B, A), got {q0.shape}")
+            raise ValueError(f"q0 must have {len(self.joints)} values ({', '.join(names)}), got {q0.shape}")
         for j, v in zip(self.joints, q0):
             if not j.contains(v):
                 raise ValueError(f"initial {j.name} = {v} outside [{j.lower}, {j.upper}]")
         self.data.qpos[self._qadr] = q0 * self._scale
         self._mj.mj_forward(self.model, self.data)
-        # Buoyancy of each link with mass: body ids, centres of buoyancy in the bodies [m], lifts
-        # [N] along the world's up, fixed in the base frame (the base does not move).
-        buoyant = [(self.model.body("jaws_housing" if body == "tool" else f"link_{body}").id, inertial)
-                   for body, inertial in zip(bravo7.INERTIAL_BODIES, bravo7.urdf_inertials())
-                   if body != "base" and config.dynamics and config.water_density > 0]
-        self._buoy_ids = np.array([b for b, _ in buoyant], dtype=int)
-        lifts = np.array([config.water_density * i.volume * _GRAVITY for _, i in buoyant])
-        self._buoy_arm = np.array([np.subtract(i.cob, i.com) for _, i in buoyant]).reshape(-1, 3)
-        lift = lifts[:, None] * _world_up(config.base_rpy)  # (k, 3) [N]
+        # Buoyancy of each body with mass: body ids, lifts [N] along the world's up, and the
+        # lift-weighted mean of the parts' centres of buoyancy less the body's centre of mass
+        # [m, in the body], fixed in the base frame (the base does not move).
+        self._buoy_ids, lifts, arms = self._buoyant_bodies()
+        self._buoy_arm = arms
+        lift = lifts[:, None] * world_up(config.base_rpy)  # (k, 3) [N]
         self.data.xfrc_applied[self._buoy_ids, :3] = lift
         # Its moment arm turns with the link: r × F = [F]×ᵀ r, whose row j is F × e_j (k, 3, 3) [N].
         self._buoy_moment = np.cross(lift[:, None, :], np.eye(3))
         # Views of MjData (fetching one is slow in a per-step loop) and the rows of the buoyant
-        # bodies: a slice when their ids run on (they do: G…B, then the jaws' housing).
+        # bodies: a slice when their ids run on (they do along a chain).
         self._xmat, self._xfrc = self.data.xmat, self.data.xfrc_applied
         ids = self._buoy_ids
         contiguous = ids.size and np.array_equal(ids, np.arange(ids[0], ids[0] + ids.size))
@@ -242,9 +129,9 @@ class SimArm:
         self.mode = np.full(n, int(Mode.POSITION))
         self.target = q0.copy()  # wire units
         self.vel_target = np.zeros(n)
-        self.stuck = -1 if not config.stuck_joint else names.index(config.stuck_joint)
+        self.stuck = _joint_index(names, config.stuck_joint, "stuck_joint")
         self._stuck_q = self.data.qpos[self._qadr].copy()
-        self.fault_index = -1 if not config.fault_joint else names.index(config.fault_joint)
+        self.fault_index = _joint_index(names, config.fault_joint, "fault_joint")
         self.limit_violations = 0
         self.demands = 0
         self.unanswered = 0  # requested ids a device does not answer
@@ -253,14 +140,38 @@ class SimArm:
         self.heartbeat_ids: dict[int, tuple[int, ...]] = {}
         self.heartbeat_hz: dict[int, int] = {}
         self._next_heartbeat: dict[int, float] = {}
-        self._tool = self.model.site("tool").id
-        efforts = {j.name: j.effort for j in bravo7.JOINTS}
-        self._torque_constant = np.array([efforts[j.name] for j in self.joints]) / (_EFFORT_CURRENT_MA * 1e-3)
+        self._tool = self.model.site("tool").id  # uvms_jax.robot.TOOL_SITE
+        efforts = np.array([*robot.effort_limits, robot.gripper.effort], dtype=float)
+        efforts[~(efforts > 0)] = _DEFAULT_EFFORT
+        self._torque_constant = efforts / (_EFFORT_CURRENT_MA * 1e-3)
         self._max_integral = self._torque_constant * _CURRENT_LIMIT_MA * 1e-3 / _KI
         # The jaws' fingers carry no load (gravity compensated): no integral, which would wind
         # up while they squeeze an object and hold them shut after the command to open.
         self._max_integral[[j.unit == "mm" for j in self.joints]] = 0.0
         np.clip(self._integral, -self._max_integral, self._max_integral, out=self._integral)
+
+    def _buoyant_bodies(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(ids (k,), lifts (k,) [N], arms (k, 3) [m])`` of the moving bodies with displaced
+        volume: the parts' lifts summed per body, the arm from the body's centre of mass to the
+        lift-weighted centre of buoyancy of its parts, in the body frame (none without
+        ``config.dynamics``, in air, or for bodies the model does not weigh)."""
+        from uvms_jax.robot import BASE
+
+        cfg, robot = self.config, self.robot
+        weighed = massive_bodies(robot) if cfg.dynamics else set()
+        per_body: dict[int, list] = {}
+        for part in robot.inertials:
+            if part.body != BASE and part.body in weighed and part.volume > 0 and cfg.water_density > 0:
+                per_body.setdefault(part.body, []).append(part)
+        ids, lifts, arms = [], [], []
+        for body, parts in sorted(per_body.items()):
+            b = self.model.body(robot.link_names[body]).id
+            lift = [cfg.water_density * p.volume * GRAVITY for p in parts]
+            cob = sum(l * np.asarray(p.cob) for l, p in zip(lift, parts)) / sum(lift)
+            ids.append(b)
+            lifts.append(sum(lift))
+            arms.append(cob - self.model.body_ipos[b])
+        return np.array(ids, dtype=int), np.array(lifts, dtype=float), np.array(arms, dtype=float).reshape(-1, 3)
 
     # -- physics ---------------------------------------------------------------------------
     @property
@@ -269,11 +180,11 @@ class SimArm:
         return float(self.data.time)
 
     def positions(self) -> np.ndarray:
-        """(n,) positions in wire units (rad, mm), plan order G…B, A."""
+        """(n + 1,) positions in wire units (rad, mm), plan order: the arm's joints, then the jaws."""
         return self.data.qpos[self._qadr] / self._scale
 
     def velocities(self) -> np.ndarray:
-        """(n,) velocities in wire units (rad/s, mm/s)."""
+        """(n + 1,) velocities in wire units (rad/s, mm/s)."""
         return self.data.qvel[self._dadr] / self._scale
 
     def step_to(self, t: float) -> None:
@@ -318,7 +229,7 @@ class SimArm:
         return HardwareStatus.OK
 
     def currents(self) -> np.ndarray:
-        """(n,) motor currents [mA]: each joint's drive torque (jaws: force) over its torque constant."""
+        """(n + 1,) motor currents [mA]: each joint's drive torque (jaws: force) over its torque constant."""
         force = self.data.actuator_force
         return (force[self._act] + force[self._iact]) / self._torque_constant * 1e3
 
@@ -328,7 +239,7 @@ class SimArm:
 
         MuJoCo applies it at the centre of mass, so the lift's torque about that point goes
         with it: ``r × F``, r = R (cob - com) in MuJoCo's world (the base frame), F the lift
-        along :func:`_world_up` (F is set once; this runs every physics step, hence the
+        along :func:`world_up` (F is set once; this runs every physics step, hence the
         precomputed matrix of ``r ↦ r × F``)."""
         if self._buoy_ids.size == 0:
             return
@@ -336,7 +247,7 @@ class SimArm:
         self._xfrc[self._buoy_rows, 3:6] = np.einsum("kij,kj->ki", self._buoy_moment, r)
 
     def _holding_torque(self) -> np.ndarray:
-        """(n,) drive torques that hold the arm still in its current pose [N·m; N]."""
+        """(n + 1,) drive torques that hold the arm still in its current pose [N·m; N]."""
         mj, m, d = self._mj, self.model, self.data
         self._apply_buoyancy()
         load = d.qfrc_bias - d.qfrc_gravcomp  # gravity the drives carry (the arm is at rest)
@@ -366,7 +277,7 @@ class SimArm:
 
     # -- protocol --------------------------------------------------------------------------
     def _devices(self, device_id: int) -> list[int]:
-        """Device ids that take a packet addressed to ``device_id`` (broadcast: the seven joints)."""
+        """Device ids that take a packet addressed to ``device_id`` (broadcast: every joint)."""
         if device_id == BROADCAST:
             return [j.device_id for j in self.joints]
         return [device_id] if device_id in self._index or device_id in _BASE_DEVICES else []
@@ -444,7 +355,7 @@ class SimArm:
 
         Returns:
           the encoded answers, one packet each, device by device (a broadcast REQUEST of k ids
-          gives 7·k packets). Requests for ids a device does not answer, and packets of ids the
+          gives (n + 1)·k packets). Requests for ids a device does not answer, and packets of ids the
           device does not take, are ignored as the arm ignores them, and counted in
           :attr:`unanswered` and :attr:`ignored`.
         """
@@ -506,6 +417,7 @@ class SimArm:
         return out
 
 
+
 def _ypr(R: np.ndarray) -> np.ndarray:
     """ZYX Euler angles (yaw, pitch, roll) [rad] of a rotation matrix ``R`` (3, 3)."""
     return np.array([math.atan2(R[1, 0], R[0, 0]), math.asin(max(-1.0, min(1.0, -R[2, 0]))),
@@ -520,189 +432,3 @@ def _ypr_rates(yaw: float, pitch: float, omega: np.ndarray) -> np.ndarray:
     return np.linalg.solve(basis, omega)
 
 
-class SimLink:
-    """A :class:`SimArm` behind a faulty link: drops, corruption and latency (seeded).
-
-    Each answer leaves as its own datagram, as each device of a Bravo 7 answers for itself
-    over UDP; with ``config.coalesce`` the answers to one received datagram share one (a byte
-    stream's view, as on serial). Drops, corruption and latency apply per datagram.
-    """
-
-    def __init__(self, arm: SimArm, config: SimConfig | None = None) -> None:
-        self.arm = arm
-        self.config = arm.config if config is None else config
-        self._rng = random.Random(self.config.seed)
-        self._reader = PacketReader()
-        self._outbox: list[tuple[float, int, bytes]] = []
-        self._seq = 0
-        self.dropped = self.corrupted = 0
-
-    @property
-    def reader_stats(self):
-        """Decoder statistics of what the device received."""
-        return self._reader.stats
-
-    def receive(self, datagram: bytes, now: float) -> None:
-        """A datagram arrives from the client at simulated time ``now`` [s]."""
-        if self._rng.random() < self.config.drop:
-            self.dropped += 1
-            return
-        self.arm.step_to(now)
-        self._emit([a for p in self._reader.feed(datagram) for a in self.arm.handle(p)], now)
-
-    def tick(self, now: float) -> None:
-        """Advance physics to ``now`` and emit due heartbeats."""
-        self.arm.step_to(now)
-        self._emit(self.arm.heartbeat(), now)
-
-    def _emit(self, packets: list[bytes], now: float) -> None:
-        if not packets:
-            return
-        for data in [b"".join(packets)] if self.config.coalesce else packets:
-            if self._rng.random() < self.config.drop:
-                self.dropped += 1
-                continue
-            if self._rng.random() < self.config.corrupt:
-                self.corrupted += 1
-                b = bytearray(data)
-                b[self._rng.randrange(len(b))] ^= self._rng.randrange(1, 256)
-                data = bytes(b)
-            self._seq += 1
-            heapq.heappush(self._outbox, (now + self.config.latency_s, self._seq, data))
-
-    def next_due(self) -> float:
-        """Time the next queued datagram is due [s] (inf if none)."""
-        return self._outbox[0][0] if self._outbox else math.inf
-
-    def pop_due(self, now: float) -> list[bytes]:
-        """Every datagram due by ``now``, in order."""
-        out = []
-        while self._outbox and self._outbox[0][0] <= now:
-            out.append(heapq.heappop(self._outbox)[2])
-        return out
-
-
-class VirtualClock:
-    """Simulated time for in-process runs: ``now()`` and ``sleep(dt)`` that just advances."""
-
-    def __init__(self, t0: float = 0.0) -> None:
-        self.t = t0
-
-    def now(self) -> float:
-        """Current simulated time [s]."""
-        return self.t
-
-    def sleep(self, dt: float) -> None:
-        """Advance simulated time by ``dt`` [s] (negative values are ignored)."""
-        if dt > 0:
-            self.t += dt
-
-
-class LoopbackTransport:
-    """In-process transport to a :class:`SimLink` on a :class:`VirtualClock` (no sockets).
-
-    ``recv`` returns one datagram, as a UDP socket does, advancing the clock to the next one
-    (or by the whole timeout), so a run costs only its computation time. ``sent`` keeps every
-    datagram the client wrote.
-    """
-
-    datagrams = True  # each recv is one whole datagram
-
-    def __init__(self, link: SimLink, clock: VirtualClock, *, tick: float = 0.01) -> None:
-        self.link, self.clock = link, clock
-        self.name = "loopback"
-        self.sent: list[bytes] = []
-        self._tick = tick
-        self._inbox: collections.deque[bytes] = collections.deque()
-
-    def send(self, data: bytes) -> None:
-        self.sent.append(bytes(data))
-        self.link.receive(data, self.clock.now())
-
-    def recv(self, timeout: float) -> bytes:
-        end = self.clock.now() + max(timeout, 0.0)
-        while True:
-            if self._inbox:
-                return self._inbox.popleft()
-            self.link.tick(self.clock.now())
-            self._inbox.extend(self.link.pop_due(self.clock.now()))
-            if self._inbox:
-                return self._inbox.popleft()
-            nxt = min(self.link.next_due(), end, self.clock.now() + self._tick)
-            if self.clock.now() >= end:
-                return b""
-            self.clock.sleep(nxt - self.clock.now())
-
-    def close(self) -> None:
-        pass
-
-
-class SimServer:
-    """UDP server thread speaking BPL for a :class:`SimArm` (real time, 127.0.0.1).
-
-    Replies go to the address of the last datagram received. Use as a context manager::
-
-        with SimServer(SimArm(cfg, q0)) as server:
-            transport = UdpTransport(*server.address)
-    """
-
-    def __init__(self, arm: SimArm, config: SimConfig | None = None, host: str = "127.0.0.1",
-                 port: int = 0, poll_s: float = 0.002) -> None:
-        self.link = SimLink(arm, config)
-        self.arm = arm
-        self._sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        self._sock.bind((host, port))
-        self.address: tuple[str, int] = self._sock.getsockname()
-        self._poll = poll_s
-        self._stop = threading.Event()
-        self._thread: threading.Thread | None = None
-        self.lock = threading.Lock()
-        self.error: BaseException | None = None
-
-    def start(self) -> SimServer:
-        """Start the server thread (simulated time 0 = now)."""
-        self._t0 = time.monotonic() - self.arm.time
-        self._thread = threading.Thread(target=self._run, name="bravo7-sim", daemon=True)
-        self._thread.start()
-        return self
-
-    def stop(self) -> None:
-        """Stop the thread and close the socket."""
-        self._stop.set()
-        if self._thread is not None:
-            self._thread.join(timeout=2.0)
-        self._sock.close()
-
-    def __enter__(self) -> SimServer:
-        return self.start()
-
-    def __exit__(self, *exc: object) -> None:
-        self.stop()
-
-    def _run(self) -> None:
-        peer = None
-        try:
-            while not self._stop.is_set():
-                now = time.monotonic() - self._t0
-                wait = min(self._poll, max(self.link.next_due() - now, 0.0))
-                self._sock.settimeout(max(wait, 1e-4))
-                try:
-                    data, peer_addr = self._sock.recvfrom(65536)
-                except (TimeoutError, BlockingIOError):
-                    data = None
-                except OSError:
-                    if self._stop.is_set():
-                        return
-                    raise
-                now = time.monotonic() - self._t0
-                with self.lock:
-                    if data is not None:
-                        peer = peer_addr
-                        self.link.receive(data, now)
-                    self.link.tick(now)
-                    out = self.link.pop_due(now)
-                if peer is not None:
-                    for datagram in out:
-                        self._sock.sendto(datagram, peer)
-        except BaseException as e:  # surfaced to tests through .error
-            self.error = e

@@ -1,4 +1,4 @@
-"""Byte transports to a Bravo 7: UDP and serial (pyserial), both with timeouts.
+"""Byte transports to a Reach arm: UDP and serial (pyserial), both with timeouts.
 
 A transport moves raw bytes; framing is the codec's job. ``recv(timeout)`` returns ``b""``
 when nothing arrived in time — timeouts are normal events on a lossy link, and the client
@@ -40,7 +40,7 @@ def parse_host_port(text: str) -> tuple[str, int]:
 
 
 class UdpTransport:
-    """UDP link to ``(host, port)`` (Bravo 7 factory default 192.168.2.3:6789).
+    """UDP link to ``(host, port)`` (Reach factory default 192.168.2.3:6789).
 
     Only datagrams from the arm's address are accepted. Each ``recv`` returns one datagram,
     which may hold any number of packets.

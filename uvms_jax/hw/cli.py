@@ -1,12 +1,16 @@
-"""``uvms-hw``: run a plan on a Bravo 7 (real or simulated), or serve the simulated arm.
+"""``uvms-hw``: run a plan on a Reach arm (real or simulated), or serve the simulated arm.
 
-    uvms-hw run PLAN [--sim | --udp HOST:PORT | --serial DEV] [--dry-run] [--speed-scale S]
-                     [--drop P] [--corrupt P] [--latency S] [--stuck-joint X]
+    uvms-hw run PLAN [--robot ARM] [--sim | --udp HOST:PORT | --serial DEV] [--dry-run]
+                     [--speed-scale S] [--drop P] [--corrupt P] [--latency S] [--stuck-joint X]
                      [--hw-fault X:BITS[@T]] [--base-rpy R P Y] [--stream HZ] [--config hw.yaml]
                      [--out DIR] ...
-    uvms-hw export PLAN --ros OUT.yaml [--jaws-start MM]
-    uvms-hw sim [--port 6789] [--drop P] [--coalesce] [--base-rpy R P Y] ...
+    uvms-hw export PLAN --ros OUT.yaml [--robot ARM] [--jaws-start MM]
+    uvms-hw sim [--robot ARM] [--port 6789] [--drop P] [--coalesce] [--base-rpy R P Y] ...
     uvms-hw --version
+
+ARM is a shipped arm card's name (``uvms_jax.robot.shipped_arms()``: bravo7, alpha5) or the
+path of an arm card (YAML, :func:`uvms_jax.robot.load_arm`); default bravo7. A plan made for
+another arm is refused (exit 2).
 
 PLAN is a ``plan.json`` or a ``trajectory_msgs/JointTrajectory``-shaped file, YAML or JSON by
 its suffix (:mod:`uvms_jax.planfile`); ``export`` writes a plan as the latter.
@@ -32,15 +36,18 @@ from uvms_jax import __version__, progress
 from uvms_jax.planfile import PlanError, load_plan, save_plan
 
 from ._check import check_plan
-from ._client import Bravo7
+from ._client import ReachArm
 from ._config import HwConfig, SimConfig, config_from_mapping
 from ._run import run_plan, write_run
-from ._sim import SimArm, SimServer
+from ._joints import joint_specs
+from ._sim import SimArm
+from ._sim_link import SimServer
 from ._transport import LinkError, SerialTransport, Transport, UdpTransport, parse_host_port
 
 __all__ = ["build_parser", "main"]
 
 EXIT_OK, EXIT_ABORTED, EXIT_REFUSED = 0, 1, 2
+DEFAULT_ROBOT = "bravo7"  # the arm card used when --robot is not given
 
 _EPILOG = """exit status:
   0  plan completed, dry run passed or plan exported
@@ -91,7 +98,7 @@ def _sim_args(p: argparse.ArgumentParser) -> None:
     g.add_argument("--drop", type=float, help="probability a datagram is lost (each direction)")
     g.add_argument("--corrupt", type=float, help="probability a reply has one byte changed")
     g.add_argument("--latency", type=float, help="added reply latency [s]")
-    g.add_argument("--stuck-joint", metavar="X", help="joint letter that does not move")
+    g.add_argument("--stuck-joint", metavar="X", help="joint (its name, case ignored) that does not move")
     g.add_argument("--hw-fault", type=_parse_fault, metavar="X:BITS[@T]",
                    help="joint X reports hardware-status BITS from simulated time T")
     g.add_argument("--coalesce", action="store_true", default=None,
@@ -101,6 +108,11 @@ def _sim_args(p: argparse.ArgumentParser) -> None:
                    help="orientation of the arm's base in the world, URDF roll pitch yaw [rad]: gravity "
                         "along the world's -z, buoyancy +z (0 0 0: upright; 3.14159 0 0: hanging); "
                         "default: the plan's base_rpy, else the --config sim section, else upright")
+
+
+def _robot_arg(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--robot", default=DEFAULT_ROBOT, metavar="ARM",
+                   help="the arm: a shipped arm card's name (bravo7, alpha5) or an arm card's YAML path")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -115,6 +127,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     r = command("run", "check and execute a plan (plan.json or JointTrajectory YAML/JSON)")
     r.add_argument("plan", type=Path, help="plan.json, or a JointTrajectory .yaml/.yml/.json")
+    _robot_arg(r)
     link = r.add_mutually_exclusive_group()
     link.add_argument("--sim", action="store_true", help="run against the simulated arm (UDP, 127.0.0.1)")
     link.add_argument("--udp", metavar="HOST:PORT", help="real arm over UDP (factory 192.168.2.3:6789)")
@@ -138,12 +151,14 @@ def build_parser() -> argparse.ArgumentParser:
 
     e = command("export", "write a plan as a trajectory_msgs/JointTrajectory-shaped YAML/JSON file")
     e.add_argument("plan", type=Path, help="plan.json, or a JointTrajectory .yaml/.yml/.json")
+    _robot_arg(e)
     e.add_argument("--ros", type=Path, required=True, metavar="OUT",
                    help="output file: YAML for .yaml/.yml, JSON otherwise")
     e.add_argument("--jaws-start", type=float, metavar="MM",
                    help="jaws opening before the first gripper step [mm] (default: that step's opening)")
 
-    s = command("sim", "serve the simulated Bravo 7 over UDP until interrupted")
+    s = command("sim", "serve the simulated arm over UDP until interrupted")
+    _robot_arg(s)
     s.add_argument("--host", default="127.0.0.1", help="address to bind")
     s.add_argument("--port", type=int, default=6789, help="UDP port (the arm's factory port)")
     s.add_argument("--config", type=Path, help="YAML with a sim section")
@@ -181,11 +196,19 @@ def _real_transport(args: argparse.Namespace) -> Transport:
     return SerialTransport(args.serial)
 
 
+def _load_robot(name: str):
+    """The arm of ``--robot`` (imported here: the robot model pulls in MuJoCo and JAX)."""
+    from uvms_jax.robot import load_arm
+
+    return load_arm(name)
+
+
 def _run(args: argparse.Namespace) -> int:
     hw, sim_cfg = _configs(args)
+    robot = _load_robot(args.robot)
     try:
-        plan = load_plan(args.plan)
-        summary = check_plan(plan, hw)
+        plan = load_plan(args.plan, robot)
+        summary = check_plan(plan, robot, hw)
     except PlanError as e:
         print(f"uvms-hw: {e}", file=sys.stderr)
         return EXIT_REFUSED
@@ -206,14 +229,17 @@ def _run(args: argparse.Namespace) -> int:
     out = args.out or Path("outputs/hw") / time.strftime("%Y-%m-%d_%H-%M-%S")
     client = None
     if not args.sim:
+        if robot.hardware is None:
+            print(f"uvms-hw: robot {robot.name!r} has no hardware profile (device ids): use --sim", file=sys.stderr)
+            return EXIT_REFUSED
         try:
-            client = Bravo7(_real_transport(args), request_timeout=hw.request_timeout_s)
+            client = ReachArm(_real_transport(args), joint_specs(robot), request_timeout=hw.request_timeout_s)
         except (LinkError, ValueError) as e:
             print(f"uvms-hw: {e}", file=sys.stderr)
             return EXIT_REFUSED
     try:
         with progress.bar(total=len(plan.segments), desc="run", unit="seg") as bar:
-            run = run_plan(plan, link="udp" if client is None else client, config=hw, sim=sim_cfg,
+            run = run_plan(plan, robot, link="udp" if client is None else client, config=hw, sim=sim_cfg,
                            progress=lambda i, n, name: bar.update(i - bar.n))  # i: segments finished
             if run.ok:
                 bar.update(bar.total - bar.n)
@@ -229,7 +255,9 @@ def _run(args: argparse.Namespace) -> int:
 
 def _export(args: argparse.Namespace) -> int:
     try:
-        save_plan(load_plan(args.plan), args.ros, joint_trajectory=True, jaws_start_mm=args.jaws_start)
+        robot = _load_robot(args.robot)
+        save_plan(load_plan(args.plan, robot), args.ros, joint_trajectory=True, jaws_start_mm=args.jaws_start,
+                  gripper=robot)
     except PlanError as e:
         print(f"uvms-hw: {e}", file=sys.stderr)
         return EXIT_REFUSED
@@ -239,8 +267,9 @@ def _export(args: argparse.Namespace) -> int:
 
 def _serve(args: argparse.Namespace) -> int:
     _, sim_cfg = _configs(args)
-    with SimServer(SimArm(sim_cfg), host=args.host, port=args.port) as server:
-        print(f"simulated Bravo 7 on {server.address[0]}:{server.address[1]} (Ctrl-C to stop)", file=sys.stderr)
+    robot = _load_robot(args.robot)
+    with SimServer(SimArm(robot, sim_cfg), host=args.host, port=args.port) as server:
+        print(f"simulated {robot.name} on {server.address[0]}:{server.address[1]} (Ctrl-C to stop)", file=sys.stderr)
         try:
             while server.error is None:
                 time.sleep(0.2)

@@ -1,0 +1,119 @@
+"""The simulated arm's MuJoCo model: the robot's one MuJoCo body tree plus drives.
+
+The bodies, joints, capsules and the tool site are :func:`uvms_jax.robot.mjcf_body`'s (with the
+robot's mass properties where ``dynamics`` is on); this module adds what only the simulator
+needs: gravity along the world's -z turned into the base frame (:func:`world_up`), no contacts,
+rotor inertia and damping on every joint, the jaws as one slide joint at the tool frame, and two
+actuators per joint — a velocity servo ``v_<joint>`` and an integral-torque motor ``i_<joint>``
+(:class:`~uvms_jax.hw.SimArm` drives both).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ._config import SimConfig
+from ._joints import MM_PER_M, joint_specs
+
+if TYPE_CHECKING:
+    import mujoco
+
+__all__ = ["GRAVITY", "JAWS_BODY", "KV", "sim_spec", "world_up"]
+
+_MM = 1.0 / MM_PER_M  # jaws: mm on the wire, m in MuJoCo
+
+# Physics of the simulated device (not an arm's data): rotor inertia and damping per joint
+# [kg·m², N·m·s/rad; jaws kg, N·s/m], the jaws' fingers box [m, kg] and the velocity servo gain.
+_HINGE_ARMATURE, _HINGE_DAMPING = 0.05, 0.1
+_JAWS_ARMATURE, _JAWS_DAMPING = 0.5, 1.0
+_JAWS_HALF_SIZE, _JAWS_MASS = (0.01, 0.02, 0.02), 0.2
+KV = 30.0  # velocity servo gain [N·m·s/rad; N·s/m]
+GRAVITY = 9.81  # [m/s²]
+JAWS_BODY = "jaws"  # the body the jaws' slide joint moves
+
+
+def world_up(base_rpy: Sequence[float] = SimConfig.base_rpy) -> np.ndarray:
+    """(3,) unit vector of the world's up (+z) in the arm's base frame, ``R^T e_z`` for the base
+    orientation R = Rz(yaw) Ry(pitch) Rx(roll) of ``base_rpy`` (URDF roll, pitch, yaw [rad]).
+
+    Gravity acts along minus this vector, buoyancy along it; (0, 0, 0) gives exactly
+    (0, 0, 1) (the upright base), (π, 0, 0) about (0, 0, -1) (the base hanging).
+    """
+    import mujoco  # imported here: the protocol layer must not need MuJoCo
+
+    q = np.zeros(4)
+    mujoco.mju_euler2Quat(q, np.asarray(base_rpy, dtype=float), "XYZ")  # URDF rpy: extrinsic x, y, z
+    mujoco.mju_negQuat(q, q)  # the inverse rotation: world → base
+    up = np.zeros(3)
+    mujoco.mju_rotVecQuat(up, np.array([0.0, 0.0, 1.0]), q)
+    return up
+
+
+def massive_bodies(robot) -> set[int]:
+    """Body numbers of ``robot`` (``-1`` base, ``i`` link of joint i) that carry mass properties."""
+    return {b.body for b in robot.inertials if b.mass > 0}
+
+
+def sim_spec(robot, kv: float = KV, physics_dt: float = SimConfig.physics_dt, dynamics: bool = True,
+             base_rpy: Sequence[float] = SimConfig.base_rpy) -> mujoco.MjSpec:
+    """MuJoCo model of the simulated ``robot``: its body tree (:func:`uvms_jax.robot.mjcf_body`),
+    the jaws' slide joint, a velocity actuator and an integral-torque motor on every joint.
+
+    MuJoCo's world is the arm's base frame; nothing collides. With ``dynamics`` each link
+    carries the robot's mass properties (``robot.inertials``, summed per body) under gravity
+    along the world's -z (:func:`world_up`: the base's -z when upright); buoyancy is applied by
+    :class:`~uvms_jax.hw.SimArm`. Bodies without mass properties (all of them without
+    ``dynamics``, or for an arm whose description has none, e.g. the Reach Alpha 5) are the
+    capsules at the density of water, gravity compensated: such an arm is servoed
+    kinematically, weightless. The jaws (a slide body at the tool frame, opening along its x
+    axis; a 0.2 kg box) are light and gravity compensated either way. Position limits are the
+    hardware path's (:func:`~uvms_jax.hw.joint_specs`: rad; the jaws' mm as m).
+
+    Args:
+      robot: the arm (:class:`uvms_jax.robot.Robot`, with a gripper).
+      kv: velocity actuator gain [N·m·s/rad; N·s/m for the jaws].
+      physics_dt: time step [s].
+      dynamics: the robot's mass properties, gravity on.
+      base_rpy: orientation of the base in the world, URDF roll, pitch, yaw [rad]
+        (:attr:`SimConfig.base_rpy`); it sets the gravity vector.
+
+    Returns:
+      an uncompiled ``mujoco.MjSpec`` (``.compile()`` gives the ``MjModel``).
+    """
+    import mujoco  # imported here: the protocol layer must not need MuJoCo
+
+    from uvms_jax.robot import TOOL_SITE, base_body, mjcf_body
+
+    specs = joint_specs(robot)
+    massive = massive_bodies(robot) if dynamics else set()
+    xml = (f'<mujoco model="{robot.name}_hw_sim"><compiler angle="radian"/>'
+           '<default><geom contype="0" conaffinity="0" density="1000"/></default>'
+           f"<worldbody>{mjcf_body(robot, inertial=bool(massive))}</worldbody></mujoco>")
+    spec = mujoco.MjSpec.from_string(xml)
+    spec.modelname = f"{robot.name}_hw_sim"
+    spec.option.timestep = physics_dt
+    spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+    spec.option.gravity = -GRAVITY * world_up(base_rpy)
+    for k, name in enumerate(robot.link_names):
+        spec.body(name).gravcomp = 0.0 if k in massive else 1.0
+    spec.body(base_body(robot)).gravcomp = 0.0 if -1 in massive else 1.0
+    for j in specs[:-1]:
+        joint = spec.joint(j.name)
+        joint.range = [j.lower, j.upper]
+        joint.armature = _HINGE_ARMATURE
+        joint.damping[0] = _HINGE_DAMPING  # [linear, (polynomial terms)]
+    tool = spec.site(TOOL_SITE)
+    jaws_spec = specs[-1]
+    jaws = spec.body(robot.link_names[-1]).add_body(name=JAWS_BODY, pos=tool.pos, quat=tool.quat, gravcomp=1.0)
+    jaws.add_joint(name=jaws_spec.name, type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[1.0, 0.0, 0.0],
+                   range=[jaws_spec.lower * _MM, jaws_spec.upper * _MM], limited=mujoco.mjtLimited.mjLIMITED_TRUE,
+                   armature=_JAWS_ARMATURE, damping=_JAWS_DAMPING)
+    jaws.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=_JAWS_HALF_SIZE, mass=_JAWS_MASS)
+    for j in specs:
+        act = spec.add_actuator(name=f"v_{j.name}", target=j.name, trntype=mujoco.mjtTrn.mjTRN_JOINT)
+        act.set_to_velocity(kv=kv)
+        spec.add_actuator(name=f"i_{j.name}", target=j.name, trntype=mujoco.mjtTrn.mjTRN_JOINT)
+    return spec
