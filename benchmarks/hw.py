@@ -29,8 +29,11 @@ import time
 from cobs import cobs
 from crc import Calculator
 
-from uvms_jax.hw import (CRC8_CONFIG, Bravo7, PacketID, PacketReader, SimArm, SimConfig, SimServer, UdpTransport,
-                         encode_floats, encode_packet)
+from uvms_jax.hw import (CRC8_CONFIG, PacketID, PacketReader, ReachArm, SimArm, SimConfig, SimServer, UdpTransport,
+                         encode_floats, encode_packet, joint_specs)
+from uvms_jax.robot import load_arm
+
+ROBOT = load_arm("bravo7")  # the arm the benchmark's simulator and client speak for
 
 _CRC8 = Calculator(CRC8_CONFIG, optimized=True)  # the peer: the crc library, as the codec configures it
 
@@ -80,7 +83,7 @@ def _percentiles(xs: list[float]) -> dict:
 
 
 def _time_reads(address: tuple[str, int], n: int) -> list[float]:
-    with Bravo7(UdpTransport(*address), request_timeout=0.5) as c:
+    with ReachArm(UdpTransport(*address), joint_specs(ROBOT), request_timeout=0.5) as c:
         for _ in range(50):
             c.read_state(retries=20)
         ts = []
@@ -105,7 +108,7 @@ def _sim_process() -> tuple[subprocess.Popen, tuple[str, int]]:
 def stream(seconds: float = 3.0, hz: int = 100) -> dict:
     proc, address = _sim_process()
     try:
-        with Bravo7(UdpTransport(*address), request_timeout=0.5) as c:
+        with ReachArm(UdpTransport(*address), joint_specs(ROBOT), request_timeout=0.5) as c:
             c.read_state(retries=40)  # the process is up
             out = {}
             for name in ("polled", "streamed"):
@@ -139,7 +142,7 @@ def round_trip(n: int) -> dict:
         proc.terminate()
         proc.wait(10)
     # the simulator as a thread of this process (what `uvms-hw run --sim` does)
-    with SimServer(SimArm(SimConfig())) as server:
+    with SimServer(SimArm(ROBOT, SimConfig())) as server:
         out["bravo7_sim_thread"] = _percentiles(_time_reads(server.address, n))
 
     srv = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
