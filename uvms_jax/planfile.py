@@ -213,6 +213,7 @@ def parse_plan(obj: Mapping[str, Any]) -> Plan:
     return Plan(tuple(names), tuple(out), base_rpy, parse_arm(obj.get("arm"), tuple(names)))
 
 
+# What an arm record must hold; any further keys a newer Robot.record() writes are kept as they are.
 _ARM_KEYS = {"name", "dof", "joint_names", "gripper", "source", "sha256"}
 _GRIPPER_KEYS = {"joint", "lower_m", "upper_m", "velocity_mps"}
 
@@ -221,13 +222,13 @@ def parse_arm(arm: Any, joint_names: Sequence[str] | None = None) -> dict | None
     """Check a plan's ``arm`` record (``Robot.record()``) and return it as a plain dict.
 
     Raises:
-      PlanError: not a mapping with exactly the record's keys, wrong types, a gripper record
+      PlanError: not a mapping with at least the record's keys, wrong types, a gripper record
         without a finite opening interval and a positive speed, or joint names other than
         ``joint_names`` (the plan's).
     """
     if arm is None:
         return None
-    if not isinstance(arm, Mapping) or set(arm) != _ARM_KEYS:
+    if not isinstance(arm, Mapping) or not _ARM_KEYS <= set(arm):
         got = sorted(arm) if isinstance(arm, Mapping) else type(arm).__name__
         raise PlanError(f"plan.arm: expected an object with keys {sorted(_ARM_KEYS)}, got {got}")
     names = arm["joint_names"]
@@ -247,7 +248,7 @@ def parse_arm(arm: Any, joint_names: Sequence[str] | None = None) -> dict | None
         if not (all(map(math.isfinite, (lo, hi, v))) and lo < hi and v > 0):
             raise PlanError(f"plan.arm.gripper: needs finite lower_m < upper_m and velocity_mps > 0, got {dict(g)}")
         g = {"joint": g["joint"], "lower_m": lo, "upper_m": hi, "velocity_mps": v}
-    return {"name": arm["name"], "dof": int(arm["dof"]), "joint_names": list(names), "gripper": g,
+    return {**arm, "name": arm["name"], "dof": int(arm["dof"]), "joint_names": list(names), "gripper": g,
             "source": arm["source"], "sha256": arm["sha256"]}
 
 
