@@ -328,7 +328,7 @@ class Executor:
 
     def _read_state(self) -> JointState:
         """This tick's state: requested, or the streamed packets that arrived since the last
-        state. When some were lost (each device answers in its own datagram, so 14 answers
+        state. When some were lost (each device answers in its own datagram, so the 2 (n + 1) answers
         rarely all arrive on a lossy link), it is completed from those under
         ``max_state_age_s`` old."""
         cfg = self.config

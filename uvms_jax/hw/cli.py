@@ -82,7 +82,7 @@ def _speed_scale(text: str) -> float:
 
 
 def _parse_fault(text: str) -> dict:
-    """``X:BITS[@T]`` → SimConfig fields (joint letter, status bits, onset time [s])."""
+    """``X:BITS[@T]`` → SimConfig fields (joint name, status bits, onset time [s])."""
     try:
         joint, rest = text.split(":", 1)
         bits, _, after = rest.partition("@")
