@@ -45,10 +45,12 @@ def main(cfg: DictConfig) -> dict:
     scenario = c.pop("scenario", None)  # a pick-and-place scenario: its grasp and place poses are the task
     with _cli.config_errors():
         settings = from_mapping(evo.DockingSettings, c)
-        task = plan.docking_task(plan.build_scene(scenario)) if scenario else None
+        # The arm of the docking scene, in the scenario's scene (its mount replaced by the vehicle's).
+        robot = evo.scene_robot(settings.scene) if scenario else None
+        task = plan.docking_task(plan.build_scene(robot, scenario)) if scenario else None
     if settings.dtype == "float64":
         jax.config.update("jax_enable_x64", True)
-    run = evo.run_docking(settings, task)
+    run = evo.run_docking(settings, task, robot)
     summary = evo.write_docking(run, out)
     log.info("GA/grid ratios %s (refined grid: %s); %.0f GA evaluations/s; outputs in %s",
              summary["ga_ratio_to_grid"], summary["ga_ratio_to_refined_grid"], summary["ga_evaluations_per_s"], out)

@@ -709,7 +709,8 @@ def plan_thesis_cage(budget_s: float):
     mapping = yaml.safe_load((cfg / "plan" / "default.yaml").read_text())
     mapping.update(planners=list(PLANNER_TABLES), budget_s=float(budget_s), render=False)
     settings = from_mapping(P.PlanSettings, mapping, "plan")
-    scene = P.build_scene(yaml.safe_load((cfg / "scenario" / "thesis_cage.yaml").read_text()))
+    scenario = yaml.safe_load((cfg / "scenario" / "thesis_cage.yaml").read_text())
+    scene = P.build_scene(P.scenario_robot(scenario), scenario)
     return P.plan_task_graph(jax.random.PRNGKey(settings.seed), scene, settings)
 
 

@@ -42,7 +42,10 @@ def main(cfg: DictConfig) -> dict:
     out = Path(HydraConfig.get().runtime.output_dir)
     with _cli.config_errors():
         settings = from_mapping(P.PlanSettings, OmegaConf.to_container(cfg.plan, resolve=True), "plan")
-    scene = P.build_scene(OmegaConf.to_container(cfg.scenario, resolve=True))
+    scenario = OmegaConf.to_container(cfg.scenario, resolve=True)
+    with _cli.config_errors():
+        robot = P.scenario_robot(scenario)
+    scene = P.build_scene(robot, scenario)
     task_plan = P.plan_task_graph(jax.random.PRNGKey(settings.seed), scene, settings)
     P.write_task_graph(task_plan, out)
     summary = {planner: dataclasses.asdict(s) for planner, s in task_plan.summary.items()}
@@ -50,7 +53,7 @@ def main(cfg: DictConfig) -> dict:
     if jp.planner in task_plan.by_planner:
         plan = P.plan_for_schedule(task_plan, jp.planner, jp.sequence, settings)
         P.write_plan(plan, out)
-        check = hw.check_plan(plan)  # the hardware's dry run: limits, continuity, timing
+        check = hw.check_plan(plan, robot)  # the hardware's dry run: limits, continuity, timing
         summary["plan_json"] = {"segments": check.n_segments, "estimated_s": check.estimated_s}
     summary["frames"] = P.render_frames(scene, task_plan.targets, out) if settings.render else 0
     (out / "summary.json").write_text(json.dumps(summary, indent=1))

@@ -13,6 +13,9 @@ from omegaconf import OmegaConf
 from uvms_jax import evo, kin, plan
 from uvms_jax.evo._collide import boxes_overlap, segment_box_distance
 from uvms_jax.settings import from_mapping
+from uvms_jax.robot import load_arm  # noqa: E402
+
+BRAVO7 = load_arm("bravo7")
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 SAMPLES = 20001  # points per segment of the brute-force distance
@@ -212,7 +215,7 @@ def test_tables_task_groups_the_symmetric_grasps():
     with initialize_config_dir(config_dir=str(CONFIGS), version_base="1.3"):
         cfg = compose("docking", overrides=["docking/preset=bravo7_tables"])
     scenario = OmegaConf.to_container(cfg, resolve=True)["scenario"]
-    task = plan.docking_task(plan.build_scene(scenario))
+    task = plan.docking_task(plan.build_scene(BRAVO7, scenario))
     assert len(task.names) == 8 and task.group.max() == 7  # 4 objects and 4 bases
     assert np.bincount(task.group)[0] == 4  # cube 1: four grasps a quarter turn apart
     assert task.T_world_box.shape == (len(scenario["tables"]), 4, 4)
@@ -230,7 +233,9 @@ def test_arm_scene_needs_exactly_one_task():
         evo.arm_docking_problem(evo.ArmSceneSettings())
     with pytest.raises(ValueError, match="exactly one task"):
         evo.arm_docking_problem(evo.ArmSceneSettings(panel=evo.PanelSettings()), task)
-    with pytest.raises(ValueError, match="unknown arm"):
+    with pytest.raises(ValueError, match="robot description not found: .*puma"):
+        evo.arm_docking_problem(evo.ArmSceneSettings(arm="puma", link_radius=0.04, panel=evo.PanelSettings()))
+    with pytest.raises(ValueError, match="need link_radius"):
         evo.arm_docking_problem(evo.ArmSceneSettings(arm="puma", panel=evo.PanelSettings()))
     with pytest.raises(ValueError, match="alternatives"):
         evo.ArmSceneSettings(alternatives=0)

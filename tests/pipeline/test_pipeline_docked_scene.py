@@ -14,6 +14,9 @@ from _pipeline_helpers import CONFIG_DIR
 from uvms_jax import evo, plan
 from uvms_jax.pipeline import docked_scene
 from uvms_jax.settings import from_mapping
+from uvms_jax.robot import load_arm  # noqa: E402
+
+BRAVO7 = load_arm("bravo7")
 
 
 @pytest.fixture(scope="module")
@@ -23,7 +26,7 @@ def demo():
         scenario = OmegaConf.to_container(compose("pipeline"), resolve=True)["scenario"]
         docking = OmegaConf.to_container(compose("docking", overrides=["docking/preset=demo"]), resolve=True)
     settings = from_mapping(evo.DockingSettings, docking)
-    problem = evo.docking_problem(settings.scene, "float64", plan.docking_task(plan.build_scene(scenario)))
+    problem = evo.docking_problem(settings.scene, "float64", plan.docking_task(plan.build_scene(BRAVO7, scenario)))
     return scenario, problem
 
 
@@ -40,7 +43,7 @@ def test_base_link_sits_on_the_docked_vehicle(demo, pose):
     np.testing.assert_allclose(T_world_vehicle, expected_vehicle, atol=1e-9)
     np.testing.assert_allclose(T_world_base, expected_vehicle @ mount, atol=1e-9)
 
-    scene = plan.build_scene(spec)
+    scene = plan.build_scene(BRAVO7, spec)
     np.testing.assert_allclose(scene.T_world_base, expected_vehicle @ mount, atol=1e-9)
     m, d = scene.model, mujoco.MjData(scene.model)
     mujoco.mj_kinematics(m, d)
@@ -60,7 +63,7 @@ def test_base_link_sits_on_the_docked_vehicle(demo, pose):
 
 def test_open_water_scene_keeps_the_tables_and_drops_the_cage(demo):
     scenario, _ = demo
-    model = plan.build_scene(scenario).model
+    model = plan.build_scene(BRAVO7, scenario).model
     names = {model.geom(i).name for i in range(model.ngeom)}
     assert {"start_left", "dest_inclined", "n1:cube1", "n5:base_cube1"} <= names
     assert not any(n.startswith("cage:") for n in names) and "ceiling" not in names

@@ -12,6 +12,9 @@ from scipy.spatial.transform import Rotation
 
 from uvms_jax import kin
 from uvms_jax.plan import CollisionChecker, build_scene, pick_place_targets, plan_motion, seed_ompl
+from uvms_jax.robot import load_arm  # noqa: E402
+
+BRAVO7 = load_arm("bravo7")
 
 SCENARIO = Path(__file__).parents[2] / "configs" / "scenario" / "thesis_cage.yaml"
 FK_ATOL = 1e-9  # float64 FK of kin vs MuJoCo bodies: same maths, round-off only
@@ -30,9 +33,9 @@ def _moved(T_world_base: np.ndarray) -> np.ndarray:
 @pytest.fixture(scope="module")
 def scenes():
     raw = yaml.safe_load(SCENARIO.read_text())
-    home = build_scene(raw)
+    home = build_scene(BRAVO7, raw)
     T_new = _moved(home.T_world_base)
-    return home, build_scene(raw, T_world_base=T_new), T_new
+    return home, build_scene(BRAVO7, raw, T_world_base=T_new), T_new
 
 
 def test_base_pose_moves_the_mujoco_arm(scenes):
@@ -64,7 +67,7 @@ def test_base_pose_in_config_equals_base_pose_in_code(scenes):
     raw = yaml.safe_load(SCENARIO.read_text())
     raw["arm"]["mount_pos"] = T_new[:3, 3].tolist()
     raw["arm"]["mount_rpy"] = Rotation.from_matrix(T_new[:3, :3]).as_euler("xyz").tolist()
-    np.testing.assert_allclose(build_scene(raw).T_world_base, T_new, atol=1e-12)
+    np.testing.assert_allclose(build_scene(BRAVO7, raw).T_world_base, T_new, atol=1e-12)
 
 
 @pytest.mark.parametrize("T", [np.eye(3), np.diag([1.0, 1.0, -1.0, 1.0]), np.full((4, 4), np.nan)])

@@ -26,6 +26,9 @@ from uvms_jax.plan import (
     trajectory_metrics,
 )
 from uvms_jax.settings import SettingsError, from_mapping
+from uvms_jax.robot import load_arm  # noqa: E402
+
+BRAVO7 = load_arm("bravo7")
 
 CONFIGS = Path(__file__).parents[2] / "configs"
 SCENARIO = CONFIGS / "scenario" / "thesis_cage.yaml"
@@ -35,19 +38,19 @@ WEIGHTLESS = {"gravity_base": np.zeros(3), "water_density": 0.0}  # only the hel
 
 @pytest.fixture(scope="module")
 def scene():
-    return build_scene(yaml.safe_load(SCENARIO.read_text()))
+    return build_scene(BRAVO7, yaml.safe_load(SCENARIO.read_text()))
 
 
 def test_two_point_metrics_by_hand(scene):
     """Rotate joint G alone by Δ: Σ|Δq| = Δ; the tool moves on a circle about G's axis, so
     the two-point distance is the chord 2 r sin(Δ/2); a vertical force f (along G's axis)
     gives τ_G = 0 and τ_i = ((p − o_i) × f) · ω_i on the other joints."""
-    chain = kin.bravo7()
-    q0 = np.asarray(scene.spec.start_q)
+    chain = BRAVO7.chain
+    q0 = np.asarray(scene.start_q)
     delta = 0.3
     q1 = q0 + np.array([delta, 0, 0, 0, 0, 0])
     f = np.array([0.0, 0.0, -1.2])  # base frame: along G's axis (z)
-    jm, ee, tau = trajectory_metrics(chain, np.stack([q0, q1]), f, **WEIGHTLESS)
+    jm, ee, tau = trajectory_metrics(BRAVO7, np.stack([q0, q1]), f, **WEIGHTLESS)
     assert jm == pytest.approx(delta, abs=ATOL)
     k0 = kin.kinematics(chain, q0)  # one compiled FK pass gives the joint frames and the tool
     frames, p = np.asarray(k0.T_base_joint), np.asarray(k0.T_base_tool)[:3, 3]
@@ -65,12 +68,12 @@ def test_two_point_metrics_by_hand(scene):
     assert abs(t0[0]) < ATOL
     assert tau == pytest.approx(max(np.abs(t0).max(), np.abs(t1).max()), abs=ATOL)
     # Nothing held and a weightless arm: no torque (tests/plan/test_plan_torque.py weighs the arm).
-    assert trajectory_metrics(chain, np.stack([q0, q1]), **WEIGHTLESS)[2] == 0.0
+    assert trajectory_metrics(BRAVO7, np.stack([q0, q1]), **WEIGHTLESS)[2] == 0.0
 
 
 def test_metrics_reject_bad_input():
     with pytest.raises(ValueError, match="finite"):
-        trajectory_metrics(kin.bravo7(), np.full((2, 6), np.nan), **WEIGHTLESS)
+        trajectory_metrics(BRAVO7, np.full((2, 6), np.nan), **WEIGHTLESS)
 
 
 def test_time_parameterisation_synchronised():

@@ -12,6 +12,9 @@ from omegaconf import OmegaConf
 from scipy.spatial import ConvexHull
 
 from uvms_jax.plan import CollisionChecker, Context, SphereChecker, build_scene
+from uvms_jax.robot import load_arm  # noqa: E402
+
+BRAVO7 = load_arm("bravo7")
 
 CONFIGS = Path(__file__).parents[2] / "configs"
 SCENARIO = CONFIGS / "scenario" / "thesis_cage.yaml"
@@ -25,7 +28,7 @@ def raw():
 def _scene_with(raw, obstacles):
     spec = copy.deepcopy(raw)
     spec["obstacles"] = obstacles
-    return build_scene(spec)
+    return build_scene(BRAVO7, spec)
 
 
 def _write_box_obj(path: Path, edge: float) -> None:
@@ -50,7 +53,7 @@ def test_each_shape_blocks_the_arm(raw, tmp_path, shape, dims):
     """An obstacle of every shape centred on the tool point at the start makes the start
     invalid for MuJoCo and for the sphere checker; moved away, the start is free again."""
     q = np.asarray(raw["start_q"])
-    p = _tool(build_scene(raw), q)
+    p = _tool(build_scene(BRAVO7, raw), q)
     if dims is None:
         file = tmp_path / "block.obj"
         _write_box_obj(file, 0.1)
@@ -99,7 +102,7 @@ def test_preset_with_obstacles_composes(raw):
     with initialize_config_dir(config_dir=str(CONFIGS), version_base="1.3"):
         cfg = compose(config_name="plan", overrides=["scenario=cage_obstacles"])
     spec = OmegaConf.to_container(cfg.scenario, resolve=True)
-    scene = build_scene(spec)
+    scene = build_scene(BRAVO7, spec)
     assert {o.shape for o in scene.spec.obstacles} == {"box", "cylinder", "sphere", "capsule"}
-    assert scene.spec.tables == build_scene(raw).spec.tables
+    assert scene.spec.tables == build_scene(BRAVO7, raw).spec.tables
     assert CollisionChecker(scene).is_valid(np.asarray(spec["start_q"]))

@@ -19,6 +19,9 @@ from uvms_jax.plan import (
 )
 from uvms_jax.plan._planners import make_planner
 from uvms_jax.settings import from_mapping
+from uvms_jax.robot import load_arm  # noqa: E402
+
+BRAVO7 = load_arm("bravo7")
 
 SCENARIO = Path(__file__).parents[2] / "configs" / "scenario" / "thesis_cage.yaml"
 
@@ -82,7 +85,7 @@ def test_other_planners_plan_with_the_sphere_checker(name, params):
     the bindings give it no partial motions."""
     seed_ompl(0)
     raw = yaml.safe_load(SCENARIO.read_text())
-    reference = CollisionChecker(build_scene(raw))
+    reference = CollisionChecker(build_scene(BRAVO7, raw))
     fast = SphereChecker(reference)
     q0 = np.asarray(raw["start_q"])
     q1 = q0 + np.array([0.8, -0.3, 0.2, 0.0, 0.3, 0.0])

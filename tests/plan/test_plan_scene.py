@@ -11,6 +11,9 @@ from scipy.spatial.transform import Rotation
 
 from uvms_jax import kin
 from uvms_jax.plan import CollisionChecker, Context, SceneSpec, build_scene, densify
+from uvms_jax.robot import load_arm  # noqa: E402
+
+BRAVO7 = load_arm("bravo7")
 
 SCENARIO = Path(__file__).parents[2] / "configs" / "scenario" / "thesis_cage.yaml"
 FK_ATOL = 1e-9  # float64 FK of kin vs MuJoCo site: same maths, round-off only
@@ -25,7 +28,7 @@ def raw():
 
 @pytest.fixture(scope="module")
 def scene(raw):
-    return build_scene(raw)
+    return build_scene(BRAVO7, raw)
 
 
 def _rpy(R):
@@ -38,7 +41,7 @@ def _with_box(raw, name, T, size):
     spec = copy.deepcopy(raw)
     spec["tables"].append({"name": name, "pos": T[:3, 3].tolist(), "size": list(size),
                            "rpy": _rpy(T[:3, :3]).tolist()})
-    return build_scene(spec)
+    return build_scene(BRAVO7, spec)
 
 
 def test_scene_from_config(scene, raw):
@@ -82,7 +85,7 @@ def test_bad_spec_names_problem(raw):
 
 def test_start_is_valid_and_limits(scene):
     ch = CollisionChecker(scene)
-    q = np.asarray(scene.spec.start_q)
+    q = np.asarray(scene.start_q)
     assert ch.is_valid(q) and ch.is_valid(q, margin=0.0)
     assert ch.clearance(q) > ch.margin
     q_out = q.copy()
@@ -95,7 +98,7 @@ def test_start_is_valid_and_limits(scene):
 def test_capsule_through_thin_box_is_a_collision(raw, scene):
     """A capsule whose axis runs through a thin box, both ends outside — MuJoCo's primitive
     capsule–box test misses it; the scene's mesh boxes must not."""
-    q = np.asarray(scene.spec.start_q)
+    q = np.asarray(scene.start_q)
     d = mujoco.MjData(scene.model)
     d.qpos[:] = q
     mujoco.mj_kinematics(scene.model, d)
@@ -158,7 +161,7 @@ def test_straight_path_through_obstacle_rejected(raw, scene):
     from uvms_jax.plan import plan_motion, seed_ompl
 
     seed_ompl(7)
-    q = np.asarray(scene.spec.start_q)
+    q = np.asarray(scene.start_q)
     d = mujoco.MjData(scene.model)
     d.qpos[:] = q
     mujoco.mj_kinematics(scene.model, d)

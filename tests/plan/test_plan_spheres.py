@@ -14,6 +14,9 @@ from uvms_jax.plan import (CollisionChecker, Context, SphereChecker, build_scene
 from uvms_jax.plan._collision import BOUND_SLACK
 from uvms_jax.plan._spheres import _box_distance, _segment_distance, coarse_to_fine
 from uvms_jax.plan._tasks import _edge_set
+from uvms_jax.robot import load_arm  # noqa: E402
+
+BRAVO7 = load_arm("bravo7")
 
 SCENARIO = Path(__file__).parents[2] / "configs" / "scenario" / "thesis_cage.yaml"
 GRID = 400  # dense parameter grid of the brute-force distance oracles
@@ -27,7 +30,7 @@ def raw():
 
 @pytest.fixture(scope="module")
 def checkers(raw):
-    reference = CollisionChecker(build_scene(raw))
+    reference = CollisionChecker(build_scene(BRAVO7, raw))
     return reference, SphereChecker(reference)
 
 
@@ -130,7 +133,7 @@ def test_planning_with_spheres(checkers, raw):
 
 def test_fast_must_wrap_the_given_checker(checkers, raw):
     reference, fast = checkers
-    other = CollisionChecker(build_scene(raw))
+    other = CollisionChecker(build_scene(BRAVO7, raw))
     q = np.asarray(raw["start_q"])
     with pytest.raises(ValueError, match="SphereChecker built on the given checker"):
         plan_motion(other, q, q + 0.1, fast=fast)
@@ -183,6 +186,6 @@ def test_min_clearance_checks_its_input(checkers, raw):
 
 
 def test_edge_set_is_the_task_graph_per_scene(raw):
-    a, b = build_scene(raw), build_scene(raw)
+    a, b = build_scene(BRAVO7, raw), build_scene(BRAVO7, raw)
     assert _edge_set(a) == frozenset(task_edges(a)) and _edge_set(a) is _edge_set(a)
     assert _edge_set(b) == _edge_set(a) and _edge_set(b) is not _edge_set(a)

@@ -28,6 +28,9 @@ from uvms_jax.plan import (
     write_plan,
     write_task_graph,
 )
+from uvms_jax.robot import load_arm  # noqa: E402
+
+BRAVO7 = load_arm("bravo7")
 
 SCENARIO = Path(__file__).parents[2] / "configs" / "scenario" / "thesis_cage.yaml"
 POSE_ATOL = 1e-6  # [m, rad-ish] float64 IK converges to 1e-8; FK round trip well within this
@@ -39,7 +42,7 @@ pytestmark = pytest.mark.slow  # one numerical-IK compile (~30 s on 2 cores)
 @pytest.fixture(scope="module")
 def setup():
     seed_ompl(3)
-    scene = build_scene(yaml.safe_load(SCENARIO.read_text()))
+    scene = build_scene(BRAVO7, yaml.safe_load(SCENARIO.read_text()))
     checker = CollisionChecker(scene)
     targets = pick_place_targets(jax.random.PRNGKey(0), scene, checker, n_seeds=N_SEEDS)
     return scene, checker, targets
@@ -87,7 +90,7 @@ def test_plan_passes_hw_dry_run(setup):
     edges = {(s, d): plan_edge(scene, checker, targets, s, d, "RRTConnect") for s, d in zip(seq[:-1], seq[1:])}
     plan = plan_from_edges(scene, targets, edges, seq, checker=checker)
     assert planfile.parse_plan(planfile.plan_to_dict(plan)) == plan
-    summary = hw.check_plan(plan)
+    summary = hw.check_plan(plan, BRAVO7)
     assert summary.n_gripper_steps == 3  # open, close at the cylinder; release on its base
     names = [s.name for s in plan.segments]
     assert names[0].startswith("0->3") and any(n.startswith("grasp") for n in names)

@@ -13,6 +13,9 @@ from scipy.spatial.transform import Rotation
 from uvms_jax import bravo7, kin
 from uvms_jax.hw import sim_spec
 from uvms_jax.plan import build_scene, static_torques, trajectory_metrics
+from uvms_jax.robot import load_arm  # noqa: E402
+
+BRAVO7 = load_arm("bravo7")
 
 SCENARIO = Path(__file__).parents[2] / "configs" / "scenario" / "thesis_cage.yaml"
 G = 9.81
@@ -24,7 +27,7 @@ FD_ATOL = 1e-6  # central differences, h = 1e-6: truncation ~1e-12, round-off ~1
 @pytest.fixture(scope="module")
 def gravities():
     """Gravity in the base frame [m/s²]: upright, hanging in the thesis cage, tilted."""
-    cage = build_scene(yaml.safe_load(SCENARIO.read_text()))
+    cage = build_scene(BRAVO7, yaml.safe_load(SCENARIO.read_text()))
     down = np.array([0.0, 0.0, -G])
     tilted = Rotation.from_euler("xyz", [0.4, -0.7, 1.1]).as_matrix().T @ down
     hanging = cage.T_base_world[:3, :3] @ down
@@ -43,7 +46,7 @@ def poses():
 def sim():
     """The simulator's arm (the manufacturer's inertials on the URDF bodies, jaws' fingers
     gravity compensated)."""
-    model = sim_spec(dynamics=True).compile()
+    model = sim_spec(BRAVO7, dynamics=True).compile()
     return model, mujoco.MjData(model)
 
 
@@ -56,16 +59,17 @@ def test_matches_mujoco(sim, gravities, poses, base, water):
     model, data = sim
     g = gravities[base]
     model.opt.gravity[:] = g
-    tau = static_torques(kin.bravo7(), poses, gravity_base=g, water_density=water)
-    bodies = ["jaws_housing" if b == "tool" else f"link_{b}" for b in bravo7.INERTIAL_BODIES[1:]]
+    tau = static_torques(BRAVO7, poses, gravity_base=g, water_density=water)
     for q, t in zip(poses, tau):
         data.qpos[:] = 0.0
         data.qpos[:6] = q
         data.qvel[:] = 0.0
         mujoco.mj_forward(model, data)
         expected = -(data.qfrc_bias - data.qfrc_gravcomp)
-        for name, inertial in zip(bodies, bravo7.urdf_inertials()[1:]):
-            b = model.body(name).id
+        for inertial in BRAVO7.inertials:
+            if inertial.body == -1:  # the base link: welded, it turns no joint
+                continue
+            b = model.body(BRAVO7.link_names[inertial.body]).id
             cob = data.xpos[b] + data.xmat[b].reshape(3, 3) @ np.asarray(inertial.cob)
             mujoco.mj_applyFT(model, data, -water * inertial.volume * g, np.zeros(3), cob, b, expected)
         np.testing.assert_allclose(t, expected[:6], atol=ATOL)
@@ -91,7 +95,7 @@ def test_is_the_gradient_of_the_potential(gravities, poses, base):
     differences), weight, buoyancy and a held object together."""
     g = gravities[base]
     f = np.array([0.3, -0.5, -2.0])
-    tau = static_torques(kin.bravo7(), poses, gravity_base=g, water_density=RHO, force_base=f)
+    tau = static_torques(BRAVO7, poses, gravity_base=g, water_density=RHO, force_base=f)
     h = 1e-6
     for q, t in zip(poses, tau):
         grad = [(_potential(q + h * e, g, RHO, f) - _potential(q - h * e, g, RHO, f)) / (2 * h) for e in np.eye(6)]
@@ -101,7 +105,7 @@ def test_is_the_gradient_of_the_potential(gravities, poses, base):
 def test_metric_is_the_largest_torque(gravities, poses):
     """trajectory_metrics' max_torque is max |τ| over points and joints; with the arm's weight
     even a move holding nothing has torque; loads add (τ is linear in them)."""
-    chain, g = kin.bravo7(), gravities["hanging"]
+    chain, g = BRAVO7, gravities["hanging"]
     f = np.array([0.0, 0.0, 3.0])
     arm = static_torques(chain, poses, gravity_base=g, water_density=RHO)
     held = static_torques(chain, poses, gravity_base=np.zeros(3), water_density=RHO, force_base=f)
@@ -117,13 +121,15 @@ def test_metric_is_the_largest_torque(gravities, poses):
 
 
 def test_bad_loads_are_named():
-    chain, q = kin.bravo7(), np.zeros((1, 6))
+    chain, q = BRAVO7, np.zeros((1, 6))
     with pytest.raises(ValueError, match="gravity_base"):
         static_torques(chain, q, gravity_base=[0.0, -G], water_density=RHO)
     with pytest.raises(ValueError, match="water_density"):
         static_torques(chain, q, gravity_base=[0.0, 0.0, -G], water_density=-1.0)
     with pytest.raises(ValueError, match="force_base"):
         static_torques(chain, q, gravity_base=[0.0, 0.0, -G], water_density=RHO, force_base=[np.nan, 0, 0])
-    with pytest.raises(ValueError, match="Bravo 7"):
-        static_torques(kin.docking_arm(), np.zeros((1, kin.docking_arm().n_joints)), gravity_base=[0.0, 0.0, -G],
-                       water_density=RHO)
+    # An arm whose description has no mass properties carries only the held object's load.
+    alpha5 = load_arm("alpha5")
+    q5 = np.zeros((1, alpha5.n_joints))
+    weightless = static_torques(alpha5, q5, gravity_base=[0.0, 0.0, -G], water_density=RHO)
+    assert not alpha5.inertials and np.all(weightless == 0.0)

@@ -18,6 +18,9 @@ import pytest
 import yaml
 
 from uvms_jax.plan import build_scene, render_run_video
+from uvms_jax.robot import load_arm  # noqa: E402
+
+BRAVO7 = load_arm("bravo7")
 
 SCENARIO = Path(__file__).parents[2] / "configs" / "scenario" / "thesis_cage.yaml"
 NO_GL_EXIT = 3  # exit status of the child when no offscreen context exists
@@ -35,9 +38,10 @@ pytestmark = pytest.mark.filterwarnings(r"ignore:os\.fork\(\) was called:Runtime
 CHILD = textwrap.dedent("""
     import sys, numpy as np, yaml
     from uvms_jax.plan import build_scene, render_run_video
-    scene = build_scene(yaml.safe_load(open(sys.argv[1])))
+    from uvms_jax.robot import load_arm
+    scene = build_scene(load_arm("bravo7"), yaml.safe_load(open(sys.argv[1])))
     t = np.linspace(0.0, {run_s}, 101)                      # a 50 Hz log
-    q = np.tile(np.asarray(scene.spec.start_q), (len(t), 1))
+    q = np.tile(np.asarray(scene.start_q), (len(t), 1))
     moving = t > {run_s} / 2
     q[moving, :3] += np.outer(t[moving] - {run_s} / 2, [0.4, -0.8, -0.8])  # [rad/s]
     try:
@@ -85,7 +89,7 @@ def test_frames_follow_the_arm(video):
 
 @pytest.fixture(scope="module")
 def scene():
-    return build_scene(yaml.safe_load(SCENARIO.read_text()))
+    return build_scene(BRAVO7, yaml.safe_load(SCENARIO.read_text()))
 
 
 @pytest.mark.parametrize("t, q, kw, match", [

@@ -56,7 +56,7 @@ def test_bravo7_description_matches_the_manufacturers_tables():
         assert got.mass == pytest.approx(want.mass)
         assert got.volume == pytest.approx(want.volume)
         np.testing.assert_allclose(got.com, np.asarray(want.com) + shift, atol=ATOL_TEXT)
-        np.testing.assert_allclose(got.cob, np.asarray(want.cob) + shift, atol=1e-6)  # config: 6 digits
+        np.testing.assert_allclose(got.cob, np.asarray(want.cob) + shift, atol=ATOL_TEXT)
         np.testing.assert_allclose(got.inertia, want.inertia, atol=ATOL_TEXT)
 
 
@@ -76,7 +76,7 @@ def _mujoco_tool(r: robot.Robot, q: np.ndarray) -> np.ndarray:
 
 @pytest.mark.parametrize("which", ["bravo7", "mjcf"])
 def test_mujoco_model_of_the_robot_follows_its_kinematics(which):
-    r = bravo7_robot() if which == "bravo7" else robot.load_robot(SMALL_MJCF, tip="hand")
+    r = bravo7_robot() if which == "bravo7" else robot.load_robot(SMALL_MJCF, tip="hand", link_radius=0.03)
     q = np.random.default_rng(0).uniform(r.lower, r.upper, (N_RANDOM, r.n_joints))
     np.testing.assert_allclose(_mujoco_tool(r, q), np.asarray(kin.fk(r.chain, q)), atol=ATOL_MJ)
 
@@ -84,11 +84,11 @@ def test_mujoco_model_of_the_robot_follows_its_kinematics(which):
 def test_format_is_read_from_the_content(tmp_path):
     mjcf_named_urdf = tmp_path / "arm.urdf"
     mjcf_named_urdf.write_text(SMALL_MJCF)
-    r = robot.load_robot(mjcf_named_urdf, tip="hand")
+    r = robot.load_robot(mjcf_named_urdf, tip="hand", link_radius=0.03)
     assert r.joint_names == ("shoulder", "elbow") and r.link_names == ("upper", "lower")
     assert [b.mass for b in r.inertials] == pytest.approx([1.0, 0.5])
     assert r.source == str(mjcf_named_urdf) and len(r.digest) == 64
-    text = robot.load_robot((robot.DESCRIPTIONS / "bravo7.urdf").read_text(), tip="tool")
+    text = robot.load_robot((robot.DESCRIPTIONS / "bravo7.urdf").read_text(), tip="tool", link_radius=0.04)
     assert text.joint_names == tuple("GFEDCB") and text.source == "<text>"
 
 
@@ -100,7 +100,7 @@ def test_format_is_read_from_the_content(tmp_path):
 ])
 def test_bad_descriptions_say_what_is_wrong(text, message):
     with pytest.raises(ValueError, match=message.replace("(", r"\(").replace(")", r"\)")):
-        robot.load_robot(text)
+        robot.load_robot(text, link_radius=0.04)
 
 
 def test_config_errors_name_the_problem():

@@ -57,9 +57,8 @@ from uvms_jax.evo._problem import evaluate
 from uvms_jax.evo._problem import evaluate_traced
 from uvms_jax.evo._problem import in_search_set
 from uvms_jax.evo._problem import make_docking_problem
-from uvms_jax.evo._scenes import ARMS
 from uvms_jax.evo._scenes import ArmTask
-from uvms_jax.evo._scenes import load_arm
+from uvms_jax.evo._scenes import scene_robot
 from uvms_jax.evo._scenes import arm_docking_problem
 from uvms_jax.evo._scenes import panel_targets
 from uvms_jax.evo._scenes import panel_task

@@ -34,16 +34,16 @@ Problem = DockingProblem | ArmDockingProblem
 
 
 def docking_problem(scene: SceneSettings | ArmSceneSettings, dtype: str = "float32",
-                    task: ArmTask | None = None) -> Problem:
+                    task: ArmTask | None = None, robot=None) -> Problem:
     """The problem of a scene: :func:`make_docking_problem` for the paper's
-    :class:`SceneSettings`, :func:`arm_docking_problem` (with ``task``) for an
-    :class:`ArmSceneSettings`.
+    :class:`SceneSettings`, :func:`arm_docking_problem` (with ``task``, and the arm ``robot``
+    when given, else the scene's) for an :class:`ArmSceneSettings`.
 
     Raises:
       ValueError: a task given for the paper's scene (its task area is part of the scene).
     """
     if isinstance(scene, ArmSceneSettings):
-        return arm_docking_problem(scene, task, jnp.dtype(dtype))
+        return arm_docking_problem(scene, task, jnp.dtype(dtype), robot)
     if task is not None:
         raise ValueError("the paper's scene has its own task area: pass a task only with an arm scene")
     return make_docking_problem(**dataclasses.asdict(scene), dtype=jnp.dtype(dtype))
@@ -231,13 +231,14 @@ def _pose_map(problem: DockingProblem, pose, n_per_side: int) -> PoseMap:
     return PoseMap(np.asarray(pose), wmax_map(problem, pose, n_per_side), float(evaluate(problem, pose).M_a))
 
 
-def run_docking(settings: DockingSettings, task: ArmTask | None = None) -> DockingRun:
+def run_docking(settings: DockingSettings, task: ArmTask | None = None, robot=None) -> DockingRun:
     """The docking experiment: GA batch (compiled ahead, then timed), optional single-run
     timing, dense grid + zoom refinement, optional CMA-ES, w_max maps, pose checks.
 
     Args:
       settings: the run's settings.
       task: an arm scene's task when it has no panel (e.g. :func:`uvms_jax.plan.docking_task`).
+      robot: the arm (:class:`uvms_jax.robot.Robot`); None: the one the arm scene names.
 
     Raises:
       ValueError: float64 asked for without ``jax_enable_x64`` (set it once at start), or a
@@ -246,7 +247,7 @@ def run_docking(settings: DockingSettings, task: ArmTask | None = None) -> Docki
     if jnp.dtype(settings.dtype) == jnp.float64 and not jax.config.jax_enable_x64:
         raise ValueError("dtype float64 needs jax.config.update('jax_enable_x64', True) before the run")
     s = settings
-    problem = docking_problem(s.scene, s.dtype, task)
+    problem = docking_problem(s.scene, s.dtype, task, robot)
     codec, ga, params = make_ga(s.ga, problem)
     log.info("load average %s; devices %s", os.getloadavg(), jax.devices())
     # Each step is one compiled call (the GA batch, the grid, ...): progress counts steps.

@@ -2,19 +2,14 @@
 
 from __future__ import annotations
 
-from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from uvms_jax import bravo7, kin
+from uvms_jax import robot as robots
 from uvms_jax.evo._arm import ArmDockingProblem, make_arm_docking_problem
 from uvms_jax.evo._settings import ArmSceneSettings, BoxSettings, PanelSettings
-
-#: Arm models by name: chain builder and link capsule radius [m].
-ARMS = {"bravo7": (kin.bravo7, bravo7.LINK_RADIUS)}
-
 
 def pose_matrix(xyz, rpy) -> np.ndarray:
     """``(4, 4)`` pose from a position [m] and roll-pitch-yaw [rad]."""
@@ -97,40 +92,32 @@ def fewer_alternatives(task: ArmTask, alternatives: int | None) -> ArmTask:
     return task._replace(T_world_tool=task.T_world_tool[keep], group=task.group[keep])
 
 
-def load_arm(arm: str, tip: str | None = None) -> tuple[kin.Chain, float | None]:
-    """An arm by name (:data:`ARMS`) or from a robot description file.
-
-    Args:
-      arm: a name in :data:`ARMS`, or a path to a URDF (``.urdf``) or MJCF (``.xml``) file.
-      tip: the tool frame in the file: a link of a URDF, a body of an MJCF model (default: the
-        file's only leaf); must be None for a named arm.
-
-    Returns:
-      ``(chain, link radius [m])``; the radius is None for a file (it holds no capsule size).
+def scene_robot(scene: ArmSceneSettings) -> robots.Robot:
+    """The arm an arm scene names: a shipped arm card (:func:`uvms_jax.robot.shipped_arms`,
+    e.g. ``bravo7``) or a URDF/MJCF file with its tool frame ``arm_tip``; ``link_radius``, when
+    set, replaces the arm's capsule radius.
 
     Raises:
-      ValueError: unknown name or file type (and the importers' errors for a bad file).
+      ValueError: an unknown arm, or a tip given for a shipped arm (it has its own tool frame).
     """
-    if arm in ARMS:
-        if tip is not None:
-            raise ValueError(f"arm_tip is for arms from files; {arm!r} has its own tool frame")
-        make_chain, radius = ARMS[arm]
-        return make_chain(), radius
-    path = Path(arm)
-    if path.suffix == ".urdf":
-        return kin.from_urdf(path, tip_link=tip), None
-    if path.suffix == ".xml":
-        return kin.from_mjcf(path, tip_body=tip), None
-    raise ValueError(f"unknown arm {arm!r}: a name in {sorted(ARMS)} or a .urdf / .xml (MJCF) file")
+    settings: dict = {"card": scene.arm} if scene.arm in robots.shipped_arms() else {
+        "description": scene.arm, "tip": scene.arm_tip}
+    if "card" in settings and scene.arm_tip is not None:
+        raise ValueError(f"arm_tip is for arms from files; {scene.arm!r} has its own tool frame")
+    if scene.link_radius is not None:
+        settings["link_radius"] = scene.link_radius
+    return robots.robot_from_config(settings)
 
 
-def arm_docking_problem(scene: ArmSceneSettings, task: ArmTask | None = None, dtype=None) -> ArmDockingProblem:
+def arm_docking_problem(scene: ArmSceneSettings, task: ArmTask | None = None, dtype=None,
+                        robot: robots.Robot | None = None) -> ArmDockingProblem:
     """The :class:`ArmDockingProblem` of an arm scene's settings and its task.
 
     Args:
       scene: the arm, the vehicle, the pose box, the objective's weights and the IK settings.
       task: what the arm must reach; None takes the scene's panel (``scene.panel``).
       dtype: float dtype of the problem's arrays.
+      robot: the arm; None: the one the scene names (:func:`scene_robot`).
 
     Raises:
       ValueError: no task or two (a panel and a task), unknown arm, or bad geometry (see
@@ -139,14 +126,12 @@ def arm_docking_problem(scene: ArmSceneSettings, task: ArmTask | None = None, dt
     if (scene.panel is None) == (task is None):
         raise ValueError("an arm scene needs exactly one task: scene.panel, or a task passed in (e.g. a "
                          "pick-and-place scenario's tool poses, uvms_jax.plan.docking_task)")
-    chain, radius = load_arm(scene.arm, scene.arm_tip)
-    if scene.link_radius is None and radius is None:
-        raise ValueError(f"arm {scene.arm!r} comes from a file: set link_radius (its links' capsule radius [m])")
+    robot = scene_robot(scene) if robot is None else robot
     task = fewer_alternatives(panel_task(scene.panel) if task is None else task, scene.alternatives)
     T_box, half = boxes(scene.scene_boxes)
     T_box, half = np.concatenate([T_box, task.T_world_box]), np.concatenate([half, task.half])
     return make_arm_docking_problem(
-        chain=chain,
+        chain=robot.chain,
         T_vehicle_base=pose_matrix(scene.mount_xyz, scene.mount_rpy),
         T_world_tool=task.T_world_tool,
         group=task.group,
@@ -156,7 +141,7 @@ def arm_docking_problem(scene: ArmSceneSettings, task: ArmTask | None = None, dt
         p_i=scene.p_init,
         a=scene.a,
         b=scene.b,
-        link_radius=radius if scene.link_radius is None else scene.link_radius,
+        link_radius=robot.link_radius,
         vehicle_boxes=boxes(scene.vehicle_boxes),
         scene_boxes=(T_box, half),
         n_seeds=scene.ik_seeds,

@@ -72,11 +72,13 @@ class ArmSceneSettings:
     see :func:`uvms_jax.evo.arm_docking_problem`.
 
     Attributes:
-      arm: a model of ``uvms_jax.evo.ARMS`` or a URDF (``.urdf``) / MJCF (``.xml``) file.
-      arm_tip: tool frame in that file (a URDF link, an MJCF body); None: the file's only leaf.
+      arm: a shipped arm (``uvms_jax.robot.shipped_arms()``, e.g. ``bravo7``) or a URDF / MJCF
+        file (the format read from its content).
+      arm_tip: tool frame in that file (a URDF link, an MJCF body or site); None: the file's
+        only leaf.
       mount_xyz, mount_rpy: arm base in the vehicle frame V [m, rad].
-      link_radius: link capsule radius [m]; None = the arm's own (Bravo 7: ``LINK_RADIUS``;
-        required for an arm from a file).
+      link_radius: link capsule radius [m]; None = the arm's own (its card's, or the robot
+        loader's default for a file).
       vehicle_boxes: the vehicle body, boxes in V.
       scene_boxes: obstacles in W (panel, seabed, tables).
       panel: targets on a task panel, or None: the task is then passed to

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import jax
 
+from uvms_jax import plan as planning
 from uvms_jax import progress
 from uvms_jax.pipeline._report import write_summary
 from uvms_jax.pipeline._settings import STAGES, PipelineSettings
@@ -33,7 +34,9 @@ def run_pipeline(settings: PipelineSettings, out: Path, config_text: str = "") -
     out.mkdir(parents=True, exist_ok=True)
     order = [s for s in STAGES if s in settings.stages]
     log.info("pipeline stages %s into %s; devices %s", order, out, jax.devices())
-    flow, reports = Flow(), []
+    # One arm for every stage: the scenario's (planning.scenario_robot).
+    robot = planning.scenario_robot(settings.scenario) if settings.scenario else None
+    flow, reports = Flow(robot=robot), []
     t_start = time.perf_counter()
     for name in progress.bar(order, desc="pipeline", unit="stage"):
         stage_out = out / name
@@ -47,7 +50,8 @@ def run_pipeline(settings: PipelineSettings, out: Path, config_text: str = "") -
         log.info("== stage %s done in %.1f s: %s", name, report.seconds, report.results)
     total = time.perf_counter() - t_start
     results = {"total_seconds": total, "stage_seconds": {r.name: r.seconds for r in reports},
-               "stage_cpu_seconds": {r.name: r.cpu_seconds for r in reports}, **{r.name: r.results for r in reports}}
+               "stage_cpu_seconds": {r.name: r.cpu_seconds for r in reports},
+               "arm": None if robot is None else robot.record(), **{r.name: r.results for r in reports}}
     (out / "results.json").write_text(json.dumps(results, indent=1, default=str))
     summary = write_summary(out, reports, total, config_text, chain(flow, out))
     log.info("pipeline done in %.1f s; summary: %s", total, summary)

@@ -45,9 +45,11 @@ class PipelineSettings:
       docking_fitness: whose GA pose goes on to planning: ``"analytic"`` or ``"surrogate"``
         (the GA on the learned map; needs the surrogate stage).
       plan, sched: the stages' settings.
-      scenario: the scene (``plan.build_scene``'s mapping: tables, objects, bases, arm mount;
-        the docking stage replaces the mount by the docked vehicle's).
-      baseline: the baseline stage's scenario (the thesis's fixed mount), or None.
+      scenario: the scene (``plan.build_scene``'s mapping: tables, objects, bases, and ``arm``:
+        the arm, :func:`uvms_jax.plan.scenario_robot`, and its mount; the docking stage
+        replaces the mount by the docked vehicle's). Every stage uses this one arm.
+      baseline: the baseline stage's scenario (the thesis's fixed mount), or None; the arm is
+        the scenario's (the baseline's ``arm`` gives only the mount).
       sched_planner: whose metrics become the cost matrix (None: ``plan.planners[0]``).
       hw: the execution stage.
     """
@@ -72,7 +74,7 @@ class PipelineSettings:
             raise ValueError("the surrogate, docking and plan stages need a scenario (tables, objects, bases, arm mount)")
         if {"docking", "surrogate"} & set(self.stages) and not isinstance(self.docking.scene, evo.ArmSceneSettings):
             raise ValueError("the docking and surrogate stages dock an arm: docking.scene must be an arm scene "
-                             "(configs/docking/scene/bravo7_*.yaml); the paper's scene: experiments/docking.py")
+                             "(configs/docking/scene/); the paper's scene: experiments/docking.py")
         if self.docking_fitness == "surrogate" and "surrogate" not in self.stages:
             raise ValueError("docking_fitness=surrogate needs the surrogate stage")
         if "baseline" in self.stages and self.baseline is None:

@@ -14,7 +14,8 @@ import jax.numpy as jnp
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from uvms_jax import bravo7, evo, hw, planfile, progress, sched, surrogate
+from uvms_jax import evo, hw, planfile, progress, sched, surrogate
+from uvms_jax import robot as robots
 from uvms_jax import plan as planning
 from uvms_jax.pipeline._report import StageReport, md_table
 from uvms_jax.pipeline._settings import PipelineSettings
@@ -33,6 +34,7 @@ class Flow:
     """What a stage hands to the later ones, in memory.
 
     Attributes:
+      robot: the arm of every stage (the scenario's).
       task: the scenario's grasp and place poses and tables, as the docking stage's task.
       problem: the docking problem of the arm on its vehicle over the scenario's task.
       reach: the surrogate stage's learned map.
@@ -43,6 +45,7 @@ class Flow:
       reports: the reports of the stages run so far, by name.
     """
 
+    robot: robots.Robot | None = None
     task: evo.ArmTask | None = None
     problem: evo.ArmDockingProblem | None = None
     reach: surrogate.ReachMapRun | None = None
@@ -63,8 +66,8 @@ def _pose(p) -> list[float]:
 def _docking_problem(s: PipelineSettings, flow: Flow) -> evo.ArmDockingProblem:
     """The arm-on-vehicle docking problem over the scenario's grasp and place poses (built once)."""
     if flow.problem is None:
-        flow.task = planning.docking_task(planning.build_scene(s.scenario))
-        flow.problem = evo.docking_problem(s.docking.scene, s.docking.dtype, flow.task)
+        flow.task = planning.docking_task(planning.build_scene(flow.robot, s.scenario))
+        flow.problem = evo.docking_problem(s.docking.scene, s.docking.dtype, flow.task, flow.robot)
     return flow.problem
 
 
@@ -88,7 +91,7 @@ def surrogates(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
              "axes; tanh hidden layer; Adam). The scene's obstacles are not in the map: poses chosen on it are scored "
              "again analytically (docking stage). The dexterity paper's surrogates of the 12-DOF UVMS are reproduced "
              "apart: `python experiments/surrogate.py` (docs/reproduction.md)."]
-    return StageReport("surrogate", "Surrogate: the Bravo 7's dexterity map on its vehicle (docs/docking.md)",
+    return StageReport("surrogate", f"Surrogate: the {flow.robot.name}'s dexterity map on its vehicle (docs/docking.md)",
                        [table], res, notes)
 
 
@@ -122,7 +125,7 @@ def docking(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
     """Docking GA (+ grid reference) of the vehicle over the scenario's task; with a learned
     map, the GA on it too; the chosen pose puts the arm's base into the planning scene."""
     problem = _docking_problem(s, flow)
-    run = evo.run_docking(s.docking, flow.task)
+    run = evo.run_docking(s.docking, flow.task, flow.robot)
     evo.write_docking(run, out)
     best = int(np.argmax(run.fitness))
     rows = [[f"analytic GA run {i + 1}", *_pose(p), float(f), float(m), int(e)]
@@ -181,14 +184,15 @@ def docking(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
     t1 = md_table(["run", "x [m]", "y [m]", "z [m]", "ψ [rad]", "fitness (eq. 15)", "M_a (eq. 1)", "evaluations"], rows)
     notes.append(f"Chosen: the {source}'s best pose {_pose(flow.pose)} → the arm's base at "
                  f"{_pose(flow.T_world_base[:3, 3])} m in the planning scene, with the vehicle's hull as an obstacle.")
-    return StageReport("docking", "Docking: where the vehicle holds the Bravo 7 over the tables (docs/docking.md)",
+    return StageReport("docking", f"Docking: where the vehicle holds the {flow.robot.name} over the tables "
+                       "(docs/docking.md)",
                        [t1], res, notes)
 
 
 def plan(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
     """IK targets and OMPL plans of every task-graph edge, the arm's base where the docking
     stage put it (else the scenario's mount); kept in memory for the schedule."""
-    scene = planning.build_scene(flow.scene_spec if flow.scene_spec is not None else s.scenario)
+    scene = planning.build_scene(flow.robot, flow.scene_spec if flow.scene_spec is not None else s.scenario)
     task_plan = planning.plan_task_graph(jax.random.key(s.plan.seed), scene, s.plan)
     planning.write_task_graph(task_plan, out)
     flow.task_plan = task_plan
@@ -257,7 +261,7 @@ def schedule(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
 
 
 def execute(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
-    """Dry-run check, then execution of the scheduled plan (or ``hw.plan``) on the simulated Bravo 7."""
+    """Dry-run check, then execution of the scheduled plan (or ``hw.plan``) on the simulated arm."""
     hs = s.hw
     if hs.plan is not None:
         the_plan, source = planfile.load_plan(hs.plan), hs.plan
@@ -268,7 +272,7 @@ def execute(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
     # The simulated arm's gravity and buoyancy follow the base the plan was made for.
     sim = hs.sim if the_plan.base_rpy is None else dataclasses.replace(hs.sim, base_rpy=the_plan.base_rpy)
     with progress.bar(total=len(the_plan.segments), desc="hw", unit="seg") as bar:
-        run = hw.run_plan(the_plan, link=hs.link, config=hs.executor, sim=sim,
+        run = hw.run_plan(the_plan, flow.robot, link=hs.link, config=hs.executor, sim=sim,
                           progress=lambda i, n, name: bar.update(i - bar.n))  # i: segments finished
         if run.ok:
             bar.update(bar.total - bar.n)
@@ -288,15 +292,16 @@ def execute(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
              "comparison. Same plan on a real arm: `uvms-hw run PLAN --dry-run`, then `--udp 192.168.2.3:6789`."]
     if hs.plot and run.log.rows:
         notes.append(_run_video(s, flow, run.log, out, res))
-    return StageReport("hw", "Execution on the simulated Bravo 7 (docs/theory.md §6, thesis 4.6)", [table], res, notes)
+    return StageReport("hw", f"Execution on the simulated {flow.robot.name} (docs/theory.md §6, thesis 4.6)", [table],
+                       res, notes)
 
 
-def _measured_arm(run_log: hw.RunLog) -> tuple[np.ndarray, np.ndarray]:
-    """Times ``(n,)`` [s] and measured arm angles ``(n, 6)`` G…B [rad] of the log rows whose
+def _measured_arm(run_log: hw.RunLog, robot: robots.Robot) -> tuple[np.ndarray, np.ndarray]:
+    """Times ``(n,)`` [s] and measured arm angles ``(n, dof)`` [rad] of the log rows whose
     measured arm state is complete (a state that did not arrive is NaN in the log)."""
     names = run_log.joint_names
     n = len(names)
-    cols = [4 + n + names.index(j.name) for j in bravo7.ARM_JOINTS]
+    cols = [4 + n + names.index(j) for j in robot.joint_names]
     rows = np.asarray([[r[0], *(r[c] for c in cols)] for r in run_log.rows], dtype=float)
     rows = rows[np.all(np.isfinite(rows), axis=1)]
     return rows[:, 0], rows[:, 1:]
@@ -309,10 +314,10 @@ def _run_video(s: PipelineSettings, flow: Flow, run_log: hw.RunLog, out: Path, r
     if flow.task_plan is not None:
         scene = flow.task_plan.scene
     elif s.scenario:
-        scene = planning.build_scene(s.scenario)
+        scene = planning.build_scene(flow.robot, s.scenario)
     else:
         return "No video of the run: no scene (run the plan stage or give a scenario)."
-    t, q = _measured_arm(run_log)
+    t, q = _measured_arm(run_log, scene.robot)
     if len(t) == 0:
         return "No video of the run: no complete measured state was logged."
     try:
@@ -358,7 +363,7 @@ def baseline(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
     run again, and compare with the docked arm."""
     if s.baseline is None:
         raise ValueError("the baseline stage needs a baseline scenario (`baseline.scenario`)")
-    fixed = Flow(scene_spec=planning.SceneSpec.from_mapping(s.baseline))
+    fixed = Flow(robot=flow.robot, scene_spec=planning.SceneSpec.from_mapping(s.baseline))
     quiet = dataclasses.replace(s, hw=dataclasses.replace(s.hw, plot=False))
     stages = {}
     for name, fn in (("plan", plan), ("schedule", schedule), ("hw", execute)):
@@ -420,7 +425,7 @@ def chain(flow: Flow, out: Path) -> str:
                      f"{r['schedule']['winner_cost']:.4f})")
     if "hw" in r:
         h = r["hw"]
-        steps.append(f"**run** on the simulated Bravo 7: {h.get('reason')}, {h.get('gates')} gates, "
+        steps.append(f"**run** on the simulated {flow.robot.name}: {h.get('reason')}, {h.get('gates')} gates, "
                      f"{h.get('duration_s')} s")
     picture = out / "plan" / "scene.png"
     return " → ".join(steps) + ("\n\n![the arm in the planning scene](plan/scene.png)" if picture.exists() else "")

@@ -1,4 +1,5 @@
-"""Motion planning for the Reach Bravo 7 in the thesis's test cage (thesis ch. 4–5).
+"""Motion planning for any arm (a :class:`uvms_jax.robot.Robot`) in a pick-and-place scene such
+as the thesis's test cage (thesis ch. 4–5).
 
 * stage: :class:`PlanSettings` (with :class:`IkSettings`, :class:`PlanJsonSettings`),
   :func:`plan_task_graph` → :class:`TaskGraphPlan` (targets, every edge by every planner,
@@ -8,8 +9,8 @@
   video of an executed run: :func:`render_run_video` → :class:`VideoInfo` (MP4, offscreen
   MuJoCo, camera :func:`scene_camera`);
 * scene: :class:`SceneSpec` (from ``configs/scenario/*.yaml``; extra :class:`Obstacle` s —
-  box, cylinder, sphere, capsule, mesh file), :func:`build_scene` → :class:`Scene` (MuJoCo
-  model, object and base poses, grasp; the arm's base pose a parameter), :class:`Context`;
+  box, cylinder, sphere, capsule, mesh file), :func:`scenario_robot` (the arm a scenario names), :func:`build_scene` (robot, spec) →
+  :class:`Scene` (MuJoCo model, object and base poses, grasp; the arm's base pose a parameter), :class:`Context`;
 * collision: :class:`CollisionChecker` (MuJoCo, the reference) — ``is_valid``, ``clearance``,
   their batched versions, ``path_is_valid``, ``min_clearance`` (exact, MuJoCo only where the sphere bounds leave it open); :func:`densify`; :class:`SphereChecker` (the arm
   as spheres, compiled; whole motions per call, conservative, MuJoCo confirms rejections);
@@ -53,7 +54,9 @@ from uvms_jax.plan._scene import Item
 from uvms_jax.plan._scene import Obstacle
 from uvms_jax.plan._scene import Scene
 from uvms_jax.plan._scene import SceneSpec
+from uvms_jax.plan._scene import MOUNT_KEYS
 from uvms_jax.plan._scene import build_scene
+from uvms_jax.plan._scene import scenario_robot
 from uvms_jax.plan._settings import CHECKERS
 from uvms_jax.plan._settings import IkSettings
 from uvms_jax.plan._settings import PlanJsonSettings

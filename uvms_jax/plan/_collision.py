@@ -6,7 +6,7 @@ distance between the moving arm (links F…B, jaws, held object) and the scene. 
 ``mj_kinematics`` + ``mj_collision`` (a few µs per configuration); clearance uses a second
 copy of the model whose geom margins are ``clearance_max``, so that MuJoCo's broad and narrow
 phases return every arm–scene pair nearer than that with its signed distance in one call.
-Batched versions take ``(k, 6)`` arrays (a whole trajectory or population) and loop over
+Batched versions take ``(k, n)`` arrays (a whole trajectory or population) and loop over
 MuJoCo calls without per-state Python objects. Validity never reads ``MjData.contact`` (building
 that view costs ~100 µs): the checker keeps one model copy whose geom margins are the safety
 margin and one whose margins are 0, and a state is valid exactly when MuJoCo reports no contact.
@@ -107,7 +107,7 @@ class CollisionChecker:
         held_on = sc.held_geoms.get(context.held) if context.held is not None else None
         moving = set(sc.arm_geoms)
         for g in range(sc.model.ngeom):
-            if g == sc.base_geom:
+            if g in sc.base_geoms:
                 bits = BASE_BITS
             elif g in sc.shoulder_geoms:
                 bits = SHOULDER_BITS
@@ -142,7 +142,7 @@ class CollisionChecker:
         raise ValueError(f"margin must be the checker's margin ({self.margin}) or 0, got {margin}")
 
     def is_valid(self, q, margin: float | None = None) -> bool:
-        """Whether ``q (6,)`` [rad] is inside the limits and no pair is nearer than ``margin``
+        """Whether ``q (n,)`` [rad] is inside the limits and no pair is nearer than ``margin``
         [m]: the checker's safety margin (default) or 0 (no penetration)."""
         q = np.asarray(q, dtype=float)
         if q.shape != (self._m.nq,) or not np.all(np.isfinite(q)):
@@ -156,7 +156,7 @@ class CollisionChecker:
         self.n_checks += 1
         return d.ncon == 0
 
-    def state_validator(self, n: int = 6):
+    def state_validator(self, n: int):
         """A minimal-overhead ``valid(state) -> bool`` for OMPL states (indexable, ``n``
         values, inside the bounds), using the safety margin and the current context."""
         m, d = self._m, self._d
@@ -185,7 +185,7 @@ class CollisionChecker:
 
     def clearance(self, q) -> float:
         """Smallest signed distance [m] between the moving arm (links F…B, jaws, held object)
-        and the scene at ``q (6,)``, capped at ``clearance_max``; negative = penetration."""
+        and the scene at ``q (n,)``, capped at ``clearance_max``; negative = penetration."""
         d = self._dc
         d.qpos[:] = q
         mujoco.mj_kinematics(self._mc, d)
@@ -202,7 +202,7 @@ class CollisionChecker:
         return Q
 
     def is_valid_batch(self, Q, margin: float | None = None) -> np.ndarray:
-        """``(k,)`` bool: :meth:`is_valid` of every row of ``Q (k, 6)``."""
+        """``(k,)`` bool: :meth:`is_valid` of every row of ``Q (k, n)``."""
         Q = self._check_batch(Q)
         mod, d = self._pick(margin)
         inside = np.all((Q >= self.lower) & (Q <= self.upper), axis=1)
@@ -217,7 +217,7 @@ class CollisionChecker:
         return out
 
     def clearance_batch(self, Q) -> np.ndarray:
-        """``(k,)`` :meth:`clearance` of every row of ``Q (k, 6)`` [m]."""
+        """``(k,)`` :meth:`clearance` of every row of ``Q (k, n)`` [m]."""
         Q = self._check_batch(Q)
         out = np.empty(len(Q))
         mod, d = self._mc, self._dc
@@ -229,7 +229,7 @@ class CollisionChecker:
         return out
 
     def min_clearance(self, Q, lower_bounds=None) -> float:
-        """Smallest :meth:`clearance` over the rows of ``Q (k, 6)`` [m] (k ≥ 1).
+        """Smallest :meth:`clearance` over the rows of ``Q (k, n)`` [m] (k ≥ 1).
 
         Args:
           Q: configurations [rad].
@@ -256,6 +256,6 @@ class CollisionChecker:
         return float(best)
 
     def path_is_valid(self, path, resolution: float = 0.01, margin: float | None = None) -> bool:
-        """Whether the piecewise-linear joint path ``(k, 6)`` is valid at every point of a
+        """Whether the piecewise-linear joint path ``(k, n)`` is valid at every point of a
         ``resolution`` [rad] interpolation."""
         return bool(np.all(self.is_valid_batch(densify(path, resolution), margin)))

@@ -10,7 +10,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from uvms_jax import bravo7, kin, sched
+from uvms_jax import kin, sched
+from uvms_jax import robot as robots
 
 __all__ = ["EdgeMetrics", "static_torques", "trajectory_metrics"]
 
@@ -31,34 +32,29 @@ def _pad(q: np.ndarray) -> np.ndarray:
     return np.concatenate([q, np.repeat(q[-1:], n - len(q), axis=0)])
 
 
-def _point_loads(chain: kin.Chain, gravity_base, water_density: float, force_base):
+def _point_loads(robot: robots.Robot, gravity_base, water_density: float, force_base):
     """The static point loads on the arm: ``(body (P,), local (P, 3) [m], force (P, 3) [N])``.
 
     ``body`` numbers the frame a point is fixed to: i < n the link turned by joint i (its
-    frame ``T_base_joint[i]``), n the tool frame. Each link of the Bravo 7 carries its weight
-    ``m g`` at its centre of mass and its buoyancy ``−ρ V g`` at its centre of buoyancy
-    (:func:`uvms_jax.bravo7.urdf_inertials`); the base link's loads turn no joint. The held
-    object's force acts at the tool point.
+    frame ``T_base_joint[i]``), n the tool frame. Each link carries its weight ``m g`` at its
+    centre of mass and its buoyancy ``−ρ V g`` at its centre of buoyancy (``robot.inertials``;
+    an arm whose description has no mass properties carries none); the base link's loads turn
+    no joint. The held object's force acts at the tool point.
     """
     g = np.asarray(gravity_base, dtype=float)
     if g.shape != (3,) or not np.all(np.isfinite(g)):
         raise ValueError(f"gravity_base must be a finite (3,) vector [m/s²], got {g}")
     if not (np.isfinite(water_density) and water_density >= 0):
         raise ValueError(f"water_density must be finite and non-negative [kg/m³], got {water_density}")
-    n = chain.n_joints
+    n = robot.n_joints
     body, local, force = [n], [np.zeros(3)], [np.zeros(3) if force_base is None else np.asarray(force_base, float)]
     if force[0].shape != (3,) or not np.all(np.isfinite(force[0])):
         raise ValueError(f"force_base must be a finite (3,) vector [N] or None, got {force[0]}")
     if np.any(g != 0):
-        names = tuple(chain.joint_names)
-        if names != tuple(j.name for j in bravo7.ARM_JOINTS):
-            raise ValueError(f"the links' mass properties are known for the Bravo 7 (joints G…B) only; chain "
-                             f"{chain.name!r} has joints {names}: pass gravity_base=(0, 0, 0)")
-        for name, inertial in zip(bravo7.INERTIAL_BODIES, bravo7.urdf_inertials()):
-            if name == "base":
+        for inertial in robot.inertials:
+            if inertial.body == robots.BASE:
                 continue
-            b = n if name == "tool" else names.index(name)
-            body += [b, b]
+            body += [inertial.body, inertial.body]
             local += [np.asarray(inertial.com), np.asarray(inertial.cob)]
             force += [inertial.mass * g, -water_density * inertial.volume * g]
     return np.array(body), np.stack(local), np.stack(force)
@@ -79,18 +75,18 @@ def _load_torques(chain: kin.Chain, q, body, local, force):
     return tau, k.T_base_tool[..., :3, 3]
 
 
-def static_torques(chain: kin.Chain, q, *, gravity_base, water_density: float, force_base=None):
+def static_torques(robot: robots.Robot, q, *, gravity_base, water_density: float, force_base=None):
     """Static joint torques of the arm's weight and buoyancy and of a held object, ``(k, n)`` [N·m].
 
     ``τ = Σ_p J_p(q)ᵀ f_p`` over the point loads (thesis eq. 4.10 at every load point): each
     link's weight ``m g`` at its centre of mass and buoyancy ``−ρ V g`` at its centre of
-    buoyancy (the manufacturer's data, :func:`uvms_jax.bravo7.urdf_inertials`), and the held
+    buoyancy (``robot.inertials``), and the held
     object's net force at the tool point; ``J_p`` is the point Jacobian (linear rows) of the
     load point. τ is the torque the loads put on the joints: the drives hold the pose with
     ``−τ`` (= MuJoCo's ``qfrc_bias`` at rest, = ∂U/∂q of the potential energy U).
 
     Args:
-      chain: the arm (``kin.bravo7()``; another chain only with ``gravity_base`` zero).
+      robot: the arm.
       q: ``(k, n)`` joint points [rad].
       gravity_base: ``(3,)`` gravitational acceleration in the arm's base frame [m/s²]
         (``R_base_world @ [0, 0, −g]``; zeros: a weightless arm, only ``force_base`` counts).
@@ -102,22 +98,22 @@ def static_torques(chain: kin.Chain, q, *, gravity_base, water_density: float, f
       ``(k, n)`` NumPy array of joint torques [N·m].
     """
     q = np.asarray(q, dtype=float)
-    if q.ndim != 2 or q.shape[1] != chain.n_joints or not np.all(np.isfinite(q)):
-        raise ValueError(f"q must be a finite (k, {chain.n_joints}) array, got shape {q.shape}")
-    return _torques_and_tool(chain, q, gravity_base, water_density, force_base)[0]
+    if q.ndim != 2 or q.shape[1] != robot.n_joints or not np.all(np.isfinite(q)):
+        raise ValueError(f"q must be a finite (k, {robot.n_joints}) array, got shape {q.shape}")
+    return _torques_and_tool(robot, q, gravity_base, water_density, force_base)[0]
 
 
-def _torques_and_tool(chain: kin.Chain, q: np.ndarray, gravity_base, water_density: float, force_base):
+def _torques_and_tool(robot: robots.Robot, q: np.ndarray, gravity_base, water_density: float, force_base):
     """:func:`static_torques` ``(k, n)`` and the tool points ``(k, 3)`` of checked ``q (k, n)``."""
-    body, local, force = _point_loads(chain, gravity_base, water_density, force_base)
+    body, local, force = _point_loads(robot, gravity_base, water_density, force_base)
     qp = jnp.asarray(_pad(q))
     dtype = qp.dtype
-    tau, p = _load_torques(chain, qp, jnp.asarray(body), jnp.asarray(local, dtype), jnp.asarray(force, dtype))
+    tau, p = _load_torques(robot.chain, qp, jnp.asarray(body), jnp.asarray(local, dtype), jnp.asarray(force, dtype))
     return np.asarray(tau)[: len(q)], np.asarray(p)[: len(q)]
 
 
 def trajectory_metrics(
-    chain: kin.Chain,
+    robot: robots.Robot,
     q,
     force_base=None,
     *,
@@ -130,7 +126,7 @@ def trajectory_metrics(
     measure the arc length of the tool).
 
     Args:
-      chain: the arm (``kin.bravo7()``).
+      robot: the arm.
       q: ``(k, n)`` joint points [rad], k ≥ 1.
       force_base: ``(3,)`` force of the held object on the tool point in the arm's base frame
         [N] (``[0, 0, F_b − F_g]`` rotated into the base frame), or None (nothing held).
@@ -143,9 +139,9 @@ def trajectory_metrics(
       |τ| over points and joints of :func:`static_torques`.
     """
     q = np.asarray(q, dtype=float)
-    if q.ndim != 2 or q.shape[0] < 1 or q.shape[1] != chain.n_joints or not np.all(np.isfinite(q)):
-        raise ValueError(f"q must be a finite (k >= 1, {chain.n_joints}) array, got shape {q.shape}")
+    if q.ndim != 2 or q.shape[0] < 1 or q.shape[1] != robot.n_joints or not np.all(np.isfinite(q)):
+        raise ValueError(f"q must be a finite (k >= 1, {robot.n_joints}) array, got shape {q.shape}")
     joint_movement = float(np.sum(np.abs(np.diff(q, axis=0))))
-    tau, p = _torques_and_tool(chain, q, gravity_base, water_density, force_base)
+    tau, p = _torques_and_tool(robot, q, gravity_base, water_density, force_base)
     ee_distance = float(np.sum(np.linalg.norm(np.diff(p, axis=0), axis=1)))
     return joint_movement, ee_distance, float(np.max(np.abs(tau)))

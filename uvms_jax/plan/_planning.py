@@ -69,7 +69,7 @@ class PlanResult:
 
     Attributes:
       success: a path was found and passed the re-check.
-      path: ``(k, 6)`` simplified waypoints [rad] (empty when not successful).
+      path: ``(k, n)`` simplified waypoints [rad] (empty when not successful).
       planning_time_s: wall time of solve + simplify over all attempts [s].
       attempts: solve calls made.
       revalidated: the returned path passed the dense re-check with margin 0.
@@ -88,8 +88,8 @@ class Trajectory:
 
     Attributes:
       t: ``(k,)`` waypoint times [s], t[0] = 0.
-      q: ``(k, 6)`` waypoints [rad].
-      max_velocity, max_acceleration: ``(6,)`` limits used [rad/s, rad/s²].
+      q: ``(k, n)`` waypoints [rad].
+      max_velocity, max_acceleration: ``(n,)`` limits used [rad/s, rad/s²].
     """
 
     t: np.ndarray
@@ -99,7 +99,7 @@ class Trajectory:
 
     def sample(self, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Positions and velocities every ``dt`` [s] (and at every waypoint): ``t (m,)``,
-        ``q (m, 6)``, ``qd (m, 6)``."""
+        ``q (m, n)``, ``qd (m, n)``."""
         ts, qs, vs = [], [], []
         for i in range(len(self.t) - 1):
             mv = synchronised_move(self.q[i], self.q[i + 1], self.max_velocity, self.max_acceleration,
@@ -161,7 +161,7 @@ def plan_motion(
 
     Args:
       checker: collision checker, already in the right :class:`~uvms_jax.plan.Context`.
-      q_start, q_goal: ``(6,)`` joint angles [rad]; both must be valid.
+      q_start, q_goal: ``(n,)`` joint angles [rad]; both must be valid.
       planner: any OMPL geometric planner (:func:`ompl_planners`), e.g. the thesis's
         ``RRTConnect``, ``BKPIECE1`` or ``PRM``.
       budget_s: total planning time allowed for this query, all attempts together [s].

@@ -36,7 +36,7 @@ def plot_ee_paths(scene: Scene, results: Sequence[EdgeResult], path: Path) -> No
     from matplotlib.lines import Line2D
     from matplotlib.ticker import MaxNLocator
 
-    chain = kin.bravo7()
+    chain = scene.robot.chain
     ok = [r for r in results if r.success]
     dense = [np.asarray(densify(r.plan.path, _EE_PATH_STEP)) for r in ok]
     p_all = np.asarray(kin.fk(chain, np.concatenate(dense)))[:, :, 3] if dense else np.zeros((0, 4))
@@ -130,5 +130,5 @@ def render_frames(scene: Scene, targets: Mapping[int, NodeTarget], out_dir: Path
     """Offscreen frames ``frame_start.png`` and ``frame_node<n>.png`` (each node's grasp/final
     configuration) into ``out_dir``; returns how many were written, 0 where no GL context
     exists (set ``MUJOCO_GL`` before MuJoCo is first imported to choose the backend)."""
-    frames = [("start", np.asarray(scene.spec.start_q))] + [(f"node{n}", t.q_at) for n, t in targets.items()]
+    frames = [("start", np.asarray(scene.start_q))] + [(f"node{n}", t.q_at) for n, t in targets.items()]
     return sum(render_frame(scene, q, out_dir / f"frame_{name}.png") for name, q in frames)

@@ -10,14 +10,15 @@ of 8 vertices, because MuJoCo's primitive capsule–box test misses a capsule wh
 right through a thin box (it reports a positive distance and no contact); cylinders and hexagonal prisms are convex meshes too.
 
 Collision groups (``contype``/``conaffinity`` bits): scene geoms ``2/2``, moving arm geoms
-``1/7``, links G and F ``1/3``, the fixed base link ``4/0`` — it is bolted to the mount, so it
-meets neither the scene nor links G and F (whose capsules touch it at the shoulder joints), but
-does meet the rest of the arm. (The base link is welded to the world, so an ``<exclude>`` naming
-it would switch off the world's geoms too; hence bits.) All world geoms share one body, so
-MuJoCo never tests them against each other; parent–child link pairs are filtered by MuJoCo, and
-the pairs listed in ``self_collision_exclude`` (links two apart whose capsules meet at a joint
-cluster; jointed bodies only) by ``<exclude>``. The in-hand copies of the objects (``held_<name>``, fixed in link B at the
-grasp) are off until a :class:`Context` turns one on.
+``1/7``, the fixed base link ``4/0`` — it is bolted to the mount, so it never meets the scene,
+only the moving links. Links that are always in contact with the base link (computed, see
+below) get ``1/3``, so that the two never meet. (The base
+link is welded to the world, so an ``<exclude>`` naming it would switch off the world's geoms
+too; hence bits.) All world geoms share one body, so MuJoCo never tests them against each other;
+parent–child link pairs are filtered by MuJoCo, and the other pairs that are in contact in every
+sampled configuration (:func:`uvms_jax.robot.self_collision_pairs`, as MoveIt's setup assistant
+finds them) by ``<exclude>``. The in-hand copies of the objects (``held_<name>``, fixed to the
+last link at the grasp) are off until a :class:`Context` turns one on.
 """
 
 from __future__ import annotations
@@ -32,7 +33,8 @@ import mujoco
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from uvms_jax import bravo7, kin
+from uvms_jax import kin
+from uvms_jax import robot as robots
 
 __all__ = [
     "Base",
@@ -42,15 +44,21 @@ __all__ = [
     "Obstacle",
     "Scene",
     "SceneSpec",
+    "MOUNT_KEYS",
     "build_scene",
     "rpy_to_matrix",
+    "scenario_robot",
 ]
 
 SCENE_BITS = (2, 2)  # contype, conaffinity of static geoms
 ARM_BITS = (1, 7)  # moving arm geoms: collide with the arm, the scene and the base link
-SHOULDER_BITS = (1, 3)  # links G and F: not against the base link (they meet it at the joints)
-BASE_BITS = (4, 0)  # fixed base link: only against links E…B, jaws and held object
+SHOULDER_BITS = (1, 3)  # links always in contact with the base link: not against it
+BASE_BITS = (4, 0)  # fixed base link: only against the other moving links, jaws and held object
 OFF_BITS = (0, 0)
+# Self-collision pairs nearer than this in every sampled configuration are skipped: at least the
+# planner's safety margin (PlanSettings.margin, 0.005 m), so that no pair reads as a collision in
+# every pose.
+SELF_COLLISION_MARGIN = 0.01  # [m]
 _CYLINDER_SIDES = 32  # inscribed polygon: radius error r(1 - cos(π/32)) ≈ 0.2 mm for r = 40 mm
 
 
@@ -64,6 +72,12 @@ def _pose(R=np.eye(3), p=(0.0, 0.0, 0.0)) -> np.ndarray:
     T[:3, :3] = R
     T[:3, 3] = p
     return T
+
+
+def _quat_matrix(wxyz: str) -> np.ndarray:
+    """Rotation ``(3, 3)`` of an MJCF ``quat`` attribute ``"w x y z"``."""
+    w, x, y, z = (float(v) for v in wxyz.split())
+    return Rotation.from_quat([x, y, z, w]).as_matrix()
 
 
 def _rz(yaw: float) -> np.ndarray:
@@ -246,7 +260,9 @@ class Obstacle:
 @dataclasses.dataclass(frozen=True)
 class SceneSpec:
     """Everything that defines the scene (``configs/scenario/*.yaml``); see that file for units.
-    ``cage_size`` None: no cage and no ceiling (open water, e.g. the arm under a vehicle)."""
+    ``cage_size`` None: no cage and no ceiling (open water, e.g. the arm under a vehicle).
+    ``start_q`` None: the start configuration is computed (:func:`uvms_jax.plan.start_configuration`).
+    The arm itself is not part of the spec: :func:`build_scene` receives it."""
 
     cage_size: tuple[float, float, float] | None
     profile: float
@@ -254,7 +270,6 @@ class SceneSpec:
     mount_pos: tuple[float, float, float]
     mount_rpy: tuple[float, float, float]
     mount_size: tuple[float, float, float]
-    link_radius: float
     jaws_open: float
     tables: tuple[Box, ...]
     objects: tuple[Item, ...]
@@ -262,10 +277,9 @@ class SceneSpec:
     object_density: float
     water_density: float
     gravity: float
-    start_q: tuple[float, ...]
+    start_q: tuple[float, ...] | None
     grasp_standoff: float = 0.05
     approach: float = 0.08
-    self_collision_exclude: tuple[tuple[str, str], ...] = ()
     obstacles: tuple[Obstacle, ...] = ()
 
     @property
@@ -316,7 +330,6 @@ class SceneSpec:
             mount_pos=t(m["arm"]["mount_pos"]),
             mount_rpy=t(m["arm"]["mount_rpy"]),
             mount_size=t(m["arm"]["mount_size"]),
-            link_radius=float(m["arm"].get("link_radius", bravo7.LINK_RADIUS)),
             jaws_open=float(m["arm"]["jaws_open"]),
             tables=tuple(Box(str(b["name"]), t(b["pos"]), t(b["size"]), t(b.get("rpy", (0, 0, 0)))) for b in m["tables"]),
             objects=tuple(objects),
@@ -325,10 +338,9 @@ class SceneSpec:
             object_density=float(m["object_density"]),
             water_density=float(m["water_density"]),
             gravity=float(m["gravity"]),
-            start_q=t(m["start_q"]),
+            start_q=None if m.get("start_q") is None else t(m["start_q"]),
             grasp_standoff=float(grasp.get("standoff", 0.05)),
             approach=float(grasp.get("approach", 0.08)),
-            self_collision_exclude=tuple(tuple(p) for p in m["arm"].get("self_collision_exclude", ())),
             obstacles=tuple(Obstacle.from_mapping(o) for o in m.get("obstacles", ()) or ()),
         )
         spec.validate()
@@ -354,8 +366,8 @@ class SceneSpec:
         for b in self.bases:
             if not b.fits or not set(b.fits) <= objs:
                 raise ValueError(f"base {b.name!r} fits unknown objects {b.fits} (objects: {sorted(objs)})")
-        if len(self.start_q) != 6 or not np.all(np.isfinite(self.start_q)):
-            raise ValueError(f"start_q must be 6 finite joint angles, got {self.start_q}")
+        if self.start_q is not None and not np.all(np.isfinite(self.start_q)):
+            raise ValueError(f"start_q must be finite joint values, got {self.start_q}")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -379,44 +391,57 @@ def _box_vertices(size) -> np.ndarray:
 
 
 class Scene:
-    """A built scene: MuJoCo model, geom groups and the poses of objects and bases.
+    """A built scene: the robot in the world, its MuJoCo model, geom groups and the poses of
+    objects and bases.
 
     Attributes:
       spec: the :class:`SceneSpec`.
+      robot: the arm (:class:`uvms_jax.robot.Robot`).
       xml: the MJCF text.
       model: ``mujoco.MjModel`` (its contype/conaffinity are switched by the collision checker).
       T_world_base: ``(4, 4)`` pose of the arm's base link in the world.
-      arm_geoms: geom ids of the moving arm (links G…B and jaws).
-      clearance_geoms: arm geoms whose distance to the scene counts as clearance (links F…B
-        and jaws; the base and link G only spin about the vertical axis under the mount, so
-        their distance to it never changes).
+      self_collision: the arm's skipped self-collision pairs
+        (:func:`uvms_jax.robot.self_collision_pairs`: ``adjacent`` and ``always``).
+      base_geoms: geom ids of the fixed base link.
+      arm_geoms: geom ids of the moving arm (its links and fingers).
+      shoulder_geoms: arm geoms of the links always in contact with the base link.
+      clearance_geoms: arm geoms whose distance to the scene counts as clearance (all but the
+        first link's: it turns about its joint's axis under the mount, so its distance to the
+        mount never changes).
       held_geoms: object node → geom id of its in-hand copy.
       obstacle_geoms: label (object/base node or table name, "cage", "ceiling", "mount")
         → geom ids.
-      T_obj_tool: ``(4, 4)`` grasp: the tool (jaws base frame) in the object frame.
+      T_obj_tool: ``(4, 4)`` grasp: the tool in the object frame.
     """
 
-    def __init__(self, spec: SceneSpec):
+    def __init__(self, spec: SceneSpec, robot: robots.Robot, self_collision_samples: int = 200):
         spec.validate()
+        if spec.start_q is not None and len(spec.start_q) != robot.n_joints:
+            raise ValueError(f"start_q has {len(spec.start_q)} values, the arm {robot.name!r} has {robot.n_joints} "
+                             f"joints ({', '.join(robot.joint_names)})")
         self.spec = spec
+        self.robot = robot
         self.tables = {b.name: b for b in spec.tables}
         self.objects = {o.node: o for o in spec.objects}
         self.bases = {b.node: b for b in spec.bases}
         self.T_world_base = spec.T_world_base
         self.T_base_world = np.linalg.inv(self.T_world_base)
+        self.self_collision = robots.self_collision_pairs(robot, self_collision_samples, jaws_open=spec.jaws_open,
+                                                          margin=SELF_COLLISION_MARGIN)
         self.xml, self.finger_length = self._build_xml()
         self.model = mujoco.MjModel.from_xml_string(self.xml)
         m = self.model
-        gid = lambda n: mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, n)  # noqa: E731
         bid = lambda n: mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, n)  # noqa: E731
-        arm_bodies = {bid(f"link_{j}") for j in "GFEDCB"}
-        self.base_geom = gid("geom_base")
-        self.held_geoms = {o.node: gid(f"held_{o.name}") for o in spec.objects}
+        link_ids = [bid(n) for n in robot.link_names]
+        base_id = bid(robots.base_body(robot))
+        self.held_geoms = {o.node: mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, f"held_{o.name}")
+                           for o in spec.objects}
         held = set(self.held_geoms.values())
-        self.arm_geoms = tuple(g for g in range(m.ngeom) if m.geom_bodyid[g] in arm_bodies and g not in held)
-        link_g = bid("link_G")
-        self.shoulder_geoms = (gid("geom_G"), gid("geom_F"))
-        self.clearance_geoms = tuple(g for g in self.arm_geoms if m.geom_bodyid[g] != link_g)
+        self.base_geoms = tuple(g for g in range(m.ngeom) if m.geom_bodyid[g] == base_id)
+        self.arm_geoms = tuple(g for g in range(m.ngeom) if m.geom_bodyid[g] in link_ids and g not in held)
+        shoulder = {bid(b) for a, b in self._base_pairs()}
+        self.shoulder_geoms = tuple(g for g in self.arm_geoms if m.geom_bodyid[g] in shoulder)
+        self.clearance_geoms = tuple(g for g in self.arm_geoms if m.geom_bodyid[g] != link_ids[0])
         self.obstacle_geoms: dict[int | str, tuple[int, ...]] = {}
         for g in range(m.ngeom):
             if m.geom_bodyid[g] != 0:
@@ -427,6 +452,40 @@ class Scene:
             self.obstacle_geoms[key] = self.obstacle_geoms.get(key, ()) + (g,)
         self.T_obj_tool = np.linalg.inv(self.T_tool_obj_for(None))
         self.default_bits = (m.geom_contype.copy(), m.geom_conaffinity.copy())
+        self.start_q = np.asarray(spec.start_q if spec.start_q is not None else self._start_configuration(), float)
+
+    def _start_configuration(self, clearance: float = SELF_COLLISION_MARGIN, per_ring: int = 64,
+                             seed: int = 0) -> np.ndarray:
+        """A collision-free configuration near the arm's home (the middle of its joint range):
+        the home itself if it is ``clearance`` [m] clear of everything, else the first clear
+        one of random configurations in rings of growing size about it (tenths of the range).
+
+        Raises:
+          ValueError: none of them is clear (then give the scenario a ``start_q``).
+        """
+        robot = self.robot
+        model = mujoco.MjModel.from_xml_string(self.xml)
+        model.geom_margin[:] = clearance / 2  # a pair's margins add up
+        data = mujoco.MjData(model)
+        lower, upper = robot.lower, robot.upper
+        home = (lower + upper) / 2
+        rng = np.random.default_rng(seed)
+        rings = [home[None]] + [np.clip(home + rng.uniform(-0.5, 0.5, (per_ring, robot.n_joints)) * f * (upper - lower),
+                                        lower, upper) for f in np.linspace(0.1, 1.0, 10)]
+        for q in np.concatenate(rings):
+            data.qpos[:] = q
+            mujoco.mj_kinematics(model, data)
+            mujoco.mj_collision(model, data)
+            if data.ncon == 0:
+                return q
+        raise ValueError(f"no configuration of {robot.name!r} within its limits is {clearance} m clear of the scene "
+                         f"near its home {np.round(home, 3).tolist()}: give the scenario a start_q")
+
+    def _base_pairs(self) -> list[tuple[str, str]]:
+        """Skipped self-collision pairs of the base link (it is welded to the world, so MuJoCo's
+        parent–child filter does not see its child: bits keep these apart)."""
+        base = robots.base_body(self.robot)
+        return [p for p in self.self_collision["adjacent"] + self.self_collision["always"] if p[0] == base]
 
     # -- poses ---------------------------------------------------------------------------
     def T_world_object(self, node: int) -> np.ndarray:
@@ -537,44 +596,38 @@ class Scene:
                 f'quat="{_fmt(kin.quat_wxyz(T[:3, :3]))}" rgba="1 0.55 0.1 1" contype="{SCENE_BITS[0]}" conaffinity="{SCENE_BITS[1]}"/>'
             )
 
-        arm = ET.fromstring(
-            kin.bravo7_mjcf_body(s.mount_pos, kin.quat_wxyz(self.T_world_base[:3, :3]), s.link_radius, s.jaws_open)
-        )
+        robot = self.robot
+        arm = ET.fromstring(robots.mjcf_body(robot, s.mount_pos, kin.quat_wxyz(self.T_world_base[:3, :3]), s.jaws_open))
+        last = arm.find(".//site[@name='tool']/..")
+        tool_site = last.find("site[@name='tool']")
+        T_link_tool = _pose(_quat_matrix(tool_site.get("quat")), [float(v) for v in tool_site.get("pos").split()])
+        base = robots.base_body(robot)
+        shoulder = {b for _, b in self._base_pairs()}
         finger_length = 0.0
-        tool_site = None
-        link_b = None
         for body in arm.iter("body"):
-            for child in body:
-                if child.tag == "site" and child.get("name") == "tool":
-                    tool_site, link_b = child, body
-        if tool_site is None:
-            raise RuntimeError("kin.bravo7_mjcf_body has no site 'tool'")
-        tool_pos = np.array([float(v) for v in tool_site.get("pos").split()])
-        for body in arm.iter("body"):
+            name = body.get("name")
             for g in body.findall("geom"):
-                name = g.get("name")
-                bits = BASE_BITS if name == "geom_base" else SHOULDER_BITS if name in ("geom_G", "geom_F") else ARM_BITS
+                bits = BASE_BITS if name == base else SHOULDER_BITS if name in shoulder else ARM_BITS
                 g.set("contype", str(bits[0]))
                 g.set("conaffinity", str(bits[1]))
                 if g.get("type") == "box":  # jaw fingers → convex meshes (see the module docstring)
                     size = np.array([float(v) for v in g.get("size").split()]) * 2
                     pos = np.array([float(v) for v in g.get("pos").split()])
-                    finger_length = max(finger_length, pos[2] + size[2] / 2 - tool_pos[2])
+                    tip = np.linalg.inv(T_link_tool) @ np.r_[pos, 1.0]
+                    finger_length = max(finger_length, tip[2] + size[2] / 2)
                     g.set("type", "mesh")
                     g.set("mesh", mesh(f"m_{g.get('name')}", _box_vertices(size)))
                     del g.attrib["size"]
-        # In-hand copies of the objects, fixed in link B at the grasp (off by default).
+        # In-hand copies of the objects, fixed to the last link at the grasp (off by default).
         for o in s.objects:
-            T = _pose(p=tool_pos) @ self.T_tool_obj_for(o.node)
+            T = T_link_tool @ self.T_tool_obj_for(o.node)
             mname = f"m_{o.name}"
-            ET.SubElement(link_b, "geom", {
+            ET.SubElement(last, "geom", {
                 "name": f"held_{o.name}", "type": "mesh", "mesh": mname, "pos": _fmt(T[:3, 3]),
                 "quat": _fmt(kin.quat_wxyz(T[:3, :3])), "rgba": "1 0.55 0.1 0.8", "contype": "0", "conaffinity": "0",
             })
-        for a, b in s.self_collision_exclude:
-            if "base_link" in (a, b):
-                raise ValueError("self_collision_exclude must not name base_link (it is welded to the world)")
-        excludes = "".join(f'<exclude body1="{a}" body2="{b}"/>' for a, b in s.self_collision_exclude)
+        excludes = "".join(f'<exclude body1="{a}" body2="{b}"/>' for a, b in self.self_collision["always"]
+                           if base not in (a, b))
         xml = (
             '<mujoco model="thesis_cage">\n  <compiler angle="radian"/>\n  <option gravity="0 0 0"/>\n'
             '  <visual><global offwidth="960" offheight="720"/></visual>\n'
@@ -586,13 +639,28 @@ class Scene:
         return xml, finger_length
 
 
-def build_scene(spec: SceneSpec | Mapping[str, Any], T_world_base=None) -> Scene:
-    """Build the MuJoCo scene from a :class:`SceneSpec` or a scenario mapping.
+#: Keys of a scenario's ``arm`` mapping that place the arm in the scene; the others are the
+#: arm's own settings (:func:`uvms_jax.robot.robot_from_config`: ``card``, ``description``, …).
+MOUNT_KEYS = ("mount_pos", "mount_rpy", "mount_size", "jaws_open")
+
+
+def scenario_robot(scenario: Mapping[str, Any]) -> robots.Robot:
+    """The arm a scenario names: its ``arm`` mapping less the mount keys (:data:`MOUNT_KEYS`),
+    e.g. ``{card: NAME}`` (a shipped arm) or ``{description: my_arm.urdf, tip: tool0, link_radius: 0.05}``."""
+    arm = scenario.get("arm")
+    if not isinstance(arm, Mapping):
+        raise ValueError("the scenario needs an `arm` mapping: the arm (card or description) and its mount")
+    return robots.robot_from_config({k: v for k, v in arm.items() if k not in MOUNT_KEYS})
+
+
+def build_scene(robot: robots.Robot, spec: SceneSpec | Mapping[str, Any], T_world_base=None) -> Scene:
+    """Build the MuJoCo scene of a robot in a scenario.
 
     Args:
-      spec: the scene.
+      robot: the arm.
+      spec: the scene: a :class:`SceneSpec` or a scenario mapping.
       T_world_base: ``(4, 4)`` pose of the arm's base link in the world [m]; None keeps the
         scenario's ``arm.mount_pos`` / ``arm.mount_rpy`` (see :meth:`SceneSpec.with_base`).
     """
     spec = spec if isinstance(spec, SceneSpec) else SceneSpec.from_mapping(spec)
-    return Scene(spec if T_world_base is None else spec.with_base(T_world_base))
+    return Scene(spec if T_world_base is None else spec.with_base(T_world_base), robot)

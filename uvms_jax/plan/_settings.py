@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import dataclasses
 
+import numpy as np
+
 from uvms_jax import sched
 from uvms_jax.plan._planners import check_parameters, ompl_planners
 from uvms_jax.plan._planning import PLANNERS
@@ -22,6 +24,9 @@ def _require(ok: bool, message: str) -> None:
         raise ValueError(message)
 
 
+TARGET_SELECTION = ("manipulability", "nearest_start")
+
+
 @dataclasses.dataclass(frozen=True)
 class IkSettings:
     """Batched numerical IK of the pick-and-place targets (:func:`~uvms_jax.plan.pick_place_targets`).
@@ -32,18 +37,25 @@ class IkSettings:
       n_yaw_continuous: yaws tried for a rotationally symmetric object (cylinder).
       max_branch_jump: largest joint change between the pre and the grasp/final
         configuration [rad].
+      select: which of a node's valid target pairs is kept: ``"manipulability"`` (the largest
+        w of the pair, the thesis's choice) or ``"nearest_start"`` (the pre configuration
+        nearest the start in joint space: one IK branch for every node, so that the moves
+        between them stay short — for arms whose joints turn more than a turn or that reach
+        a pose in several elbow branches).
     """
 
     n_seeds: int = 64
     iterations: int = 150
     n_yaw_continuous: int = 8
     max_branch_jump: float = 1.0
+    select: str = "manipulability"
 
     def __post_init__(self):
         _require(self.n_seeds >= 1, f"ik.n_seeds must be >= 1, got {self.n_seeds}")
         _require(self.iterations >= 1, f"ik.iterations must be >= 1, got {self.iterations}")
         _require(self.n_yaw_continuous >= 1, f"ik.n_yaw_continuous must be >= 1, got {self.n_yaw_continuous}")
         _require(self.max_branch_jump > 0, f"ik.max_branch_jump must be > 0 [rad], got {self.max_branch_jump}")
+        _require(self.select in TARGET_SELECTION, f"ik.select must be one of {TARGET_SELECTION}, got {self.select!r}")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -91,7 +103,8 @@ class PlanSettings:
       margin: safety distance while planning [m]; re-checks use 0.
       clearance_max: clearances above this read as it [m].
       max_velocity, max_acceleration: joint limits of the time parameterisation, one value
-        for all joints or one per joint [rad/s, rad/s²].
+        for all joints or one per joint [rad/s, rad/s²]; ``max_velocity`` None: the arm's
+        velocity limits (:meth:`joint_velocity`).
       ik: the IK of the targets.
       weights: metric name (``uvms_jax.sched.METRICS``) → weight K of the cost matrix (thesis
         eqs. 4.16–4.17, Table 4.3); a metric left out weighs 0.
@@ -110,7 +123,7 @@ class PlanSettings:
     simplify_s: float = 0.2
     margin: float = 0.005
     clearance_max: float = 0.3
-    max_velocity: float | tuple[float, ...] = 0.5
+    max_velocity: float | tuple[float, ...] | None = None
     max_acceleration: float | tuple[float, ...] = 1.0
     ik: IkSettings = IkSettings()
     weights: dict[str, float] = dataclasses.field(default_factory=lambda: {m: 0.2 for m in sched.METRICS})
@@ -134,9 +147,26 @@ class PlanSettings:
                  f"need 0 <= margin < clearance_max, got {self.margin}, {self.clearance_max}")
         for name in ("max_velocity", "max_acceleration"):
             v = getattr(self, name)
+            if v is None and name == "max_velocity":
+                continue
             _require(all(x > 0 for x in (v if isinstance(v, tuple) else (v,))), f"{name} must be > 0, got {v}")
         unknown = sorted(set(self.weights) - set(sched.METRICS))
         _require(not unknown, f"unknown metrics {unknown} in weights (known: {sched.METRICS})")
+
+    def joint_velocity(self, robot) -> np.ndarray:
+        """``(n,)`` the joint speeds of the time parameterisation [rad/s or m/s]: ``max_velocity``,
+        or the arm's velocity limits where it is None.
+
+        Raises:
+          ValueError: ``max_velocity`` exceeds the arm's limit at some joint (naming them).
+        """
+        limits = robot.velocity_limits
+        if self.max_velocity is None:
+            return limits
+        v = np.broadcast_to(np.asarray(self.max_velocity, dtype=float), limits.shape)
+        over = [f"{name} ({a:g} > {b:g})" for name, a, b in zip(robot.joint_names, v, limits) if a > b * (1 + 1e-9)]
+        _require(not over, f"plan max_velocity exceeds the velocity limits of {robot.name!r}: {', '.join(over)}")
+        return np.array(v)
 
     def weight_vector(self) -> tuple[float, ...]:
         """The weights in ``uvms_jax.sched.METRICS`` order (missing metrics 0)."""

@@ -142,6 +142,20 @@ def _segment_valid(checker: CollisionChecker, ctx: Context, a, b, resolution: fl
     return checker.path_is_valid(np.stack([a, b]), resolution)
 
 
+def _nearest_turn(q: np.ndarray, q_ref: np.ndarray, robot) -> np.ndarray:
+    """Revolute angles ``q (..., n)`` moved by whole turns to the value nearest ``q_ref (n,)``
+    within the limits: a joint whose range spans more than a turn reaches a pose at several
+    angles, and the one nearest the start keeps the moves between targets short."""
+    revolute = np.array([k == "revolute" for k in robot.chain.kinds])
+    turns = np.round((q_ref - q) / (2 * np.pi))
+    shifted = q + 2 * np.pi * turns
+    for step in (-1.0, 1.0):  # back inside the limits where the nearest turn lies beyond one
+        outside = (shifted < robot.lower) if step > 0 else (shifted > robot.upper)
+        shifted = np.where(outside, shifted + step * 2 * np.pi, shifted)
+    inside = (shifted >= robot.lower) & (shifted <= robot.upper)
+    return np.where(revolute & inside & np.isfinite(q), shifted, q)
+
+
 def pick_place_targets(
     key: jax.Array,
     scene: Scene,
@@ -151,6 +165,7 @@ def pick_place_targets(
     n_yaw_continuous: int = 8,
     max_branch_jump: float = 1.0,
     resolution: float = 0.01,
+    select: str = "manipulability",
 ) -> dict[int, NodeTarget]:
     """Solve the targets of every object and base node by batched numerical IK.
 
@@ -161,6 +176,8 @@ def pick_place_targets(
       n_yaw_continuous: yaws tried for a rotationally symmetric object (cylinder).
       max_branch_jump: largest joint change [rad] allowed between ``q_pre`` and ``q_at``.
       resolution: joint step [rad] of the segment check between them.
+      select: the kept pair: the largest manipulability, or ``"nearest_start"`` (its pre
+        configuration nearest ``scene.start_q``, max-norm) — see ``plan.IkSettings``.
 
     Returns:
       node → :class:`NodeTarget`.
@@ -168,13 +185,13 @@ def pick_place_targets(
     Raises:
       ValueError: a node has no valid, collision-free target pair (names the node).
     """
-    chain = kin.bravo7()
+    chain = scene.robot.chain
     nodes = sorted(scene.objects) + sorted(scene.bases)
     per_node = [tool_poses(scene, n, n_yaw_continuous) for n in nodes]
     T_world = np.concatenate([np.stack([at, pre], axis=1) for _, at, pre in per_node])  # (K, 2, 4, 4)
     T_base = scene.T_base_world @ T_world
     sol = kin.numeric_ik(key, chain, jnp.asarray(T_base), n_seeds=n_seeds, iterations=iterations, all_seeds=True)
-    q_all = np.asarray(sol.q)  # (K, 2, S, 6)
+    q_all = _nearest_turn(np.asarray(sol.q), scene.start_q, scene.robot)  # (K, 2, S, n)
     ok_all = np.asarray(sol.valid)
     w_all = np.asarray(indices.manipulability(kin.jacobian(chain, jnp.nan_to_num(jnp.asarray(q_all)))))
     out: dict[int, NodeTarget] = {}
@@ -195,7 +212,8 @@ def pick_place_targets(
                 if jump.min() > max_branch_jump or (s, j) in tried:
                     continue
                 tried.add((s, j))
-                score = float(min(w_all[row + k, 0, s], w_all[row + k, 1, j]))
+                w = float(min(w_all[row + k, 0, s], w_all[row + k, 1, j]))
+                score = -float(np.max(np.abs(q_pre[j] - scene.start_q))) if select == "nearest_start" else w
                 a, p = q_at[s], q_pre[j]
                 if not (_valid(checker, ctx["arrive"], p) and _valid(checker, ctx["leave"], p)
                         and _valid(checker, ctx["down"], a) and _valid(checker, ctx["up"], a)
@@ -204,11 +222,11 @@ def pick_place_targets(
                     continue
                 n_ok += 1
                 if best is None or score > best[0]:
-                    best = (score, k, a.copy(), p.copy())
+                    best = (score, k, a.copy(), p.copy(), w)
         row += len(yaws)
         if best is None:
             raise ValueError(f"node {node}: no collision-free IK target pair among {len(yaws)} yaws x {n_seeds} seeds")
-        score, k, a, p = best
-        out[node] = NodeTarget(node, p, a, pre[k], at[k], float(yaws[k]), score, n_ok)
+        _, k, a, p, w = best
+        out[node] = NodeTarget(node, p, a, pre[k], at[k], float(yaws[k]), w, n_ok)
     checker.set_context(Context())
     return out

@@ -16,7 +16,7 @@ from collections.abc import Mapping, Sequence
 import jax
 import numpy as np
 
-from uvms_jax import kin, planfile, sched
+from uvms_jax import planfile, sched
 from uvms_jax import progress as progress_lines
 from uvms_jax.plan._collision import CollisionChecker
 from uvms_jax.plan._planning import seed_ompl
@@ -122,10 +122,9 @@ def plan_task_graph(key: jax.Array, scene: Scene, settings: PlanSettings = PlanS
     ik = settings.ik
     targets = pick_place_targets(key, scene, checker, n_seeds=ik.n_seeds, iterations=ik.iterations,
                                  n_yaw_continuous=ik.n_yaw_continuous, max_branch_jump=ik.max_branch_jump,
-                                 resolution=settings.recheck_resolution)
+                                 resolution=settings.recheck_resolution, select=ik.select)
     ik_seconds = time.perf_counter() - t0
     log.info("IK targets for %d nodes in %.1f s (compilation included)", len(targets), ik_seconds)
-    chain = kin.bravo7()
     fast = SphereChecker(checker) if settings.checker == "spheres" else None
     edges = task_edges(scene)
     weights = settings.weight_vector()
@@ -137,8 +136,8 @@ def plan_task_graph(key: jax.Array, scene: Scene, settings: PlanSettings = PlanS
             r = plan_edge(scene, checker, targets, src, dst, planner, budget_s=settings.budget_s,
                           resolution=settings.resolution, recheck_resolution=settings.recheck_resolution,
                           clearance_resolution=settings.clearance_resolution, simplify_s=settings.simplify_s,
-                          max_velocity=settings.max_velocity, max_acceleration=settings.max_acceleration,
-                          chain=chain, fast=fast, params=settings.planner_params.get(planner))
+                          max_velocity=settings.joint_velocity(scene.robot), max_acceleration=settings.max_acceleration,
+                          fast=fast, params=settings.planner_params.get(planner))
             results.append(r)
             log.debug("%s %d->%d success=%s revalidated=%s %.3f s", planner, src, dst, r.success, r.revalidated,
                       r.plan.planning_time_s)
@@ -175,7 +174,7 @@ def plan_for_schedule(task_plan: TaskGraphPlan, planner: str, sequence: Sequence
     jp = settings.plan_json
     plan = plan_from_edges(task_plan.scene, task_plan.targets, edges, [int(v) for v in sequence],
                            jaws_open_mm=jp.jaws_open_mm, jaws_closed_mm=jp.jaws_closed_mm,
-                           max_velocity=settings.max_velocity, max_acceleration=settings.max_acceleration,
+                           max_velocity=settings.joint_velocity(task_plan.scene.robot), max_acceleration=settings.max_acceleration,
                            checker=task_plan.checker)
     task_plan.checker.set_context(Context())
     return plan

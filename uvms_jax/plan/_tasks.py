@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from uvms_jax import bravo7, kin, planfile, sched
+from uvms_jax import planfile, sched
 from uvms_jax.plan._collision import CollisionChecker, densify
 from uvms_jax.plan._metrics import EdgeMetrics, trajectory_metrics
 from uvms_jax.plan._planning import PlanResult, Trajectory, check_trajectory, plan_motion, time_parameterize
@@ -82,7 +82,7 @@ def _edge_set(scene: Scene) -> frozenset[tuple[int, int]]:
 
 def _q_at_node(scene: Scene, targets: Mapping[int, NodeTarget], node: int) -> np.ndarray:
     if node in (START, goal_node(scene)):
-        return np.asarray(scene.spec.start_q, dtype=float)
+        return np.asarray(scene.start_q, dtype=float)
     if node not in targets:
         raise ValueError(f"unknown node {node} (known: {sorted(targets)}, start {START}, goal {goal_node(scene)})")
     return targets[node].q_pre
@@ -134,7 +134,6 @@ def plan_edge(
     simplify_s: float = 0.2,
     max_velocity=0.5,
     max_acceleration=1.0,
-    chain: kin.Chain | None = None,
     fast: SphereChecker | None = None,
     params: Mapping[str, Any] | None = None,
 ) -> EdgeResult:
@@ -155,14 +154,13 @@ def plan_edge(
         return EdgeResult(planner, src, dst, res, None, None, {})
     traj = time_parameterize(res.path, max_velocity, max_acceleration)
     check = check_trajectory(checker, traj, recheck_resolution, collision_free=res.revalidated)
-    chain = chain or kin.bravo7()
     force = None
     if ctx.held is not None:
         force = scene.T_base_world[:3, :3] @ scene.payload_force_world(ctx.held)
     dense = densify(res.path, recheck_resolution)
     # Gravity in the base frame: the base may be tilted or hang (SceneSpec.with_base).
     gravity = scene.T_base_world[:3, :3] @ np.array([0.0, 0.0, -scene.spec.gravity])
-    jm, ee, tau = trajectory_metrics(chain, dense, force, gravity_base=gravity,
+    jm, ee, tau = trajectory_metrics(scene.robot, dense, force, gravity_base=gravity,
                                      water_density=scene.spec.water_density)
     clearance = (fast or checker).min_clearance(densify(res.path, clearance_resolution))
     metrics = EdgeMetrics(planning_time=res.planning_time_s, joint_movement=jm, ee_distance=ee, security=clearance,
@@ -252,5 +250,5 @@ def plan_from_edges(
             segments += [_motion(f"final on {names[dst]}", down),
                          _gripper(f"release on {names[dst]}", jaws_open_mm),
                          _motion(f"post-final {names[dst]}", up)]
-    return planfile.Plan(tuple(j.name for j in bravo7.ARM_JOINTS), tuple(segments),
-                         base_rpy=tuple(float(v) for v in scene.spec.mount_rpy))
+    return planfile.Plan(scene.robot.joint_names, tuple(segments),
+                         base_rpy=tuple(float(v) for v in scene.spec.mount_rpy), arm=scene.robot.record())

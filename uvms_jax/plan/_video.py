@@ -1,4 +1,4 @@
-"""A video of an executed run: the Bravo 7 in the planning scene, rendered offscreen by MuJoCo.
+"""A video of an executed run: the arm in the planning scene, rendered offscreen by MuJoCo.
 
 The frames replay joint angles logged over time (e.g. the measured states of a hardware run),
 sampled at a fixed frame rate, and go to an H.264 MP4 (yuv420p, playable everywhere) through

@@ -49,7 +49,9 @@ def write_task_graph(task_plan: TaskGraphPlan, out: Path) -> None:
     (out / "targets.json").write_text(json.dumps({
         str(n): {"q_pre": t.q_pre.tolist(), "q_at": t.q_at.tolist(), "yaw": t.yaw,
                  "manipulability": t.manipulability, "candidates": t.n_candidates}
-        for n, t in task_plan.targets.items()} | {"start": list(scene.spec.start_q)}, indent=1))
+        for n, t in task_plan.targets.items()} | {"start": scene.start_q.tolist()}, indent=1))
+    # The self-collision pairs the checker skips, as computed for this arm (docs/robots.md).
+    (out / "self_collision.json").write_text(json.dumps(scene.self_collision, indent=1))
     rows = []
     for planner, results in task_plan.by_planner.items():
         rows += [_edge_row(r) for r in results]

@@ -10,7 +10,9 @@ them) and the hardware profile.
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
+import logging
 import os
 import xml.etree.ElementTree as ET
 from collections.abc import Mapping
@@ -25,6 +27,8 @@ from uvms_jax.kin import _import
 from uvms_jax.robot._model import BASE, BodyInertial, Gripper, Hardware, Robot
 
 __all__ = ["DESCRIPTIONS", "load_arm", "load_robot", "robot_from_config", "shipped_arms"]
+
+log = logging.getLogger(__name__)
 
 #: The description files shipped with the package (the Reach Bravo 7, ...).
 DESCRIPTIONS = Path(__file__).parent / "descriptions"
@@ -168,10 +172,10 @@ def load_robot(
     *,
     tip: str | None = None,
     base: str | None = None,
-    gripper: str | None = None,
+    gripper: str | Mapping[str, Any] | None = None,
     gripper_velocity: float | None = None,
+    link_radius: float,
     finger_size=(0.016, 0.03, 0.08),
-    link_radius: float = 0.04,
     buoyancy: Mapping[str, Mapping[str, Any]] | None = None,
     hardware: Mapping[str, Any] | None = None,
     name: str | None = None,
@@ -184,10 +188,13 @@ def load_robot(
       tip: the tool frame: a URDF link, an MJCF body or site (default: the only leaf).
       base: the base: a URDF link or an MJCF body (default: the root link / the world body).
       gripper: name of the prismatic (URDF) or slide (MJCF) joint that opens the jaws, below
-        the tip; its limits [m] are read from the file. None: no gripper.
+        the tip, its limits [m] read from the file; or, for a description without one, the
+        gripper itself: ``{"joint": NAME, "lower": m, "upper": m, "velocity": m/s}`` (the
+        fingers then hang from the tip). None: no gripper.
       gripper_velocity: the gripper's speed limit [m/s]; default: the file's (an MJCF has none).
       finger_size: full edges of one finger box [m] (the fingers' collision shape).
-      link_radius: capsule radius of the links' collision model [m].
+      link_radius: capsule radius of the links' collision model [m] (required: the collision
+        model is capsules along the links; the description's own geometry is not read).
       buoyancy: link/body name → ``{"volume": m³, "cob": [x, y, z] m in that link's frame}``.
       hardware: ``{"protocol": "bpl", "device_ids": {joint: id, ...}}``, or None.
       name: the robot's name (default: the file's).
@@ -198,11 +205,12 @@ def load_robot(
     """
     data, source, path = _read(description)
     fmt = _format(data, source)
+    in_file = gripper if isinstance(gripper, str) else None
     if fmt == "urdf":
         urdf = _import.read_urdf(path if path is not None else data.decode())
-        parts = _urdf_robot(urdf, base, tip, gripper)
+        parts = _urdf_robot(urdf, base, tip, in_file)
     else:
-        parts = _mjcf_robot(path if path is not None else data.decode(), base, tip, gripper)
+        parts = _mjcf_robot(path if path is not None else data.decode(), base, tip, in_file)
     joints, T_base_tool, base_link, file_name, raw_inertials, body_frames, frames, grip = parts
     chain = _import._build(joints, T_base_tool, file_name if name is None else name)
     buoyancy = dict(buoyancy or {})
@@ -218,7 +226,15 @@ def load_robot(
     if buoyancy:  # links named that carry no mass properties in the file
         raise ValueError(f"buoyancy of links {sorted(buoyancy)}: the description gives them no mass properties")
     gripper_model = None
-    if grip is not None:
+    if isinstance(gripper, Mapping):
+        unknown = sorted(set(gripper) - {"joint", "lower", "upper", "velocity", "effort"})
+        if unknown or "joint" not in gripper:
+            raise ValueError(f"a gripper given in settings needs joint, lower, upper, velocity (effort optional); "
+                             f"got keys {sorted(gripper)}")
+        gripper_model = Gripper(str(gripper["joint"]), float(gripper["lower"]), float(gripper["upper"]),
+                                float(gripper["velocity"]), float(gripper.get("effort", 0.0)),
+                                tuple(float(v) for v in finger_size))
+    elif grip is not None:
         lower, upper, speed, effort = grip
         speed = speed if gripper_velocity is None else gripper_velocity
         if speed is None:
@@ -287,8 +303,16 @@ def robot_from_config(cfg: Mapping[str, Any]) -> Robot:
     cfg.pop("card", None)
     if not cfg.get("description"):
         raise ValueError("arm settings need `card` (a shipped arm or a YAML card) or `description` (a URDF/MJCF file)")
+    if cfg.get("link_radius") is None:
+        raise ValueError(f"arm settings need link_radius [m] for {cfg['description']}: the radius of the capsules "
+                         "along its links (the collision model)")
     kwargs = {k: v for k, v in cfg.items() if k != "description" and v is not None}
-    return load_robot(folder / str(cfg["description"]), **kwargs)
+    log.info("arm %s: collision model of capsules along the links, radius %g m", cfg["description"],
+             float(cfg["link_radius"]))
+    robot = load_robot(folder / str(cfg["description"]), **kwargs)
+    if folder == DESCRIPTIONS:  # a shipped description: named the same on every machine
+        robot = dataclasses.replace(robot, source=f"uvms_jax/robot/descriptions/{cfg['description']}")
+    return robot
 
 
 def load_arm(card: str) -> Robot:

@@ -125,14 +125,14 @@ def robot_mjcf(robot: Robot, jaws_open: float | None = None, inertial: bool = Fa
             f"  <worldbody>\n{mjcf_body(robot, jaws_open=jaws_open, inertial=inertial)}\n  </worldbody>\n</mujoco>\n")
 
 
-def self_collision_pairs(robot: Robot, n_samples: int = 200, seed: int = 0,
-                         jaws_open: float | None = None) -> dict[str, list[tuple[str, str]]]:
+def self_collision_pairs(robot: Robot, n_samples: int = 200, seed: int = 0, jaws_open: float | None = None,
+                         margin: float = 0.0) -> dict[str, list[tuple[str, str]]]:
     """The body pairs a self-collision check skips, found as MoveIt's setup assistant finds them.
 
-    ``adjacent``: a link and its parent (MuJoCo skips these itself). ``always``: non-adjacent
-    pairs in contact in every one of ``n_samples`` configurations drawn uniformly within the
-    joint limits (they touch by construction, e.g. capsules meeting at a joint cluster), so a
-    check of them says nothing about the pose.
+    ``adjacent``: a link and its parent. ``always``: non-adjacent pairs nearer than ``margin``
+    [m] (a collision checker's safety distance) in every one of ``n_samples`` configurations
+    drawn uniformly within the joint limits: they touch by construction (e.g. capsules meeting
+    at a joint cluster), so a check of them says nothing about the pose.
 
     Returns:
       ``{"adjacent": [(body, body), ...], "always": [(body, body), ...]}`` (body names).
@@ -155,7 +155,7 @@ def self_collision_pairs(robot: Robot, n_samples: int = 200, seed: int = 0,
         mujoco.mj_kinematics(model, data)
         touching = set()
         for a, b in always:
-            if any(mujoco.mj_geomDistance(model, data, g1, g2, _DISTMAX, None) <= 0.0
+            if any(mujoco.mj_geomDistance(model, data, g1, g2, _DISTMAX, None) <= margin
                    for g1 in geoms[a] for g2 in geoms[b]):
                 touching.add((a, b))
         always = touching
