@@ -1,6 +1,9 @@
 """The robot model: loading by content, the shipped Bravo 7 against the manufacturer's tables,
 the MuJoCo builder against the POE kinematics, and the computed self-collision pairs."""
 
+import re
+from pathlib import Path
+
 import mujoco
 import numpy as np
 import pytest
@@ -125,3 +128,16 @@ def test_self_collision_pairs_are_computed():
     # The thesis model's one hand-listed pair: links E and C, whose capsules meet at the wrist
     # cluster in every pose.
     assert pairs["always"] == [("link_E", "link_C")]
+
+
+STAGES = Path(__file__).parents[2] / "uvms_jax"
+
+
+def test_no_stage_names_a_particular_arm():
+    """Planning, scheduling, the pipeline and the plan format receive their arm: none of their
+    modules imports or names one."""
+    files = [p for d in ("plan", "sched", "pipeline") for p in (STAGES / d).glob("*.py")] + [STAGES / "planfile.py"]
+    assert len(files) > 20
+    naming = [f"{p.relative_to(STAGES)}:{i}" for p in files for i, line in enumerate(p.read_text().splitlines(), 1)
+              if re.search(r"bravo|alpha ?5", line, flags=re.I)]
+    assert not naming, naming
