@@ -4,15 +4,15 @@
 
 About a minute on a 2-core CPU (a small GA; ``python experiments/docking.py
 docking/preset=bravo7`` is the full experiment with its grid reference). The arm here is the
-Bravo 7 from ``examples/bravo7.urdf``; point ``URDF`` and ``TIP`` at your own file.
+Bravo 7's shipped description; point ``URDF`` and ``TIP`` at your own file.
 """
 
 import jax
 import numpy as np
 
-from uvms_jax import evo, indices, kin
+from uvms_jax import evo, indices, kin, robot
 
-URDF, TIP = "examples/bravo7.urdf", "tool"
+URDF, TIP = str(robot.DESCRIPTIONS / "bravo7.urdf"), "tool"
 
 
 def main() -> None:

@@ -1,13 +1,14 @@
-"""The Reach Bravo 7: every number the project knows about the arm, in one place.
+"""The Reach Bravo 7's published tables: the source and the oracle of its description file.
 
 Kinematics from the public Blueprint Lab URDF (docs/theory.md §1.3), device ids of the BPL
-protocol (docs/theory.md §6), the size of the project's primitive collision model, and the
-manufacturer's kinematic and dynamic data (Blueprint Lab, "Reach Bravo Kinematics and
-Dynamics", 2020): its standard-DH table and each link's mass, centre of mass, inertia and
-buoyancy, given in its own link frames and mapped here into the URDF link frames
-(:func:`urdf_inertials`; docs/hardware.md says how, a test proves it).
-``uvms_jax.kin`` (the POE chain, URDF/MJCF export), ``uvms_jax.plan`` (the collision scene)
-and ``uvms_jax.hw`` (joint limits, the simulator) all build on these tables.
+protocol (docs/theory.md §6), and the manufacturer's kinematic and dynamic data (Blueprint Lab,
+"Reach Bravo Kinematics and Dynamics", 2020): its standard-DH table and each link's mass,
+centre of mass, inertia and buoyancy, given in its own link frames and mapped here into the
+URDF link frames (:func:`urdf_inertials`; docs/hardware.md says how, a test proves it).
+The stages use the arm as a :class:`uvms_jax.robot.Robot` loaded from its shipped description
+(``uvms_jax/robot/descriptions/bravo7.urdf`` and its card), which was written from these
+tables; tests check the two against each other. ``kin.bravo7()`` (the papers' reproductions)
+builds its chain from the joint table here.
 
 Plain Python on purpose: importing this module imports neither JAX nor NumPy, so the
 hardware path stays light.
@@ -33,7 +34,6 @@ __all__ = [
     "Inertial",
     "JAWS",
     "JOINTS",
-    "LINK_RADIUS",
     "NAME",
     "TOOL_RPY",
     "TOOL_XYZ",
@@ -105,11 +105,6 @@ JAWS = Joint("A", 0x01, (0.0, 0.0, 0.009), (0.0, 0.0, 0.0), (0.0, 0.0, 1.0), 0.0
 # Every actuator in hardware order G, F, E, D, C, B, A.
 JOINTS: tuple[Joint, ...] = ARM_JOINTS + (JAWS,)
 
-# Capsule radius of the primitive link shapes [m], in the planning scene and the simulator.
-# The links are roughly 0.09 m across at the joint housings (docs/theory.md §1.3) and slimmer
-# along the tubes; capsules of 0.045 m make the wrist capsules (D, E) touch link B in poses the
-# real arm reaches (the thesis's grasps among them), so the model uses 0.04 m.
-LINK_RADIUS = 0.04
 
 
 # -- the manufacturer's kinematic and dynamic data ---------------------------------------------

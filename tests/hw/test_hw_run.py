@@ -98,7 +98,7 @@ def test_sim_model_geometry_is_the_bravo7_module():
         np.testing.assert_allclose(body.pos, joint.xyz, atol=1e-7)
         j = model.joint(joint.name)
         np.testing.assert_allclose(model.jnt_range[j.id], (joint.lower, joint.upper))
-        np.testing.assert_allclose(model.geom_size[model.body_geomadr[body.id], 0], bravo7.LINK_RADIUS)
+        np.testing.assert_allclose(model.geom_size[model.body_geomadr[body.id], 0], 0.04)  # the card's radius
     # URDF rpy (0, π, 0) on joint B: its axis −z points along +z of the world at q = 0 when the
     # chain above is straight up to it (D's yaw π flips only x and y).
     mujoco.mj_kinematics(model, data)

@@ -142,7 +142,9 @@ def test_mjcf_loads_in_mujoco_and_matches_fk():
     import mujoco
 
     chain = kin.bravo7()
-    model = mujoco.MjModel.from_xml_string(kin.bravo7_mjcf())
+    from uvms_jax import robot
+
+    model = mujoco.MjModel.from_xml_string(robot.robot_mjcf(robot.load_arm("bravo7")))
     data = mujoco.MjData(model)
     site = model.site("tool").id
     q = random_q(chain, 50, seed=6)

@@ -205,7 +205,7 @@ def test_mjcf_matches_mujoco_kinematics_and_jacobian():
 
 def test_bravo7_mjcf_imports_as_kin_bravo7():
     ref = kin.bravo7()
-    chain = kin.from_mjcf(kin.bravo7_mjcf(), tip_site="tool")
+    chain = kin.from_mjcf(robot.robot_mjcf(robot.load_arm("bravo7")), tip_site="tool")
     assert chain.joint_names == ref.joint_names
     q = random_q(ref, 200, seed=4)
     for a, b in zip(pose_and_jacobian(chain, q), pose_and_jacobian(ref, q)):

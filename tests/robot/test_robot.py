@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from uvms_jax import bravo7, kin, robot
+from uvms_jax.plan._scene import SELF_COLLISION_MARGIN
 
 ATOL_TEXT = 1e-8  # numbers written to a file with 10 significant digits and read back
 N_RANDOM = 50
@@ -122,12 +123,17 @@ def test_config_errors_name_the_problem():
 
 
 def test_self_collision_pairs_are_computed():
-    pairs = robot.self_collision_pairs(bravo7_robot(), n_samples=200)
+    arm = bravo7_robot()
+    pairs = robot.self_collision_pairs(arm, n_samples=200)
     assert pairs["adjacent"] == [("base_link", "link_G"), ("link_G", "link_F"), ("link_F", "link_E"),
                                  ("link_E", "link_D"), ("link_D", "link_C"), ("link_C", "link_B")]
-    # The thesis model's one hand-listed pair: links E and C, whose capsules meet at the wrist
-    # cluster in every pose.
+    # The thesis model's hand-listed pairs: links E and C, whose capsules meet at the wrist
+    # cluster in every pose; and, within the planner's margin, the base link and link F, whose
+    # capsules meet at the shoulder (the F capsule's end is 81.6 mm from the base capsule's,
+    # less than two radii and a 10 mm margin).
     assert pairs["always"] == [("link_E", "link_C")]
+    assert robot.self_collision_pairs(arm, n_samples=200, margin=SELF_COLLISION_MARGIN)["always"] == [
+        ("base_link", "link_F"), ("link_E", "link_C")]
 
 
 STAGES = Path(__file__).parents[2] / "uvms_jax"

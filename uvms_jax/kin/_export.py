@@ -1,4 +1,4 @@
-"""URDF export of any chain, and URDF/MJCF of the Reach Bravo 7 from its joint table."""
+"""URDF export of any chain, and the URDF of the Reach Bravo 7 from its joint table."""
 
 from __future__ import annotations
 
@@ -9,7 +9,6 @@ import numpy as np
 
 from uvms_jax import bravo7 as _b7
 from uvms_jax.kin._chain import REVOLUTE, Chain, UrdfJoint
-from uvms_jax.kin._lie import rpy_matrix
 from uvms_jax.kin._models import BRAVO7_JAWS, BRAVO7_JOINTS, BRAVO7_TOOL_XYZ
 
 
@@ -97,55 +96,3 @@ def quat_wxyz(R: np.ndarray) -> np.ndarray:
     q = np.zeros(4)
     mujoco.mju_mat2Quat(q, np.ascontiguousarray(R, dtype=np.float64).reshape(9))
     return q
-
-
-def bravo7_mjcf_body(
-    pos=(0.0, 0.0, 0.0), quat=(1.0, 0.0, 0.0, 0.0), link_radius: float = _b7.LINK_RADIUS, jaws_open: float = 0.03
-) -> str:
-    """MJCF ``<body>`` tree of the Bravo 7 (joints G…B, hinge, radians) with primitive shapes.
-
-    Each link is a capsule from its joint origin to the next joint origin; the jaws are two
-    fixed boxes ``jaws_open`` apart. A site named ``tool`` marks the jaws base frame. Insert
-    the result into a ``<worldbody>`` whose ``<compiler angle="radian"/>`` is set.
-
-    Args:
-      pos, quat: mounting pose of the base link in the parent frame [m], (w, x, y, z).
-      link_radius: capsule radius [m] (default: the Bravo 7's, links ≈ 0.09 m in diameter).
-      jaws_open: gap between the jaw fingers [m].
-    """
-    r = link_radius
-    lines = [f'<body name="base_link" pos="{_fmt(pos)}" quat="{_fmt(quat)}">']
-    lines.append(f'  <geom name="geom_base" type="capsule" fromto="0 0 0 {_fmt(BRAVO7_JOINTS[0].xyz)}" size="{r}"/>')
-    depth = 1
-    for i, joint in enumerate(BRAVO7_JOINTS):
-        pad = "  " * depth
-        child = BRAVO7_JOINTS[i + 1].xyz if i + 1 < len(BRAVO7_JOINTS) else BRAVO7_TOOL_XYZ
-        q = quat_wxyz(np.asarray(rpy_matrix(np.asarray(joint.rpy, dtype=np.float64))))
-        lines.append(f'{pad}<body name="link_{joint.name}" pos="{_fmt(joint.xyz)}" quat="{_fmt(q)}">')
-        lines.append(
-            f'{pad}  <joint name="{joint.name}" type="hinge" axis="{_fmt(joint.axis)}" '
-            f'range="{joint.lower} {joint.upper}" limited="true"/>'
-        )
-        lines.append(f'{pad}  <geom name="geom_{joint.name}" type="capsule" fromto="0 0 0 {_fmt(child)}" size="{r}"/>')
-        depth += 1
-    pad = "  " * depth
-    tz = BRAVO7_TOOL_XYZ
-    lines.append(f'{pad}<site name="tool" pos="{_fmt(tz)}" size="0.01"/>')
-    finger = 'size="0.008 0.015 0.04"'
-    for side, sign in (("left", 1.0), ("right", -1.0)):
-        fx = sign * (jaws_open / 2.0 + 0.008)
-        lines.append(
-            f'{pad}<geom name="geom_jaw_{side}" type="box" pos="{_fmt((tz[0] + fx, tz[1], tz[2] + 0.04))}" {finger}/>'
-        )
-    for d in range(depth - 1, -1, -1):
-        lines.append("  " * d + "</body>")
-    return "\n".join(lines)
-
-
-def bravo7_mjcf(link_radius: float = _b7.LINK_RADIUS, jaws_open: float = 0.03) -> str:
-    """A complete MJCF model of the Bravo 7 alone, base link at the world origin."""
-    body = bravo7_mjcf_body(link_radius=link_radius, jaws_open=jaws_open)
-    return (
-        '<mujoco model="bravo7">\n  <compiler angle="radian"/>\n  <option gravity="0 0 0"/>\n'
-        f"  <worldbody>\n{body}\n  </worldbody>\n</mujoco>\n"
-    )

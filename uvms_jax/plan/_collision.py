@@ -17,7 +17,8 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from uvms_jax.plan._scene import ARM_BITS, BASE_BITS, OFF_BITS, SCENE_BITS, SHOULDER_BITS, Context, Scene
+from uvms_jax.plan._scene import (ARM_BITS, BASE_BITS, FIRST_BITS, MOUNT_BITS, OFF_BITS, SCENE_BITS, SHOULDER_BITS,
+                                  Context, Scene)
 
 __all__ = ["BOUND_SLACK", "CollisionChecker", "densify"]
 
@@ -109,6 +110,8 @@ class CollisionChecker:
         for g in range(sc.model.ngeom):
             if g in sc.base_geoms:
                 bits = BASE_BITS
+            elif g in sc.first_geoms:
+                bits = FIRST_BITS
             elif g in sc.shoulder_geoms:
                 bits = SHOULDER_BITS
             elif g in moving or g == held_on:
@@ -116,13 +119,13 @@ class CollisionChecker:
             elif g in sc.held_geoms.values():
                 bits = OFF_BITS
             else:
-                bits = OFF_BITS if g in off else SCENE_BITS
+                bits = OFF_BITS if g in off else MOUNT_BITS if g in sc.mount_geoms else SCENE_BITS
             self._m.geom_contype[g], self._m.geom_conaffinity[g] = bits
             self._m0.geom_contype[g], self._m0.geom_conaffinity[g] = bits
             # Clearance model: only the clearance geoms (and the held object) against the scene.
             if g in sc.clearance_geoms or g == held_on:
                 cbits = (1, 0)
-            elif bits == SCENE_BITS:
+            elif bits in (SCENE_BITS, MOUNT_BITS):
                 cbits = (0, 1)
             else:
                 cbits = OFF_BITS

@@ -10,15 +10,16 @@ of 8 vertices, because MuJoCo's primitive capsule–box test misses a capsule wh
 right through a thin box (it reports a positive distance and no contact); cylinders and hexagonal prisms are convex meshes too.
 
 Collision groups (``contype``/``conaffinity`` bits): scene geoms ``2/2``, moving arm geoms
-``1/7``, the fixed base link ``4/0`` — it is bolted to the mount, so it never meets the scene,
-only the moving links. Links that are always in contact with the base link (computed, see
-below) get ``1/3``, so that the two never meet. (The base
-link is welded to the world, so an ``<exclude>`` naming it would switch off the world's geoms
-too; hence bits.) All world geoms share one body, so MuJoCo never tests them against each other;
-parent–child link pairs are filtered by MuJoCo, and the other pairs that are in contact in every
-sampled configuration (:func:`uvms_jax.robot.self_collision_pairs`, as MoveIt's setup assistant
-finds them) by ``<exclude>``. The in-hand copies of the objects (``held_<name>``, fixed to the
-last link at the grasp) are off until a :class:`Context` turns one on.
+``1/15``, the fixed base link ``4/0`` (it is bolted to the mount, so it never meets the scene,
+only the moving links), the mount plate ``8/0``. Links always in contact with the base link
+(computed, see below) get ``1/11`` and meet it not; the first link, which turns about its axis
+at the base, gets ``1/3`` and meets neither the base link nor the mount. (The base link is welded
+to the world, so an ``<exclude>`` naming it would switch off the world's geoms too; hence bits.)
+All world geoms share one body, so MuJoCo never tests them against each other; parent–child
+link pairs are filtered by MuJoCo, and the other pairs that are in contact in every sampled
+configuration (:func:`uvms_jax.robot.self_collision_pairs`, as MoveIt's setup assistant finds
+them) by ``<exclude>``. The in-hand copies of the objects (``held_<name>``, fixed to the last
+link at the grasp) are off until a :class:`Context` turns one on.
 """
 
 from __future__ import annotations
@@ -51,8 +52,10 @@ __all__ = [
 ]
 
 SCENE_BITS = (2, 2)  # contype, conaffinity of static geoms
-ARM_BITS = (1, 7)  # moving arm geoms: collide with the arm, the scene and the base link
-SHOULDER_BITS = (1, 3)  # links always in contact with the base link: not against it
+MOUNT_BITS = (8, 0)  # the mount plate: against the moving links but the first
+ARM_BITS = (1, 15)  # moving arm geoms: collide with the arm, the scene, the base link and the mount
+SHOULDER_BITS = (1, 11)  # links always in contact with the base link: not against it
+FIRST_BITS = (1, 3)  # the first link: it turns about its axis at the base, touching neither base nor mount
 BASE_BITS = (4, 0)  # fixed base link: only against the other moving links, jaws and held object
 OFF_BITS = (0, 0)
 # Self-collision pairs nearer than this in every sampled configuration are skipped: at least the
@@ -405,6 +408,8 @@ class Scene:
       base_geoms: geom ids of the fixed base link.
       arm_geoms: geom ids of the moving arm (its links and fingers).
       shoulder_geoms: arm geoms of the links always in contact with the base link.
+      first_geoms: arm geoms of the first link (it meets neither the base link nor the mount).
+      mount_geoms: the mount plate's geoms.
       clearance_geoms: arm geoms whose distance to the scene counts as clearance (all but the
         first link's: it turns about its joint's axis under the mount, so its distance to the
         mount never changes).
@@ -441,6 +446,8 @@ class Scene:
         self.arm_geoms = tuple(g for g in range(m.ngeom) if m.geom_bodyid[g] in link_ids and g not in held)
         shoulder = {bid(b) for a, b in self._base_pairs()}
         self.shoulder_geoms = tuple(g for g in self.arm_geoms if m.geom_bodyid[g] in shoulder)
+        self.first_geoms = tuple(g for g in self.arm_geoms if m.geom_bodyid[g] == link_ids[0])
+        self.mount_geoms = tuple(g for g in range(m.ngeom) if m.geom(g).name == "mount")
         self.clearance_geoms = tuple(g for g in self.arm_geoms if m.geom_bodyid[g] != link_ids[0])
         self.obstacle_geoms: dict[int | str, tuple[int, ...]] = {}
         for g in range(m.ngeom):
@@ -531,11 +538,11 @@ class Scene:
 
         world: list[str] = []
 
-        def box(label: str, T: np.ndarray, size, rgba: str) -> None:
+        def box(label: str, T: np.ndarray, size, rgba: str, bits=SCENE_BITS) -> None:
             mname = mesh(f"m_{label}", _box_vertices(size))
             world.append(
                 f'<geom name="{label}" type="mesh" mesh="{mname}" pos="{_fmt(T[:3, 3])}" '
-                f'quat="{_fmt(kin.quat_wxyz(T[:3, :3]))}" rgba="{rgba}" contype="{SCENE_BITS[0]}" conaffinity="{SCENE_BITS[1]}"/>'
+                f'quat="{_fmt(kin.quat_wxyz(T[:3, :3]))}" rgba="{rgba}" contype="{bits[0]}" conaffinity="{bits[1]}"/>'
             )
 
         if s.cage_size is not None:
@@ -567,7 +574,7 @@ class Scene:
                     k += 1
         ms = s.mount_size
         mount_T = self.T_world_base @ _pose(p=(0, 0, -ms[2] / 2))
-        box("mount", mount_T, ms, "0.3 0.3 0.3 1")
+        box("mount", mount_T, ms, "0.3 0.3 0.3 1", MOUNT_BITS)
         for t in s.tables[1:]:
             box(t.name, t.T_world_box, t.size, "0.75 0.8 0.9 0.6")
         bits = f'contype="{SCENE_BITS[0]}" conaffinity="{SCENE_BITS[1]}" rgba="0.55 0.6 0.7 0.8"'
@@ -607,7 +614,8 @@ class Scene:
         for body in arm.iter("body"):
             name = body.get("name")
             for g in body.findall("geom"):
-                bits = BASE_BITS if name == base else SHOULDER_BITS if name in shoulder else ARM_BITS
+                bits = (BASE_BITS if name == base else FIRST_BITS if name == robot.link_names[0]
+                        else SHOULDER_BITS if name in shoulder else ARM_BITS)
                 g.set("contype", str(bits[0]))
                 g.set("conaffinity", str(bits[1]))
                 if g.get("type") == "box":  # jaw fingers → convex meshes (see the module docstring)

@@ -19,6 +19,7 @@ manipulability ``min(w(q_pre), w(q_at))`` wins.
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Mapping
 
 import jax
 import jax.numpy as jnp
@@ -142,6 +143,39 @@ def _segment_valid(checker: CollisionChecker, ctx: Context, a, b, resolution: fl
     return checker.path_is_valid(np.stack([a, b]), resolution)
 
 
+def _node_name(scene: Scene, node: int) -> str:
+    return scene.objects[node].name if node in scene.objects else scene.bases[node].name
+
+
+def _first_contact(checker: CollisionChecker, ctx: Mapping[str, Context], pre, at) -> str:
+    """The first contact of a rejected target pair, in words (at the pre or the grasp
+    configuration, or on the segment between them)."""
+    for key, q in (("arrive", pre), ("leave", pre), ("down", at), ("up", at)):
+        checker.set_context(ctx[key])
+        found = checker.contacts(q)
+        if found:
+            a, b, dist = found[0]
+            return f"{a} against {b} ({1e3 * -dist:.0f} mm deep) at the {'pre' if q is pre else 'grasp'} pose"
+    return "the move between the pre and the grasp pose collides"
+
+
+def _unreachable(scene: Scene, T_world_at: np.ndarray, n_solved: int, n_paired: int, collision: str | None,
+                 n_tries: int, max_branch_jump: float) -> str:
+    """Why no target pair of a node is valid: out of reach (by how much), no IK solution, a
+    branch jump, or a collision (the first contact)."""
+    distance = float(np.min(np.linalg.norm(T_world_at[:, :3, 3] - scene.T_world_base[:3, 3], axis=-1)))
+    reach = scene.robot.max_reach
+    if n_solved == 0:
+        if distance > reach:
+            return (f"out of reach: its grasp pose is {distance:.3f} m from the arm's base, {distance - reach:.3f} m "
+                    f"beyond the arm's longest reach ({reach:.3f} m)")
+        return (f"no IK solution within the joint limits for the grasp and its pre pose ({n_tries} tries; "
+                f"{distance:.3f} m from the base, reach {reach:.3f} m)")
+    if n_paired == 0:
+        return f"every grasp solution is more than ik.max_branch_jump = {max_branch_jump} rad from its pre pose"
+    return f"in collision: every IK solution collides, e.g. {collision}"
+
+
 def _nearest_turn(q: np.ndarray, q_ref: np.ndarray, robot) -> np.ndarray:
     """Revolute angles ``q (..., n)`` moved by whole turns to the value nearest ``q_ref (n,)``
     within the limits: a joint whose range spans more than a turn reaches a pose at several
@@ -198,10 +232,11 @@ def pick_place_targets(
     row = 0
     for node, (yaws, at, pre) in zip(nodes, per_node):
         ctx = node_contexts(scene, node)
-        best, n_ok = None, 0
+        best, n_ok, n_solved, n_paired, collision = None, 0, 0, 0, None
         for k in range(len(yaws)):
             q_at, q_pre = q_all[row + k, 0], q_all[row + k, 1]
             ok_at, ok_pre = ok_all[row + k, 0], ok_all[row + k, 1]
+            n_solved += int(ok_at.any() and ok_pre.any())
             if not ok_pre.any():
                 continue
             pre_idx = np.flatnonzero(ok_pre)
@@ -212,6 +247,7 @@ def pick_place_targets(
                 if jump.min() > max_branch_jump or (s, j) in tried:
                     continue
                 tried.add((s, j))
+                n_paired += 1
                 w = float(min(w_all[row + k, 0, s], w_all[row + k, 1, j]))
                 score = -float(np.max(np.abs(q_pre[j] - scene.start_q))) if select == "nearest_start" else w
                 a, p = q_at[s], q_pre[j]
@@ -219,13 +255,16 @@ def pick_place_targets(
                         and _valid(checker, ctx["down"], a) and _valid(checker, ctx["up"], a)
                         and _segment_valid(checker, ctx["down"], p, a, resolution)
                         and _segment_valid(checker, ctx["up"], a, p, resolution)):
+                    collision = collision or _first_contact(checker, ctx, p, a)
                     continue
                 n_ok += 1
                 if best is None or score > best[0]:
                     best = (score, k, a.copy(), p.copy(), w)
         row += len(yaws)
         if best is None:
-            raise ValueError(f"node {node}: no collision-free IK target pair among {len(yaws)} yaws x {n_seeds} seeds")
+            why = _unreachable(scene, at, n_solved, n_paired, collision, len(yaws) * n_seeds, max_branch_jump)
+            raise ValueError(f"node {node} ({_node_name(scene, node)}): {why}; arm {scene.robot.name!r} with its "
+                             f"base at {np.round(scene.T_world_base[:3, 3], 3).tolist()} m")
         _, k, a, p, w = best
         out[node] = NodeTarget(node, p, a, pre[k], at[k], float(yaws[k]), w, n_ok)
     checker.set_context(Context())

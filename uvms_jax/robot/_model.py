@@ -156,6 +156,15 @@ class Robot:
         return self.joint_names + ((self.gripper.joint,) if self.gripper is not None else ())
 
     @property
+    def max_reach(self) -> float:
+        """An upper bound of the tool's distance from the base origin [m]: the lengths between
+        consecutive joint origins and to the tool, plus every prismatic joint's travel."""
+        frames = np.asarray(self.chain.T_base_joint0, dtype=float)
+        points = np.concatenate([np.zeros((1, 3)), frames[:, :3, 3], np.asarray(self.chain.T_base_tool0)[None, :3, 3]])
+        travel = sum(float(u - lo) for u, lo, k in zip(self.upper, self.lower, self.chain.kinds) if k == "prismatic")
+        return float(np.sum(np.linalg.norm(np.diff(points, axis=0), axis=1))) + travel
+
+    @property
     def lower(self) -> np.ndarray:
         return np.asarray(self.chain.lower, dtype=float)
 
