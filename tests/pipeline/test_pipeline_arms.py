@@ -63,5 +63,7 @@ def test_pipeline_with_another_arm(tmp_path, arm):
     hw = res["hw"]
     assert hw["ok"] and hw["reason"] == "completed", hw
     assert hw["sim"]["limit_violations"] == 0 and hw["max_gate_error_rad"] <= 0.01
+    trajectory = yaml.safe_load((run / "hw" / "joint_trajectory.yaml").read_text())
+    assert trajectory["joint_names"] == [*res["arm"]["joint_names"], "jaws"]
     pairs = json.loads((run / "plan" / "self_collision.json").read_text())
     assert len(pairs["adjacent"]) == dof  # the base and every moving link, each with its parent

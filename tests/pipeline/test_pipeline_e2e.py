@@ -21,7 +21,7 @@ STAGE_FILES = {  # each stage's folder must hold these files
     "docking": ["runs.csv", "grid_optimum.json", "best_pose.json", "docked_top_view.png", "summary.json"],
     "plan": ["edges.csv", "targets.json", "cost_RRTConnect.csv", "ee_paths_RRTConnect.png"],
     "schedule": ["table.md", "results.json", "plan.json"],
-    "hw": ["run.csv", "result.json"],
+    "hw": ["run.csv", "result.json", "joint_trajectory.yaml"],
     "baseline": ["plan/edges.csv", "schedule/plan.json", "hw/result.json"],
 }
 

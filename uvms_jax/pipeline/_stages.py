@@ -277,6 +277,8 @@ def execute(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
         if run.ok:
             bar.update(bar.total - bar.n)
     res = hw.write_run(run, out, plot=hs.plot, plan_path=source)
+    # The plan as a ROS-shaped JointTrajectory: what another arm's own controller executes.
+    planfile.save_plan(the_plan, out / "joint_trajectory.yaml", joint_trajectory=True, gripper=flow.robot)
     if not run.ok:
         log.warning("simulated run aborted (arm told to hold): %s", run.result.reason)
     clock = "virtual clock" if hs.link == "loopback" else "real time"
@@ -289,7 +291,8 @@ def execute(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
     notes = [f"Link: {hs.link} ({clock}); reached-gate threshold {hs.executor.gate_threshold_rad} rad "
              "(thesis 4.6: every encoder within the threshold before the next motion). The thesis validated its "
              "real-arm runs with motion capture (~2 mm); `run.csv` logs commanded vs measured states for the same "
-             "comparison. Same plan on a real arm: `uvms-hw run PLAN --dry-run`, then `--udp 192.168.2.3:6789`."]
+             "comparison. Same plan on a real arm: `uvms-hw run PLAN --dry-run`, then `--udp 192.168.2.3:6789`; "
+             "`joint_trajectory.yaml`: the plan as a ROS-shaped JointTrajectory for any arm's own controller."]
     if hs.plot and run.log.rows:
         notes.append(_run_video(s, flow, run.log, out, res))
     return StageReport("hw", f"Execution on the simulated {flow.robot.name} (docs/theory.md §6, thesis 4.6)", [table],
