@@ -12,7 +12,6 @@ from __future__ import annotations
 import io
 import os
 from dataclasses import dataclass
-from pathlib import Path
 
 import mujoco
 import numpy as np
@@ -127,17 +126,113 @@ def from_urdf(source, base_link: str | None = None, tip_link: str | None = None,
     return _build(joints, T_base_tool, urdf.robot.name if name is None else name)
 
 
+_FORMATS = {"robot": "URDF", "mujoco": "MJCF"}
+
+
+def _description_bytes(source, what: str) -> tuple[bytes, str]:
+    """``(bytes, label)`` of a description given as a path or as its text."""
+    if isinstance(source, bytes):
+        return source, "<text>"
+    if isinstance(source, str) and not source.strip():
+        raise ValueError(f"{what} description is an empty string: give a file path or the XML text")
+    if _is_text(source):
+        return source.encode(), "<text>"
+    if not isinstance(source, (str, os.PathLike)):
+        raise TypeError(f"{what} description must be a path or the XML text, got {type(source).__name__}")
+    path = os.fspath(source)
+    if not os.path.isfile(path):
+        raise ValueError(f"{what} file not found: {path}")
+    with open(path, "rb") as f:
+        return f.read(), path
+
+
+def strict_root(data: bytes, source: str, expected: str | None = None):
+    """The root element of a description, parsed strictly (an error names the line and
+    column; nothing is recovered); ``expected`` (``"robot"``: URDF, ``"mujoco"``: MJCF) refuses
+    the other format by name."""
+    from lxml import etree  # yourdfpy's XML library
+
+    try:
+        root = etree.fromstring(data, parser=etree.XMLParser(recover=False, resolve_entities=False))
+    except etree.XMLSyntaxError as err:
+        raise ValueError(f"{source} is not well-formed XML: {' '.join(str(err).split())}") from None  # one line
+    if expected is not None and root.tag != expected:
+        found = _FORMATS.get(root.tag)
+        raise ValueError(f"{source} is {found + ' (<' + root.tag + '>)' if found else 'a <' + root.tag + '> file'}, "
+                         f"not {_FORMATS[expected]} (<{expected}>)")
+    return root
+
+
+def _floats(text: str | None, n: int, where: str, default: str) -> np.ndarray:
+    values = (default if text is None else text).split()
+    try:
+        out = np.array([float(v) for v in values])
+    except ValueError:
+        raise ValueError(f"{where} {text!r} is not {n} numbers") from None
+    if out.shape != (n,):
+        raise ValueError(f"{where} {text!r} is not {n} numbers")
+    if not np.all(np.isfinite(out)):
+        raise ValueError(f"{where} {text!r} is not finite")
+    return out
+
+
+def _check_urdf_tree(root, source: str) -> None:
+    """Refuse what a URDF parser would load wrong without a word: unnamed or duplicate links
+    and joints, joints between unknown links, a link with two parents or a cycle (a closed
+    loop: a URDF is a tree), non-finite or zero axes and origins."""
+    links = [e.get("name") for e in root.findall("link")]
+    joints = root.findall("joint")
+    for kind, names in (("link", links), ("joint", [j.get("name") for j in joints])):
+        if any(not n for n in names):
+            raise ValueError(f"{source}: a <{kind}> has no name (line {root.find(kind).sourceline})")
+        dup = sorted({n for n in names if names.count(n) > 1})
+        if dup:
+            raise ValueError(f"{source}: {kind} names repeat: {dup}")
+    parent_of: dict[str, str] = {}
+    for j in joints:
+        name = j.get("name")
+        ends = {}
+        for end in ("parent", "child"):
+            e = j.find(end)
+            if e is None or not e.get("link"):
+                raise ValueError(f"{source}: joint {name!r} has no <{end} link=...> (line {j.sourceline})")
+            if e.get("link") not in links:
+                raise ValueError(f"{source}: joint {name!r} names an unknown {end} link {e.get('link')!r}")
+            ends[end] = e.get("link")
+        if ends["child"] in parent_of:
+            raise ValueError(f"{source}: link {ends['child']!r} is the child of two joints "
+                             f"({parent_of[ends['child']][1]!r} and {name!r}): a closed loop; a URDF is a tree")
+        parent_of[ends["child"]] = (ends["parent"], name)
+        origin = j.find("origin")
+        if origin is not None:
+            _floats(origin.get("xyz"), 3, f"joint {name!r}: origin xyz", "0 0 0")
+            _floats(origin.get("rpy"), 3, f"joint {name!r}: origin rpy", "0 0 0")
+        if j.get("type") in ("revolute", "continuous", "prismatic", "planar"):
+            axis = j.find("axis")
+            xyz = _floats(None if axis is None else axis.get("xyz"), 3, f"joint {name!r}: axis", "1 0 0")
+            if np.linalg.norm(xyz) < 1e-12:
+                raise ValueError(f"joint {name!r}: axis {xyz} has zero length")
+    for link in parent_of:  # a cycle has no root above it
+        seen, node = {link}, link
+        while node in parent_of:
+            node = parent_of[node][0]
+            if node in seen:
+                raise ValueError(f"{source}: the joints above link {link!r} form a cycle: a closed loop; a URDF is a tree")
+            seen.add(node)
+
+
 def read_urdf(source):
-    """A parsed URDF (``yourdfpy.URDF``, meshes not loaded) from a path or the URDF text."""
+    """A parsed URDF (``yourdfpy.URDF``, meshes not loaded) from a path or the URDF text,
+    read strictly: malformed XML, an MJCF file, a closed loop, repeated names and bad numbers
+    are errors that say where (:func:`strict_root`), never a lenient second try."""
     import yourdfpy  # the URDF parser; imported here, as only robot files need it
 
-    if _is_text(source):
-        handle = io.BytesIO(source.encode())
-    else:
-        handle = os.fspath(source)
-        if not os.path.isfile(handle):
-            raise ValueError(f"URDF file not found: {handle}")
-    return yourdfpy.URDF.load(handle, build_scene_graph=False, load_meshes=False, load_collision_meshes=False)
+    data, label = _description_bytes(source, "URDF")
+    _check_urdf_tree(strict_root(data, label, "robot"), label)
+    # Well-formed bytes take yourdfpy's strict path (it recovers only from an XML error).
+    return yourdfpy.URDF.load(io.BytesIO(data), build_scene_graph=False, load_meshes=False,
+                              load_collision_meshes=False,
+                              mesh_dir=os.path.dirname(label) if label != "<text>" else "")
 
 
 def urdf_path_joints(urdf, base_link: str | None, tip_link: str | None) -> tuple[list[_Joint], np.ndarray, str]:
@@ -241,13 +336,9 @@ def mjcf_path_joints(source, base_body: str | None, tip_body: str | None,
     model's name."""
     if tip_body is not None and tip_site is not None:
         raise ValueError("give tip_body or tip_site, not both")
-    if _is_text(source):
-        spec = mujoco.MjSpec.from_string(source)
-    else:
-        path = Path(source)
-        if not path.is_file():
-            raise ValueError(f"MJCF file not found: {path}")
-        spec = mujoco.MjSpec.from_file(str(path))
+    data, label = _description_bytes(source, "MJCF")
+    strict_root(data, label, "mujoco")  # MuJoCo would read a URDF too, as another model
+    spec = mujoco.MjSpec.from_string(data.decode()) if label == "<text>" else mujoco.MjSpec.from_file(label)
     model = spec.compile()
     data = mujoco.MjData(model)
     data.qpos[:] = model.qpos0
