@@ -54,7 +54,7 @@ def settings_of(cfg: DictConfig) -> PipelineSettings:
     c = OmegaConf.to_container(cfg, resolve=True)
     stages = c["stages"]
     sched_overrides = list(c["sched"]["overrides"])
-    if "plan" in stages:  # the planning stage's metrics become the cost matrix (compat, start, goal: the thesis's)
+    if "plan" in stages:  # the planning stage's metrics become the cost matrix (the compat: its scene's)
         sched_overrides = ["sched/source=edges_csv", "sched.source.path=null", *sched_overrides]
     schedule = _stage_config("schedule", sched_overrides, seed=c["seed"])["sched"]
     schedule["weights"] = c["sched"]["weights"]

@@ -224,7 +224,8 @@ def schedule(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
     task_plan = flow.task_plan
     planner = s.sched_planner or s.plan.planners[0]
     raw = task_plan.metrics[planner] if task_plan is not None else None
-    run = sched.run_schedule(key, s.sched, raw, note=f"planning stage metrics ({planner})")
+    compat = planning.compatibility(task_plan.scene) if task_plan is not None else None  # the scene's fits
+    run = sched.run_schedule(key, s.sched, raw, note=f"planning stage metrics ({planner})", compat=compat)
     results = sched.write_schedule(run, out, plots=s.sched.plots)
     winner = run.best
     t1 = md_table(["solver", "schedule", "cost", "time [ms] (ours)", "thesis Table 5.5 [ms] (eq. 4.1 matrix)"],

@@ -73,6 +73,7 @@ from uvms_jax.plan._taskgraph import TaskGraphPlan
 from uvms_jax.plan._taskgraph import plan_for_schedule
 from uvms_jax.plan._taskgraph import plan_task_graph
 from uvms_jax.plan._tasks import EdgeResult
+from uvms_jax.plan._tasks import compatibility
 from uvms_jax.plan._tasks import edge_endpoints
 from uvms_jax.plan._tasks import goal_node
 from uvms_jax.plan._tasks import metric_tensor

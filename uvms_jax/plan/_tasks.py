@@ -33,6 +33,7 @@ from uvms_jax.plan._targets import NodeTarget, node_contexts
 
 __all__ = [
     "EdgeResult",
+    "compatibility",
     "edge_endpoints",
     "goal_node",
     "metric_tensor",
@@ -49,6 +50,11 @@ def goal_node(scene: Scene) -> int:
     return max(*scene.objects, *scene.bases) + 1
 
 
+def compatibility(scene: Scene) -> dict[int, tuple[int, ...]]:
+    """Object node → the base nodes it fits (the scene's ``fits``): the scheduler's compat."""
+    return {o: tuple(b for b in sorted(scene.bases) if o in scene.bases[b].fits) for o in sorted(scene.objects)}
+
+
 def task_edges(scene: Scene) -> list[tuple[int, int]]:
     """All allowed moves ``(src, dst)`` of the task graph, in row-major order: the static move
     rules of ``uvms_jax.sched`` (``PickPlaceProblem.rule``) on the scene's nodes.
@@ -59,8 +65,7 @@ def task_edges(scene: Scene) -> list[tuple[int, int]]:
     """
     goal = goal_node(scene)
     n = goal + 1
-    compat = {o: tuple(b for b in sorted(scene.bases) if o in scene.bases[b].fits) for o in sorted(scene.objects)}
-    problem = sched.PickPlaceProblem.from_matrix(np.zeros((n, n)), compat, START, goal)
+    problem = sched.PickPlaceProblem.from_matrix(np.zeros((n, n)), compatibility(scene), START, goal)
     if problem.bases != tuple(sorted(scene.bases)):
         raise ValueError(f"scene nodes must be start {START}, objects, bases, goal {goal} without gaps; "
                          f"got objects {sorted(scene.objects)}, bases {sorted(scene.bases)}")

@@ -10,7 +10,7 @@ import logging
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any, Mapping, Sequence
 
 import jax
 import numpy as np
@@ -214,6 +214,7 @@ def run_schedule(
     *,
     note: str = "planner metrics",
     root: Path | None = None,
+    compat: Mapping[int, Sequence[int]] | None = None,
 ) -> ScheduleRun:
     """The scheduling stage: source → problem → every solver (timed) → GRASP sweep.
 
@@ -226,12 +227,15 @@ def run_schedule(
       note: the source note when ``raw_metrics`` is given.
       root: directory that the source's relative file paths start from (default: the
         working directory).
+      compat: object node → the base nodes it fits, with ``raw_metrics`` (e.g. the planning
+        scene's); None: the source's.
     """
     src, weights = settings.source, settings.weights
     if raw_metrics is None:
         problem, nm, note = load_source(src, weights, root)
     else:
-        problem, nm = problem_from_metrics(raw_metrics, src.compat, src.start, src.goal, weights, src.mirror_goal)
+        problem, nm = problem_from_metrics(raw_metrics, src.compat if compat is None else compat, src.start,
+                                           src.goal, weights, src.mirror_goal)
     if nm is None:
         log.info("%s; the weights %s are ignored", note, weights.name)
     solved = solve_all(key, problem, settings)
