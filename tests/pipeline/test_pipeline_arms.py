@@ -20,15 +20,9 @@ from _pipeline_helpers import ROOT
 ROBOTS = importlib.metadata.distribution("example-robot-data").locate_file(
     "cmeel.prefix/share/example-robot-data/robots"
 )
-# name: (description file, tip, link radius [m], joints); the jaws come from the card (none of
-# these files has a gripper joint below its tip).
-ARMS = {
-    "xarm7_mjcf": ("xarm_description/urdf/xarm7.urdf", "link7", 0.04, 7),  # MJCF, no geometry
-    "z1": ("z1_description/urdf/z1.urdf", "gripperStator", 0.04, 6),
-    "ur5": ("ur_description/urdf/ur5_robot.urdf", "tool0", 0.05, 6),
-    "panda": ("panda_description/urdf/panda.urdf", "panda_hand_tcp", 0.05, 7),
-}
-JAWS = {"joint": "jaws", "lower": 0.0, "upper": 0.1, "velocity": 0.1}
+EXAMPLE_ARMS = yaml.safe_load((ROOT / "examples" / "arms.yaml").read_text())
+# The xArm 7 also as MJCF with no geometry; the joint counts are the oracle of what loads.
+ARMS = {"xarm7_mjcf": 7, "z1": 6, "ur5": 6, "panda": 7}
 N_EDGES = 34  # the thesis task graph (thesis Table 5.1, eq. 4.1)
 
 
@@ -44,10 +38,12 @@ def _bare_mjcf(urdf: str, out) -> str:
 
 @pytest.mark.parametrize("arm", list(ARMS))
 def test_pipeline_with_another_arm(tmp_path, arm):
-    urdf, tip, radius, dof = ARMS[arm]
+    dof = ARMS[arm]
+    settings = dict(EXAMPLE_ARMS["arms"][arm.removesuffix("_mjcf")], gripper=EXAMPLE_ARMS["jaws"])
+    urdf = settings["description"]
     description = _bare_mjcf(urdf, tmp_path) if arm.endswith("_mjcf") else str(ROBOTS / urdf)
     card = tmp_path / "arm.yaml"
-    card.write_text(yaml.safe_dump({"description": description, "tip": tip, "link_radius": radius, "gripper": JAWS}))
+    card.write_text(yaml.safe_dump({**settings, "description": description}))
     run = tmp_path / "run"
     cmd = [sys.executable, "experiments/pipeline.py", f"hydra.run.dir={run}", "experiment=tiny",
            "stages=[docking,plan,schedule,hw]", f"scenario.arm.card={card}", "scenario.start_q=null",
