@@ -85,12 +85,13 @@ def sim_spec(robot, kv: float = KV, physics_dt: float = SimConfig.physics_dt, dy
     """
     import mujoco  # imported here: the protocol layer must not need MuJoCo
 
-    from uvms_jax.robot import TOOL_SITE, base_body, mjcf_body
+    from uvms_jax.robot import TOOL_SITE, base_body, mjcf_assets, mjcf_body
 
     specs = joint_specs(robot)
     massive = massive_bodies(robot) if dynamics else set()
     xml = (f'<mujoco model="{robot.name}_hw_sim"><compiler angle="radian"/>'
            '<default><geom contype="0" conaffinity="0" density="1000"/></default>'
+           f"<asset>{''.join(mjcf_assets(robot))}</asset>"
            f"<worldbody>{mjcf_body(robot, inertial=bool(massive))}</worldbody></mujoco>")
     spec = mujoco.MjSpec.from_string(xml)
     spec.modelname = f"{robot.name}_hw_sim"

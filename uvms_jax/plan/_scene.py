@@ -605,6 +605,7 @@ class Scene:
 
         robot = self.robot
         arm = ET.fromstring(robots.mjcf_body(robot, s.mount_pos, kin.quat_wxyz(self.T_world_base[:3, :3]), s.jaws_open))
+        assets += robots.mjcf_assets(robot)  # the description's meshes, boxes and cylinders of the arm
         last = arm.find(".//site[@name='tool']/..")
         tool_site = last.find("site[@name='tool']")
         T_link_tool = _pose(_quat_matrix(tool_site.get("quat")), [float(v) for v in tool_site.get("pos").split()])

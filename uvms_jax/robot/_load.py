@@ -24,6 +24,7 @@ import numpy as np
 import yaml
 
 from uvms_jax.kin import _import
+from uvms_jax.robot._geometry import description_shapes
 from uvms_jax.robot._model import BASE, BodyInertial, Gripper, Hardware, Robot
 
 __all__ = ["DESCRIPTIONS", "load_arm", "load_robot", "robot_from_config", "shipped_arms"]
@@ -179,6 +180,7 @@ def load_robot(
     buoyancy: Mapping[str, Mapping[str, Any]] | None = None,
     hardware: Mapping[str, Any] | None = None,
     name: str | None = None,
+    collision: str = "description",
 ) -> Robot:
     """A :class:`Robot` from a URDF or MJCF file (or its text); the format is read from the
     root element, not the file name.
@@ -193,11 +195,14 @@ def load_robot(
         fingers then hang from the tip). None: no gripper.
       gripper_velocity: the gripper's speed limit [m/s]; default: the file's (an MJCF has none).
       finger_size: full edges of one finger box [m] (the fingers' collision shape).
-      link_radius: capsule radius of the links' collision model [m] (required: the collision
-        model is capsules along the links; the description's own geometry is not read).
+      link_radius: capsule radius of the links' collision model [m] (required: the capsules
+        along the links are the collision model where the description's is not used).
       buoyancy: link/body name → ``{"volume": m³, "cob": [x, y, z] m in that link's frame}``.
       hardware: ``{"protocol": "bpl", "device_ids": {joint: id, ...}}``, or None.
       name: the robot's name (default: the file's).
+      collision: ``"description"``: the file's collision primitives and meshes
+        (:attr:`Robot.shapes`), capsules where it has none or a mesh cannot be read (logged);
+        ``"capsules"``: capsules along the links whatever the file has.
 
     Raises:
       ValueError: a missing file, text that is not URDF or MJCF, unknown names, and every
@@ -225,6 +230,16 @@ def load_robot(
         inertials.append(_fold(T_com, mass, I, body_frames[body], body, volume, None if cob is None else cob_com[:3]))
     if buoyancy:  # links named that carry no mass properties in the file
         raise ValueError(f"buoyancy of links {sorted(buoyancy)}: the description gives them no mass properties")
+    if collision not in ("description", "capsules"):
+        raise ValueError(f"collision must be 'description' or 'capsules', got {collision!r}")
+    shapes = ()
+    if collision == "description":
+        described = (urdf, path) if fmt == "urdf" else (path if path is not None else data.decode())
+        bodies = {base_link: BASE, **{j.link: i for i, j in enumerate(joints)}}
+        shapes = description_shapes(chain.name, fmt, described, bodies, frames, body_frames, float(link_radius))
+    else:
+        log.info("arm %s: collision model of capsules along the links (radius %g m), as asked", chain.name,
+                 float(link_radius))
     gripper_model = None
     if isinstance(gripper, Mapping):
         unknown = sorted(set(gripper) - {"joint", "lower", "upper", "velocity", "effort"})
@@ -251,6 +266,7 @@ def load_robot(
         effort_limits=tuple(j.effort for j in joints),
         link_radius=float(link_radius),
         inertials=tuple(inertials),
+        shapes=shapes,
         gripper=gripper_model,
         hardware=hw,
         source=source,
@@ -260,7 +276,7 @@ def load_robot(
 
 
 _CONFIG_KEYS = {"card", "description", "tip", "base", "gripper", "gripper_velocity", "finger_size", "link_radius",
-                "buoyancy", "hardware", "name"}
+                "buoyancy", "hardware", "name", "collision"}
 
 
 def shipped_arms() -> list[str]:
@@ -307,8 +323,6 @@ def robot_from_config(cfg: Mapping[str, Any]) -> Robot:
         raise ValueError(f"arm settings need link_radius [m] for {cfg['description']}: the radius of the capsules "
                          "along its links (the collision model)")
     kwargs = {k: v for k, v in cfg.items() if k != "description" and v is not None}
-    log.info("arm %s: collision model of capsules along the links, radius %g m", cfg["description"],
-             float(cfg["link_radius"]))
     robot = load_robot(folder / str(cfg["description"]), **kwargs)
     if folder == DESCRIPTIONS:  # a shipped description: named the same on every machine
         robot = dataclasses.replace(robot, source=f"uvms_jax/robot/descriptions/{cfg['description']}")

@@ -4,8 +4,12 @@ Bodies follow the chain: the base link, then one body per joint in its frame at 
 (``chain.T_base_joint0``), named as the description names them. Each link is a capsule of the
 robot's ``link_radius`` from its joint's origin to the next joint's origin (the last to the
 tool frame; a sphere where the two coincide); the base link a capsule from its origin to the
-first joint's. A site ``tool`` marks the tool frame; a gripper adds two finger boxes, the
-opening along the tool's x axis, reaching forward along its z axis.
+first joint's. A robot whose description gives collision geometry (``robot.shapes``) has those
+shapes instead of the capsules: spheres and capsules as MuJoCo primitives, boxes and cylinders
+as convex meshes (8 vertices; a prism of 32 sides around the cylinder), mesh files as ``<mesh
+file=...>`` assets (:func:`mjcf_assets` gives the ``<asset>`` entries every model of the arm
+needs). A site ``tool`` marks the tool frame; a gripper adds two finger boxes, the opening along
+the tool's x axis, reaching forward along its z axis.
 """
 
 from __future__ import annotations
@@ -17,13 +21,17 @@ import numpy as np
 
 from uvms_jax import kin
 from uvms_jax.kin._chain import REVOLUTE
+from uvms_jax.robot._geometry import Shape
 from uvms_jax.robot._model import BASE, Robot
 
-__all__ = ["TOOL_SITE", "base_body", "geom_name", "mjcf_body", "robot_mjcf", "self_collision_pairs"]
+__all__ = ["TOOL_SITE", "base_body", "geom_name", "mjcf_assets", "mjcf_body", "robot_mjcf", "self_collision_pairs"]
 
 TOOL_SITE = "tool"
 _COINCIDENT = 1e-9  # [m] joint origins closer than this make a sphere, not a capsule
 _DISTMAX = 1.0  # [m] mj_geomDistance reports distances up to this (and this beyond it)
+_CYLINDER_SIDES = 32  # a cylinder shape is the prism of this many sides around it
+# A moving body without shapes still needs mass in MuJoCo (a collision model needs none).
+_NO_MASS = '<inertial pos="0 0 0" mass="1e-06" diaginertia="1e-10 1e-10 1e-10"/>'
 
 
 def _fmt(values) -> str:
@@ -37,8 +45,62 @@ def base_body(robot: Robot) -> str:
 
 
 def geom_name(robot: Robot, body: int) -> str:
-    """Name of a body's link capsule: ``geom_base`` or ``geom_<joint>``."""
+    """Name of a body's link capsule: ``geom_base`` or ``geom_<joint>``; the description's shapes
+    of that body are ``geom_base_<k>`` / ``geom_<joint>_<k>`` (``k`` counts that body's shapes)."""
     return "geom_base" if body == BASE else f"geom_{robot.joint_names[body]}"
+
+
+def _shape_names(robot: Robot) -> list[str]:
+    """Geom names of ``robot.shapes``, in order."""
+    count: dict[int, int] = {}
+    names = []
+    for s in robot.shapes:
+        k = count[s.body] = count.get(s.body, -1) + 1
+        names.append(f"{geom_name(robot, s.body)}_{k}")
+    return names
+
+
+def _hull_vertices(shape: Shape) -> np.ndarray:
+    """``(k, 3)`` convex mesh vertices of a box or cylinder shape in its frame (a cylinder: the
+    circumscribed prism, never smaller)."""
+    if shape.kind == "box":
+        h = np.asarray(shape.size, dtype=float) / 2.0
+        return np.array([[sx * h[0], sy * h[1], sz * h[2]] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
+    r, length = shape.size
+    a = np.arange(_CYLINDER_SIDES) * 2 * np.pi / _CYLINDER_SIDES
+    ring = np.stack([np.cos(a), np.sin(a)], -1) * r / np.cos(np.pi / _CYLINDER_SIDES)
+    return np.concatenate([np.c_[ring, np.full(len(a), -length / 2)], np.c_[ring, np.full(len(a), length / 2)]])
+
+
+def mjcf_assets(robot: Robot) -> list[str]:
+    """The ``<mesh>`` entries of an ``<asset>`` element that :func:`mjcf_body`'s geoms use
+    (none for a robot of capsules). Mesh names are ``m_<geom name>``."""
+    assets = []
+    for s, name in zip(robot.shapes, _shape_names(robot)):
+        if s.kind == "mesh" and s.file:
+            assets.append(f'<mesh name="m_{name}" file="{s.file}" scale="{_fmt(s.scale)}"/>')
+        elif s.kind == "mesh":
+            assets.append(f'<mesh name="m_{name}" vertex="{_fmt(s.vertices)}"/>')
+        elif s.kind in ("box", "cylinder"):
+            assets.append(f'<mesh name="m_{name}" vertex="{_fmt(_hull_vertices(s))}"/>')
+    return assets
+
+
+def _shape_geom(shape: Shape, name: str) -> str:
+    T = shape.T
+    pose = f'pos="{_fmt(T[:3, 3])}" quat="{_fmt(kin.quat_wxyz(T[:3, :3]))}"'
+    if shape.kind == "sphere":
+        return f'<geom name="{name}" type="sphere" size="{shape.size[0]!r}" {pose}/>'
+    if shape.kind == "capsule":
+        return f'<geom name="{name}" type="capsule" size="{shape.size[0]!r} {shape.size[1] / 2!r}" {pose}/>'
+    return f'<geom name="{name}" type="mesh" mesh="m_{name}" {pose}/>'
+
+
+def _body_geoms(robot: Robot, body: int, end: np.ndarray) -> list[str]:
+    """The body's geoms: its capsule (to ``end`` in its frame), or its shapes."""
+    if not robot.shapes:
+        return [_link_geom(geom_name(robot, body), end, robot.link_radius)]
+    return [_shape_geom(s, n) for s, n in zip(robot.shapes, _shape_names(robot)) if s.body == body]
 
 
 def _link_geom(name: str, end: np.ndarray, radius: float) -> str:
@@ -81,11 +143,10 @@ def mjcf_body(robot: Robot, pos=(0.0, 0.0, 0.0), quat=(1.0, 0.0, 0.0, 0.0), jaws
     twists = np.asarray(chain.twists, dtype=np.float64)
     tool = np.asarray(chain.T_base_tool0, dtype=np.float64)
     n = robot.n_joints
-    r = robot.link_radius
     lines = [f'<body name="{base_body(robot)}" pos="{_fmt(pos)}" quat="{_fmt(quat)}">']
     if inertial and _inertial(robot, BASE):
         lines.append("  " + _inertial(robot, BASE))
-    lines.append("  " + _link_geom(geom_name(robot, BASE), frames[0, :3, 3], r))
+    lines += ["  " + g for g in _body_geoms(robot, BASE, frames[0, :3, 3])]
     previous = np.eye(4)
     for i in range(n):
         pad = "  " * (i + 1)
@@ -94,13 +155,15 @@ def mjcf_body(robot: Robot, pos=(0.0, 0.0, 0.0), quat=(1.0, 0.0, 0.0, 0.0), jaws
         axis = R.T @ (twists[i, 3:] if chain.kinds[i] == REVOLUTE else twists[i, :3])
         lines.append(f'{pad}<body name="{robot.link_names[i]}" pos="{_fmt(local[:3, 3])}" '
                      f'quat="{_fmt(kin.quat_wxyz(local[:3, :3]))}">')
+        geoms = _body_geoms(robot, i, (np.linalg.inv(frames[i]) @ (frames[i + 1] if i + 1 < n else tool))[:3, 3])
         if inertial and _inertial(robot, i):
             lines.append(f"{pad}  " + _inertial(robot, i))
+        elif not geoms:
+            lines.append(f"{pad}  " + _NO_MASS)
         kind = "hinge" if chain.kinds[i] == REVOLUTE else "slide"
         lines.append(f'{pad}  <joint name="{robot.joint_names[i]}" type="{kind}" axis="{_fmt(axis)}" '
                      f'range="{float(chain.lower[i])!r} {float(chain.upper[i])!r}" limited="true"/>')
-        end = (np.linalg.inv(frames[i]) @ (frames[i + 1] if i + 1 < n else tool))[:3, 3]
-        lines.append(f"{pad}  " + _link_geom(geom_name(robot, i), end, r))
+        lines += [f"{pad}  " + g for g in geoms]
         previous = frames[i]
     pad = "  " * (n + 1)
     T_link_tool = np.linalg.inv(frames[-1]) @ tool
@@ -121,7 +184,9 @@ def mjcf_body(robot: Robot, pos=(0.0, 0.0, 0.0), quat=(1.0, 0.0, 0.0, 0.0), jaws
 
 def robot_mjcf(robot: Robot, jaws_open: float | None = None, inertial: bool = False) -> str:
     """A complete MJCF model of the robot alone, its base link at the world origin, no gravity."""
+    assets = "".join(f"\n    {a}" for a in mjcf_assets(robot))
     return (f'<mujoco model="{robot.name}">\n  <compiler angle="radian"/>\n  <option gravity="0 0 0"/>\n'
+            + (f"  <asset>{assets}\n  </asset>\n" if assets else "") +
             f"  <worldbody>\n{mjcf_body(robot, jaws_open=jaws_open, inertial=inertial)}\n  </worldbody>\n</mujoco>\n")
 
 

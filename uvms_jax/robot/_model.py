@@ -17,8 +17,9 @@ import dataclasses
 import numpy as np
 
 from uvms_jax import kin
+from uvms_jax.robot._geometry import Shape
 
-__all__ = ["BodyInertial", "Gripper", "Hardware", "Robot", "BASE"]
+__all__ = ["BodyInertial", "Gripper", "Hardware", "Robot", "Shape", "BASE"]
 
 BASE = -1  # body number of the base link
 
@@ -109,8 +110,13 @@ class Robot:
       base_link: the base link's (URDF) or body's (MJCF) name in the description.
       link_names: ``(n,)`` the description's link/body moved by each joint.
       effort_limits: ``(n,)`` joint torque/force limits [N·m or N] (0: not given).
-      link_radius: radius of the capsules along the links [m] (the collision model).
+      link_radius: radius of the capsules along the links [m]: the collision model where
+        ``shapes`` is empty.
       inertials: mass properties per body (empty: the description has none).
+      shapes: the collision model read from the description (its primitives and meshes, each
+        fixed to a body, see :class:`~uvms_jax.robot.Shape`); empty: capsules of
+        ``link_radius`` along the links (the description has no collision geometry, or a mesh
+        of it cannot be read, or the caller asked for capsules).
       gripper: the gripper at the tool frame, or None.
       hardware: the real arm's wire profile, or None (simulation only).
       source: where the description came from (a path, or ``"<text>"``).
@@ -124,6 +130,7 @@ class Robot:
     effort_limits: tuple[float, ...]
     link_radius: float
     inertials: tuple[BodyInertial, ...] = ()
+    shapes: tuple[Shape, ...] = ()
     gripper: Gripper | None = None
     hardware: Hardware | None = None
     source: str = "<text>"
@@ -136,6 +143,9 @@ class Robot:
                              f"{len(self.effort_limits)} effort limits")
         if not self.link_radius > 0:
             raise ValueError(f"robot {self.name!r}: link_radius must be > 0 [m], got {self.link_radius}")
+        bad = sorted({s.body for s in self.shapes} - set(range(BASE, n)))
+        if bad:
+            raise ValueError(f"robot {self.name!r}: shapes on bodies {bad}, not -1 … {n - 1}")
         if self.gripper is not None and self.gripper.joint in self.joint_names:
             raise ValueError(f"robot {self.name!r}: gripper joint {self.gripper.joint!r} is also an arm joint")
         if self.hardware is not None:

@@ -1,0 +1,274 @@
+"""The collision model of an arm read from its description: its collision primitives and meshes.
+
+URDF ``<collision>`` elements (box, cylinder, sphere, mesh with scale; each at its origin) and
+MJCF collision geoms (``contype`` or ``conaffinity`` not 0: box, cylinder, capsule, sphere,
+ellipsoid as its bounding box, mesh) are folded into the moving body they are fixed to, as the
+inertials are (:mod:`uvms_jax.robot._load`): body ``-1`` the base link, ``i`` the link moved by
+joint ``i``, poses at ``q = 0`` in that body's frame (``chain.T_base_joint0[i]``). Fixed links
+are folded; links moved by a joint off the chain (a gripper's fingers, whose opening the
+:class:`~uvms_jax.robot.Gripper`'s finger boxes stand for) are left out.
+
+Mesh files are found relative to the description file, as absolute paths (``file://`` too), or
+as ``package://NAME/rest``: the nearest ancestor folder of the description named ``NAME``, then
+the entries of ``ROS_PACKAGE_PATH``. MuJoCo reads STL and OBJ files (not COLLADA). When a mesh
+does not resolve or MuJoCo cannot read it — or the description has no collision geometry at
+all — the whole arm falls back to capsules along the links (the robot's ``link_radius``), and
+one log line says why: a partial model would hide links, capsules of a known radius do not.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import logging
+import os
+from collections.abc import Mapping
+from pathlib import Path
+
+import mujoco
+import numpy as np
+
+__all__ = ["Shape", "SHAPE_KINDS", "description_shapes", "resolve_mesh"]
+
+log = logging.getLogger(__name__)
+
+#: ``Shape.kind`` values.
+SHAPE_KINDS = ("box", "cylinder", "sphere", "capsule", "mesh")
+_MESH_SUFFIXES = (".stl", ".obj")  # what MuJoCo reads (and .msh, its own format)
+
+
+@dataclasses.dataclass(frozen=True)
+class Shape:
+    """One collision shape of the description, fixed to one body of the robot.
+
+    Attributes:
+      body: body number (``-1`` the base link, ``i`` the link moved by joint ``i``).
+      kind: ``"box"``, ``"cylinder"``, ``"sphere"``, ``"capsule"`` or ``"mesh"``.
+      pose: the shape's frame in the body's frame, 16 numbers of the ``(4, 4)`` matrix row by
+        row (:attr:`T`); a cylinder's and a capsule's axis is its z axis, a box's centre and a
+        mesh file's origin are its origin.
+      size: box: full edges ``(x, y, z)``; cylinder and capsule: ``(radius, length)``, the
+        length without the caps; sphere: ``(radius,)``; mesh: ``()`` [m].
+      file: mesh: the absolute path of an STL or OBJ file (MuJoCo collides with its convex hull).
+      scale: mesh: the file's scale per axis.
+      vertices: mesh without a file (an MJCF inline mesh): its vertices, flat ``(3k,)`` [m].
+      link: the description's link (URDF) or body (MJCF) it belongs to.
+    """
+
+    body: int
+    kind: str
+    pose: tuple[float, ...]
+    size: tuple[float, ...] = ()
+    file: str = ""
+    scale: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    vertices: tuple[float, ...] = ()
+    link: str = ""
+
+    def __post_init__(self) -> None:
+        if self.kind not in SHAPE_KINDS:
+            raise ValueError(f"shape of {self.link!r}: kind {self.kind!r} is not one of {SHAPE_KINDS}")
+        if len(self.pose) != 16:
+            raise ValueError(f"shape of {self.link!r}: pose needs the 16 numbers of a (4, 4) matrix")
+        if self.kind == "mesh" and not (self.file or self.vertices):
+            raise ValueError(f"shape of {self.link!r}: a mesh needs a file or vertices")
+
+    @property
+    def T(self) -> np.ndarray:
+        """``(4, 4)`` the shape's frame in its body's frame."""
+        return np.asarray(self.pose, dtype=float).reshape(4, 4)
+
+
+class _Fallback(Exception):
+    """The description's geometry cannot be used: the arm gets capsules (the message says why)."""
+
+
+def _pose(T: np.ndarray) -> tuple[float, ...]:
+    return tuple(float(v) for v in np.asarray(T, dtype=float).reshape(16))
+
+
+def resolve_mesh(filename: str, folder: Path | None) -> Path | None:
+    """The file a description's mesh reference names, or None where it does not resolve.
+
+    Args:
+      filename: a path relative to ``folder``, an absolute path, ``file://PATH`` or
+        ``package://NAME/rest`` (``NAME`` is looked for among the ancestors of ``folder``, then
+        in the entries of ``ROS_PACKAGE_PATH``).
+      folder: the description file's folder (None for a description given as text).
+    """
+    if filename.startswith("file://"):
+        filename = filename[len("file://"):]
+    if filename.startswith("package://"):
+        name, _, rest = filename[len("package://"):].partition("/")
+        roots = [] if folder is None else [a for a in (folder, *folder.parents) if a.name == name]
+        for entry in filter(None, os.environ.get("ROS_PACKAGE_PATH", "").split(os.pathsep)):
+            entry = Path(entry)
+            roots += [entry] if entry.name == name else [entry / name]
+        for root in roots:
+            if (root / rest).is_file():
+                return (root / rest).resolve()
+        return None
+    path = Path(filename)
+    if not path.is_absolute():
+        if folder is None:
+            return None
+        path = folder / path
+    return path.resolve() if path.is_file() else None
+
+
+@functools.lru_cache(maxsize=256)
+def _mesh_error(file: str, scale: tuple[float, float, float]) -> str | None:
+    """Why MuJoCo cannot use a mesh file in a moving body (None: it can)."""
+    if not file.lower().endswith(_MESH_SUFFIXES + (".msh",)):
+        return f"MuJoCo reads STL and OBJ meshes, not {Path(file).suffix or 'a file without suffix'} ({file})"
+    xml = (f'<mujoco><asset><mesh name="m" file="{file}" scale="{" ".join(map(repr, scale))}"/></asset>'
+           '<worldbody><body><joint/><geom type="mesh" mesh="m"/></body></worldbody></mujoco>')
+    try:
+        mujoco.MjModel.from_xml_string(xml)
+    except ValueError as err:
+        return f"MuJoCo cannot read mesh {file}: {str(err).strip().splitlines()[0]}"
+    return None
+
+
+def _mesh(file: str, scale, body: int, T: np.ndarray, link: str, folder: Path | None) -> Shape:
+    path = resolve_mesh(file, folder)
+    if path is None:
+        where = "a description given as text" if folder is None else str(folder)
+        raise _Fallback(f"mesh {file!r} of link {link!r} does not resolve (from {where})")
+    scale = (1.0, 1.0, 1.0) if scale is None else tuple(float(s) for s in np.broadcast_to(np.asarray(scale, float), 3))
+    error = _mesh_error(str(path), scale)
+    if error is not None:
+        raise _Fallback(error)
+    return Shape(body, "mesh", _pose(T), file=str(path), scale=scale, link=link)
+
+
+def _moving_ancestor(name: str, parent_of: Mapping[str, str], bodies: Mapping[str, int],
+                     moves: Mapping[str, bool]) -> int | None:
+    """The body a link is fixed to; None above the base or where a joint off the chain moves
+    it (``moves[link]``: the joint to its parent is not fixed)."""
+    while name not in bodies:
+        if name not in parent_of or moves.get(name, False):
+            return None
+        name = parent_of[name]
+    return bodies[name]
+
+
+def _urdf_shapes(urdf, folder: Path | None, bodies: Mapping[str, int], frames: Mapping[str, np.ndarray],
+                 body_frames: Mapping[int, np.ndarray]) -> tuple[list[Shape], list[str]]:
+    robot = urdf.robot
+    parent_of = {j.child: j.parent for j in robot.joints}
+    moves = {j.child: j.type != "fixed" for j in robot.joints}
+    shapes, off_chain = [], []
+    for link in robot.links:
+        if not link.collisions:
+            continue
+        body = _moving_ancestor(link.name, parent_of, bodies, moves)
+        if body is None or link.name not in frames:
+            off_chain.append(link.name)
+            continue
+        T_body_link = np.linalg.inv(body_frames[body]) @ frames[link.name]
+        for c in link.collisions:
+            T = T_body_link @ (np.eye(4) if c.origin is None else np.asarray(c.origin, float))
+            g = c.geometry
+            if g.box is not None:
+                shapes.append(Shape(body, "box", _pose(T), tuple(float(v) for v in g.box.size), link=link.name))
+            elif g.cylinder is not None:
+                shapes.append(Shape(body, "cylinder", _pose(T), (float(g.cylinder.radius), float(g.cylinder.length)),
+                                    link=link.name))
+            elif g.sphere is not None:
+                shapes.append(Shape(body, "sphere", _pose(T), (float(g.sphere.radius),), link=link.name))
+            elif g.mesh is not None:
+                shapes.append(_mesh(g.mesh.filename, g.mesh.scale, body, T, link.name, folder))
+            else:
+                raise _Fallback(f"link {link.name!r} has a collision element without a box, cylinder, sphere or mesh")
+    return shapes, off_chain
+
+
+def _mat(pos, quat) -> np.ndarray:
+    R = np.empty(9)
+    mujoco.mju_quat2Mat(R, np.asarray(quat, dtype=float))
+    T = np.eye(4)
+    T[:3, :3] = R.reshape(3, 3)
+    T[:3, 3] = pos
+    return T
+
+
+def _mjcf_shapes(source, bodies: Mapping[str, int], frames: Mapping[str, np.ndarray],
+                 body_frames: Mapping[int, np.ndarray]) -> tuple[list[Shape], list[str]]:
+    spec = mujoco.MjSpec.from_file(str(source)) if isinstance(source, Path) else mujoco.MjSpec.from_string(source)
+    model = spec.compile()
+    names = [model.body(b).name or f"body{b}" for b in range(model.nbody)]
+    parent_of = {names[b]: names[int(model.body_parentid[b])] for b in range(1, model.nbody)}
+    moves = {names[b]: bool(model.body_jntnum[b]) for b in range(1, model.nbody)}
+    folder = source.parent if isinstance(source, Path) else None
+    mesh_dir = folder / spec.meshdir if folder is not None and spec.meshdir else folder
+    spec_meshes = list(spec.meshes)
+    G = mujoco.mjtGeom
+    shapes, off_chain = [], []
+    for g in range(model.ngeom):
+        if not (model.geom_contype[g] or model.geom_conaffinity[g]):
+            continue  # a visual geom
+        name = names[int(model.geom_bodyid[g])]
+        body = _moving_ancestor(name, parent_of, bodies, moves)
+        if body is None or name not in frames:
+            off_chain.append(name)
+            continue
+        T = np.linalg.inv(body_frames[body]) @ frames[name] @ _mat(model.geom_pos[g], model.geom_quat[g])
+        t, size = int(model.geom_type[g]), np.asarray(model.geom_size[g], float)
+        if t == G.mjGEOM_BOX:
+            shapes.append(Shape(body, "box", _pose(T), tuple(2 * size), link=name))
+        elif t == G.mjGEOM_ELLIPSOID:  # its bounding box: never smaller
+            shapes.append(Shape(body, "box", _pose(T), tuple(2 * size), link=name))
+        elif t in (G.mjGEOM_CYLINDER, G.mjGEOM_CAPSULE):
+            kind = "cylinder" if t == G.mjGEOM_CYLINDER else "capsule"
+            shapes.append(Shape(body, kind, _pose(T), (float(size[0]), 2 * float(size[1])), link=name))
+        elif t == G.mjGEOM_SPHERE:
+            shapes.append(Shape(body, "sphere", _pose(T), (float(size[0]),), link=name))
+        elif t == G.mjGEOM_MESH:
+            k = int(model.geom_dataid[g])
+            file = spec_meshes[k].file if k < len(spec_meshes) else ""
+            if file:  # the compiled geom pose includes MuJoCo's re-centring of the mesh: undo it
+                T_file = T @ np.linalg.inv(_mat(model.mesh_pos[k], model.mesh_quat[k]))
+                shapes.append(_mesh(file, tuple(spec_meshes[k].scale), body, T_file, name, mesh_dir))
+            else:  # an inline mesh: its compiled vertices in the compiled geom's frame
+                a, n = int(model.mesh_vertadr[k]), int(model.mesh_vertnum[k])
+                vertices = tuple(map(float, model.mesh_vert[a:a + n].ravel()))
+                shapes.append(Shape(body, "mesh", _pose(T), vertices=vertices, link=name))
+        else:  # a plane, height field or SDF: scenery, not a link
+            off_chain.append(f"{name} ({G(t).name.removeprefix('mjGEOM_').lower()})")
+    return shapes, off_chain
+
+
+def description_shapes(name: str, fmt: str, parsed, bodies: Mapping[str, int], frames: Mapping[str, np.ndarray],
+                       body_frames: Mapping[int, np.ndarray], link_radius: float) -> tuple[Shape, ...]:
+    """The description's collision shapes folded into the robot's bodies, or ``()`` (the
+    capsules along the links) where it has none or one cannot be used; logs which, once.
+
+    Args:
+      name: the arm's name (for the log).
+      fmt: ``"urdf"`` or ``"mjcf"``.
+      parsed: URDF: the parsed ``yourdfpy.URDF`` and the file's path or None, as a pair; MJCF:
+        the file's path or the text.
+      bodies: description link/body name → body number (the base and the chain's links).
+      frames: every link's/body's frame in the base frame at ``q = 0``.
+      body_frames: body number → its frame in the base frame at ``q = 0``.
+      link_radius: the capsules' radius (for the log).
+    """
+    try:
+        if fmt == "urdf":
+            urdf, path = parsed
+            shapes, off_chain = _urdf_shapes(urdf, None if path is None else Path(path).parent, bodies, frames,
+                                             body_frames)
+        else:
+            shapes, off_chain = _mjcf_shapes(parsed, bodies, frames, body_frames)
+    except _Fallback as why:
+        log.warning("arm %s: collision model of capsules along the links (radius %g m): %s", name, link_radius, why)
+        return ()
+    if not shapes:
+        log.info("arm %s: the description has no collision geometry on the chain: capsules along the links "
+                 "(radius %g m)", name, link_radius)
+        return ()
+    left = (f"; left out (above the base, moved by joints off the chain, or not a link shape): "
+            f"{sorted(set(off_chain))}" if off_chain else "")
+    log.info("arm %s: collision model from the description: %d shapes (%d meshes)%s", name, len(shapes),
+             sum(s.kind == "mesh" for s in shapes), left)
+    return tuple(shapes)
