@@ -14,6 +14,7 @@ import pytest
 import yaml
 
 from uvms_jax import robot
+from uvms_jax.hw._sim_model import sim_spec
 from uvms_jax.plan import CollisionChecker, SphereChecker, build_scene
 from uvms_jax.robot._geometry import resolve_mesh
 
@@ -279,6 +280,8 @@ def test_panda_loads_its_stl_meshes(panda):
     assert all(Path(s.file).is_relative_to(Path(ROBOTS).resolve()) for s in panda.shapes)  # package://example-robot-data
     pairs = robot.self_collision_pairs(panda, n_samples=50)
     assert len(pairs["adjacent"]) == 7 and ("panda_link0", "panda_link1") in pairs["adjacent"]
+    sim = sim_spec(panda).compile()  # the simulated arm: the same meshes, as assets
+    assert sim.nmesh == 9 and all(sim.body_mass[1:] > 0)
 
 
 def test_panda_scene_and_sphere_checker(panda):
