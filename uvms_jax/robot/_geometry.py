@@ -225,10 +225,10 @@ def _mjcf_shapes(source, bodies: Mapping[str, int], frames: Mapping[str, np.ndar
             shapes.append(Shape(body, "sphere", _pose(T), (float(size[0]),), link=name))
         elif t == G.mjGEOM_MESH:
             k = int(model.geom_dataid[g])
-            file = spec_meshes[k].file if k < len(spec_meshes) else ""
-            if file:  # the compiled geom pose includes MuJoCo's re-centring of the mesh: undo it
+            mesh = spec.mesh(model.mesh(k).name) if model.mesh(k).name else spec_meshes[k]
+            if mesh.file:  # the compiled geom pose includes MuJoCo's re-centring of the mesh: undo it
                 T_file = T @ np.linalg.inv(_mat(model.mesh_pos[k], model.mesh_quat[k]))
-                shapes.append(_mesh(file, tuple(spec_meshes[k].scale), body, T_file, name, mesh_dir))
+                shapes.append(_mesh(mesh.file, tuple(mesh.scale), body, T_file, name, mesh_dir))
             else:  # an inline mesh: its compiled vertices in the compiled geom's frame
                 a, n = int(model.mesh_vertadr[k]), int(model.mesh_vertnum[k])
                 vertices = tuple(map(float, model.mesh_vert[a:a + n].ravel()))
