@@ -10,10 +10,10 @@ DEV := $(VENV)/.installed-dev
 # compile afresh, so the compile times they report are real. `make clean` empties the cache.
 # Every program is kept, however quick its compile: within one `make test` the two pytest
 # workers and the command-line tests' subprocesses reuse each other's programs.
-demo test test-all papers: export JAX_COMPILATION_CACHE_DIR ?= $(CURDIR)/.cache/jax
-demo test test-all papers: export JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS ?= 0
+demo test test-slow test-all papers: export JAX_COMPILATION_CACHE_DIR ?= $(CURDIR)/.cache/jax
+demo test test-slow test-all papers: export JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS ?= 0
 
-.PHONY: setup demo test test-all papers bench clean
+.PHONY: setup demo test test-slow test-all papers bench clean
 
 setup: $(DEV)
 
@@ -37,6 +37,10 @@ demo: $(RUNTIME)
 
 test: $(DEV)
 	$(PY) -m pytest -q -n 2 -m "not slow"
+
+# The slow end-to-end and acceptance runs (about 3 min on 2 cores after `make test`); CI runs both.
+test-slow: $(DEV)
+	$(PY) -m pytest -q -n 2 -m slow
 
 test-all: $(DEV)
 	$(PY) -m pytest -q -n 2
