@@ -98,9 +98,10 @@ def test_format_is_read_from_the_content(tmp_path):
 
 @pytest.mark.parametrize("text, message", [
     ("", "empty string"),
-    ("<robot name='a'><link name='x'></robot>", "not well-formed XML: mismatched tag: line 1, column"),
+    ("<robot name='a'><link name='x'></robot>", "not well-formed XML: Opening and ending tag mismatch: link line 1 "
+                                                "and robot, line 1, column 40"),
     ("<sdf version='1.6'/>", "root <sdf>: expected <robot> (URDF) or <mujoco> (MJCF)"),
-    ("no/such/file.urdf", "robot description not found"),
+    ("no/such/file.urdf", "robot description file not found: no/such/file.urdf"),
 ])
 def test_bad_descriptions_say_what_is_wrong(text, message):
     with pytest.raises(ValueError, match=message.replace("(", r"\(").replace(")", r"\)")):

@@ -317,12 +317,24 @@ class SceneSpec:
         """Build from the scenario mapping (a plain dict, e.g. ``OmegaConf.to_container(cfg)``)."""
         t = lambda x: tuple(float(v) for v in x)  # noqa: E731
         objects = []
+        # Nodes: the given numbers, or by default the objects 1 … k and the bases k + 1 … in the
+        # file's order (the task graph's start is 0, its goal one past the last base).
+        auto = {str(x["name"]): i + 1 for i, x in enumerate([*m["objects"], *m["bases"]])}
+        node_of = lambda x: int(x["node"]) if x.get("node") is not None else auto[str(x["name"])]  # noqa: E731
+        names = {str(o["name"]): node_of(o) for o in m["objects"]}
+
+        def fits(b) -> tuple[int, ...]:  # objects by name or node number
+            unknown = [f for f in b["fits"] if isinstance(f, str) and f not in names]
+            if unknown:
+                raise ValueError(f"base {b.get('name')!r} fits unknown objects {unknown} (objects: {sorted(names)})")
+            return tuple(names[f] if isinstance(f, str) else int(f) for f in b["fits"])
+
         for o in m["objects"]:
             dims = {"box": lambda: o["size"], "cylinder": lambda: (o["radius"], o["height"]),
                     "hex_prism": lambda: (o["edge"], o["height"])}
             if o["shape"] not in dims:
                 raise ValueError(f"object {o.get('name')!r}: unknown shape {o['shape']!r}")
-            objects.append(Item(int(o["node"]), str(o["name"]), str(o["shape"]), t(dims[o["shape"]]()),
+            objects.append(Item(node_of(o), str(o["name"]), str(o["shape"]), t(dims[o["shape"]]()),
                                 str(o["table"]), t(o["at"]), float(o.get("yaw", 0.0))))
         grasp = m.get("grasp", {})
         cage = m.get("cage")
@@ -336,8 +348,8 @@ class SceneSpec:
             jaws_open=float(m["arm"]["jaws_open"]),
             tables=tuple(Box(str(b["name"]), t(b["pos"]), t(b["size"]), t(b.get("rpy", (0, 0, 0)))) for b in m["tables"]),
             objects=tuple(objects),
-            bases=tuple(Base(int(b["node"]), str(b["name"]), t(b["size"]), str(b["table"]), t(b["at"]),
-                             float(b.get("yaw", 0.0)), tuple(int(f) for f in b["fits"])) for b in m["bases"]),
+            bases=tuple(Base(node_of(b), str(b["name"]), t(b["size"]), str(b["table"]), t(b["at"]),
+                             float(b.get("yaw", 0.0)), fits(b)) for b in m["bases"]),
             object_density=float(m["object_density"]),
             water_density=float(m["water_density"]),
             gravity=float(m["gravity"]),

@@ -13,7 +13,6 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import logging
-import os
 import xml.etree.ElementTree as ET
 from collections.abc import Mapping
 from pathlib import Path
@@ -35,31 +34,11 @@ log = logging.getLogger(__name__)
 DESCRIPTIONS = Path(__file__).parent / "descriptions"
 
 
-def _read(description) -> tuple[bytes, str, Path | None]:
-    """``(bytes, source label, path or None)`` of a path or of the description's text."""
-    if isinstance(description, (str, os.PathLike)) and not (isinstance(description, str) and
-                                                             description.lstrip().startswith("<")):
-        if isinstance(description, str) and not description.strip():
-            raise ValueError("robot description is an empty string: give a URDF/MJCF path or its text")
-        path = Path(description)
-        if not path.is_file():
-            raise ValueError(f"robot description not found: {path}")
-        return path.read_bytes(), str(path), path
-    if isinstance(description, str):
-        return description.encode(), "<text>", None
-    raise TypeError(f"robot description must be a path or the XML text, got {type(description).__name__}")
-
-
 def _format(data: bytes, source: str) -> str:
-    """``"urdf"`` or ``"mjcf"`` from the root element; a clear error for anything else."""
-    try:
-        root = ET.fromstring(data)
-    except ET.ParseError as err:
-        raise ValueError(f"robot description {source} is not well-formed XML: {err}") from None
-    if root.tag == "robot":
-        return "urdf"
-    if root.tag == "mujoco":
-        return "mjcf"
+    """``"urdf"`` or ``"mjcf"`` from the root element, parsed strictly; a clear error otherwise."""
+    root = _import.strict_root(data, f"robot description {source}")
+    if root.tag in ("robot", "mujoco"):
+        return "urdf" if root.tag == "robot" else "mjcf"
     raise ValueError(f"robot description {source} has root <{root.tag}>: expected <robot> (URDF) or <mujoco> (MJCF)")
 
 
@@ -208,7 +187,8 @@ def load_robot(
       ValueError: a missing file, text that is not URDF or MJCF, unknown names, and every
         error of :func:`uvms_jax.kin.from_urdf` / :func:`uvms_jax.kin.from_mjcf`.
     """
-    data, source, path = _read(description)
+    data, source = _import._description_bytes(description, "robot description")
+    path = None if source == "<text>" else Path(source)
     fmt = _format(data, source)
     in_file = gripper if isinstance(gripper, str) else None
     if fmt == "urdf":
