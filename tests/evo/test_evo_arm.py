@@ -233,7 +233,7 @@ def test_arm_scene_needs_exactly_one_task():
         evo.arm_docking_problem(evo.ArmSceneSettings())
     with pytest.raises(ValueError, match="exactly one task"):
         evo.arm_docking_problem(evo.ArmSceneSettings(panel=evo.PanelSettings()), task)
-    with pytest.raises(ValueError, match="robot description not found: .*puma"):
+    with pytest.raises(ValueError, match="robot description file not found: .*puma"):
         evo.arm_docking_problem(evo.ArmSceneSettings(arm="puma", link_radius=0.04, panel=evo.PanelSettings()))
     with pytest.raises(ValueError, match="need link_radius"):
         evo.arm_docking_problem(evo.ArmSceneSettings(arm="puma", panel=evo.PanelSettings()))
