@@ -5,7 +5,7 @@ preset). Reports per arm the stages' wall and CPU seconds, the process's wall ti
 XLA compilation included: each process compiles afresh, no persistent cache), edges planned,
 gates reached. Prints one JSON object.
 
-    .venv/bin/python benchmarks/pipeline_arms.py [--tiny] [--arms bravo7 ur5]
+    .venv/bin/python benchmarks/pipeline_arms.py [--tiny] [--capsules] [--arms bravo7 ur5]
 """
 
 from __future__ import annotations
@@ -28,22 +28,24 @@ EXAMPLE_ARMS = yaml.safe_load((ROOT / "examples" / "arms.yaml").read_text())
 STAGES = "[docking,plan,schedule,hw]"
 
 
-def _card(arm: str, folder: Path) -> str:
+def _card(arm: str, folder: Path, capsules: bool) -> str:
     """The arm's card: a shipped name, or a card written for an example-robot-data arm."""
     if arm not in EXAMPLE_ARMS["arms"]:
         return arm
     robots = importlib.metadata.distribution("example-robot-data").locate_file(
         "cmeel.prefix/share/example-robot-data/robots")
     settings = dict(EXAMPLE_ARMS["arms"][arm], gripper=EXAMPLE_ARMS["jaws"])
+    if capsules:
+        settings["collision"] = "capsules"
     settings["description"] = str(Path(robots) / settings["description"])
     path = folder / f"{arm}.yaml"
     path.write_text(yaml.safe_dump(settings))
     return str(path)
 
 
-def run_arm(arm: str, tiny: bool, folder: Path) -> dict:
+def run_arm(arm: str, tiny: bool, capsules: bool, folder: Path) -> dict:
     out = folder / f"run_{arm}"
-    overrides = [f"hydra.run.dir={out}", f"stages={STAGES}", f"scenario.arm.card={_card(arm, folder)}"]
+    overrides = [f"hydra.run.dir={out}", f"stages={STAGES}", f"scenario.arm.card={_card(arm, folder, capsules)}"]
     if arm != "bravo7":  # the thesis's start pose and target choice are the Bravo 7's
         overrides += ["scenario.start_q=null", "plan.ik.select=nearest_start"]
     if tiny:
@@ -65,11 +67,14 @@ def run_arm(arm: str, tiny: bool, folder: Path) -> dict:
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--tiny", action="store_true", help="the test preset (experiment=tiny) instead of the demo's sizes")
+    p.add_argument("--capsules", action="store_true",
+                   help="the example arms with capsules along their links instead of their files' collision geometry")
     p.add_argument("--arms", nargs="+", default=["bravo7", *EXAMPLE_ARMS["arms"]])
     args = p.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
-        runs = [run_arm(arm, args.tiny, Path(tmp)) for arm in args.arms]
+        runs = [run_arm(arm, args.tiny, args.capsules, Path(tmp)) for arm in args.arms]
     print(json.dumps({"benchmark": "pipeline_arms", "preset": "tiny" if args.tiny else "demo", "stages": STAGES,
+                      "collision": "capsules" if args.capsules else "description",
                       "machine": {"cpus": os.cpu_count(), "processor": platform.processor() or platform.machine()},
                       "runs": runs}, indent=1))
 
