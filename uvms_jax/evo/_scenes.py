@@ -5,25 +5,18 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
+from uvms_jax import frames
 from uvms_jax import robot as robots
 from uvms_jax.evo._arm import ArmDockingProblem, make_arm_docking_problem
 from uvms_jax.evo._settings import ArmSceneSettings, BoxSettings, PanelSettings
-
-def pose_matrix(xyz, rpy) -> np.ndarray:
-    """``(4, 4)`` pose from a position [m] and roll-pitch-yaw [rad]."""
-    T = np.eye(4)
-    T[:3, :3] = Rotation.from_euler("xyz", rpy).as_matrix()  # fixed x-y-z axes: R_z R_y R_x, as URDF
-    T[:3, 3] = xyz
-    return T
 
 
 def boxes(items: tuple[BoxSettings, ...]) -> tuple[np.ndarray, np.ndarray]:
     """``(T (m, 4, 4), half (m, 3))`` of box settings."""
     if not items:
         return np.zeros((0, 4, 4)), np.zeros((0, 3))
-    return np.stack([pose_matrix(b.pos, b.rpy) for b in items]), np.stack([np.asarray(b.size) / 2 for b in items])
+    return np.stack([frames.rpy_pose(b.pos, b.rpy) for b in items]), np.stack([np.asarray(b.size) / 2 for b in items])
 
 
 def panel_targets(panel: PanelSettings) -> np.ndarray:
@@ -132,7 +125,7 @@ def arm_docking_problem(scene: ArmSceneSettings, task: ArmTask | None = None, dt
     T_box, half = np.concatenate([T_box, task.T_world_box]), np.concatenate([half, task.half])
     return make_arm_docking_problem(
         chain=robot.chain,
-        T_vehicle_base=pose_matrix(scene.mount_xyz, scene.mount_rpy),
+        T_vehicle_base=frames.rpy_pose(scene.mount_xyz, scene.mount_rpy),
         T_world_tool=task.T_world_tool,
         group=task.group,
         low=scene.pose_low,

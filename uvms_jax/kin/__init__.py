@@ -26,7 +26,6 @@ from uvms_jax.kin._chain import prismatic_twist
 from uvms_jax.kin._chain import revolute_twist
 from uvms_jax.kin._chain import with_dtype
 from uvms_jax.kin._export import bravo7_urdf
-from uvms_jax.kin._export import quat_wxyz
 from uvms_jax.kin._export import to_urdf
 from uvms_jax.kin._fk import Kinematics
 from uvms_jax.kin._fk import fk

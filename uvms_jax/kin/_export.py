@@ -4,26 +4,16 @@ from __future__ import annotations
 
 from typing import Sequence
 
-import mujoco
 import numpy as np
 
 from uvms_jax import bravo7 as _b7
+from uvms_jax import frames
 from uvms_jax.kin._chain import REVOLUTE, Chain, UrdfJoint
 from uvms_jax.kin._models import BRAVO7_JAWS, BRAVO7_JOINTS, BRAVO7_TOOL_XYZ
 
 
 def _fmt(values) -> str:
     return " ".join(f"{float(v):.10g}" for v in values)
-
-
-def matrix_to_rpy(R: np.ndarray) -> np.ndarray:
-    """URDF roll-pitch-yaw of a rotation (``R = Rz(yaw) Ry(pitch) Rx(roll)``), gimbal-lock safe."""
-    R = np.asarray(R, dtype=np.float64)
-    pitch = np.arcsin(np.clip(-R[2, 0], -1.0, 1.0))
-    if abs(R[2, 0]) < 1.0 - 1e-9:
-        return np.array([np.arctan2(R[2, 1], R[2, 2]), pitch, np.arctan2(R[1, 0], R[0, 0])])
-    # Gimbal lock: only roll ± yaw is defined; put it all in yaw.
-    return np.array([0.0, pitch, np.arctan2(-R[0, 1], R[1, 1])])
 
 
 def _urdf_text(name: str, joints: Sequence[UrdfJoint], tool_xyz, tool_rpy, extra: str = "") -> str:
@@ -50,28 +40,28 @@ def _urdf_text(name: str, joints: Sequence[UrdfJoint], tool_xyz, tool_rpy, extra
 def to_urdf(chain: Chain) -> str:
     """URDF of any chain: one link per joint, the joint frames at ``q = 0`` taken from
     ``chain.T_base_joint0``, and a fixed joint to a link named ``tool``."""
-    frames = np.asarray(chain.T_base_joint0, dtype=np.float64)
+    T_joint = np.asarray(chain.T_base_joint0, dtype=np.float64)
     twists = np.asarray(chain.twists, dtype=np.float64)
     previous = np.eye(4)
     joints = []
     for i, kind in enumerate(chain.kinds):
-        local = np.linalg.inv(previous) @ frames[i]
+        local = np.linalg.inv(previous) @ T_joint[i]
         direction = twists[i, 3:] if kind == REVOLUTE else twists[i, :3]
         joints.append(
             UrdfJoint(
                 name=chain.joint_names[i],
                 xyz=tuple(local[:3, 3]),
-                rpy=tuple(matrix_to_rpy(local[:3, :3])),
-                axis=tuple(frames[i, :3, :3].T @ direction),
+                rpy=tuple(frames.matrix_rpy(local[:3, :3])),
+                axis=tuple(T_joint[i, :3, :3].T @ direction),
                 lower=float(chain.lower[i]),
                 upper=float(chain.upper[i]),
                 kind=kind,
                 velocity=float(chain.velocity_limits[i]),
             )
         )
-        previous = frames[i]
+        previous = T_joint[i]
     tool = np.linalg.inv(previous) @ np.asarray(chain.T_base_tool0, dtype=np.float64)
-    return _urdf_text(chain.name, joints, tool[:3, 3], matrix_to_rpy(tool[:3, :3]))
+    return _urdf_text(chain.name, joints, tool[:3, 3], frames.matrix_rpy(tool[:3, :3]))
 
 
 def bravo7_urdf() -> str:
@@ -88,11 +78,3 @@ def bravo7_urdf() -> str:
         "  </joint>"
     )
     return _urdf_text(_b7.NAME, BRAVO7_JOINTS, BRAVO7_TOOL_XYZ, _b7.TOOL_RPY, extra=jaws)
-
-
-def quat_wxyz(R: np.ndarray) -> np.ndarray:
-    """Unit quaternion ``(w, x, y, z)`` of a rotation matrix ``(3, 3)``, as MJCF writes it
-    (MuJoCo's ``mju_mat2Quat``)."""
-    q = np.zeros(4)
-    mujoco.mju_mat2Quat(q, np.ascontiguousarray(R, dtype=np.float64).reshape(9))
-    return q

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from uvms_jax import frames
 from uvms_jax.kin._chain import PRISMATIC, REVOLUTE, Chain, make_chain, prismatic_twist, revolute_twist
 
 # A continuous joint (URDF) or an unlimited hinge (MJCF) turns forever; the chain gets the limits
@@ -288,13 +289,6 @@ def _urdf_joint(j, T: np.ndarray, link: str) -> _Joint:
     )
 
 
-def _pose(p, xmat) -> np.ndarray:
-    T = np.eye(4)
-    T[:3, :3] = np.asarray(xmat, dtype=np.float64).reshape(3, 3)
-    T[:3, 3] = p
-    return T
-
-
 def from_mjcf(
     source,
     base_body: str | None = None,
@@ -356,12 +350,12 @@ def mjcf_path_joints(source, base_body: str | None, tip_body: str | None,
             raise ValueError(f"site {tip_site!r} not found; the model has: {', '.join(sorted(sites))}")
         sid = model.site(tip_site).id
         tip = body_name[int(model.site_bodyid[sid])]
-        T_world_tool = _pose(data.site_xpos[sid], data.site_xmat[sid])
+        T_world_tool = frames.pose(np.reshape(data.site_xmat[sid], (3, 3)), data.site_xpos[sid])
     else:
         leaves = sorted(set(parent_of) - set(parent_of.values()))
         tip = _pick("tip body", tip_body, leaves, set(bodies), "tip_body= or tip_site=")
-        T_world_tool = _pose(data.xpos[bodies[tip]], data.xmat[bodies[tip]])
-    T_base_world = np.linalg.inv(_pose(data.xpos[bodies[base]], data.xmat[bodies[base]]))
+        T_world_tool = frames.pose(np.reshape(data.xmat[bodies[tip]], (3, 3)), data.xpos[bodies[tip]])
+    T_base_world = np.linalg.inv(frames.pose(np.reshape(data.xmat[bodies[base]], (3, 3)), data.xpos[bodies[base]]))
 
     coupled = {
         int(j)
@@ -388,7 +382,7 @@ def mjcf_path_joints(source, base_body: str | None, tip_body: str | None,
                 lower, upper = CONTINUOUS_LIMITS
             else:
                 raise ValueError(f"slide joint {jname!r} has no range: give it limited=\"true\" range=\"…\"")
-            frame = T_base_world @ _pose(data.xanchor[j], data.xmat[b])
+            frame = T_base_world @ frames.pose(np.reshape(data.xmat[b], (3, 3)), data.xanchor[j])
             joints.append(
                 _Joint(
                     name=jname,

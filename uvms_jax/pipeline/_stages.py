@@ -12,9 +12,8 @@ from pathlib import Path
 import jax
 import jax.numpy as jnp
 import numpy as np
-from scipy.spatial.transform import Rotation
 
-from uvms_jax import evo, hw, planfile, progress, sched, surrogate
+from uvms_jax import evo, frames, hw, planfile, progress, sched, surrogate
 from uvms_jax import robot as robots
 from uvms_jax import plan as planning
 from uvms_jax.pipeline._report import StageReport, md_table
@@ -100,7 +99,7 @@ def _world_obstacles(problem: evo.ArmDockingProblem, T_world_vehicle: np.ndarray
     out = []
     for i, (T, half) in enumerate(zip(np.asarray(problem.T_vehicle_box), np.asarray(problem.vehicle_half))):
         W = T_world_vehicle @ T
-        rpy = Rotation.from_matrix(W[:3, :3]).as_euler("xyz")
+        rpy = frames.matrix_rpy(W[:3, :3])
         out.append(planning.Obstacle(f"vehicle{i}", "box", tuple(W[:3, 3].tolist()), tuple(rpy.tolist()),
                                      tuple((2 * half).tolist())))
     return tuple(out)

@@ -32,9 +32,8 @@ from typing import Any
 
 import mujoco
 import numpy as np
-from scipy.spatial.transform import Rotation
 
-from uvms_jax import kin
+from uvms_jax import frames
 from uvms_jax import robot as robots
 
 __all__ = [
@@ -47,7 +46,6 @@ __all__ = [
     "SceneSpec",
     "MOUNT_KEYS",
     "build_scene",
-    "rpy_to_matrix",
     "scenario_robot",
 ]
 
@@ -65,28 +63,6 @@ SELF_COLLISION_MARGIN = 0.01  # [m]
 _CYLINDER_SIDES = 32  # inscribed polygon: radius error r(1 - cos(π/32)) ≈ 0.2 mm for r = 40 mm
 
 
-def rpy_to_matrix(rpy: Sequence[float]) -> np.ndarray:
-    """Rotation ``Rz(yaw) Ry(pitch) Rx(roll)`` (URDF fixed-axis roll-pitch-yaw), ``(3, 3)``."""
-    return Rotation.from_euler("xyz", np.asarray(rpy, dtype=float)).as_matrix()
-
-
-def _pose(R=np.eye(3), p=(0.0, 0.0, 0.0)) -> np.ndarray:
-    T = np.eye(4)
-    T[:3, :3] = R
-    T[:3, 3] = p
-    return T
-
-
-def _quat_matrix(wxyz: str) -> np.ndarray:
-    """Rotation ``(3, 3)`` of an MJCF ``quat`` attribute ``"w x y z"``."""
-    w, x, y, z = (float(v) for v in wxyz.split())
-    return Rotation.from_quat([x, y, z, w]).as_matrix()
-
-
-def _rz(yaw: float) -> np.ndarray:
-    return rpy_to_matrix((0.0, 0.0, yaw))
-
-
 def _fmt(v) -> str:
     return " ".join(f"{float(x):.10g}" for x in np.ravel(v))
 
@@ -102,12 +78,12 @@ class Box:
 
     @property
     def T_world_box(self) -> np.ndarray:
-        return _pose(rpy_to_matrix(self.rpy), self.pos)
+        return frames.pose(frames.rpy_matrix(self.rpy), self.pos)
 
     @property
     def T_world_top(self) -> np.ndarray:
         """Frame on the centre of the top face, z along the face normal."""
-        return self.T_world_box @ _pose(p=(0.0, 0.0, self.size[2] / 2.0))
+        return self.T_world_box @ frames.pose(p=(0.0, 0.0, self.size[2] / 2.0))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -245,7 +221,7 @@ class Obstacle:
 
     @property
     def T_world(self) -> np.ndarray:
-        return _pose(rpy_to_matrix(self.rpy), self.pos)
+        return frames.pose(frames.rpy_matrix(self.rpy), self.pos)
 
     def hull_vertices(self) -> np.ndarray:
         """``(k, 3)`` vertices of the convex mesh standing for a box or a cylinder, in its frame
@@ -288,7 +264,7 @@ class SceneSpec:
     @property
     def T_world_base(self) -> np.ndarray:
         """``(4, 4)`` pose of the arm's base link in the world (``mount_pos``, ``mount_rpy``)."""
-        return _pose(rpy_to_matrix(self.mount_rpy), self.mount_pos)
+        return frames.pose(frames.rpy_matrix(self.mount_rpy), self.mount_pos)
 
     def with_base(self, T_world_base) -> "SceneSpec":
         """The same scene with the arm's base link at ``T_world_base (4, 4)`` (world frame, m).
@@ -308,7 +284,7 @@ class SceneSpec:
                 and np.allclose(T[3], (0, 0, 0, 1))):
             raise ValueError(f"T_world_base must be a rigid transform (rotation block orthonormal, det +1, last row "
                              f"0 0 0 1), got\n{np.round(T, 6)}")
-        rpy = Rotation.from_matrix(R).as_euler("xyz")
+        rpy = frames.matrix_rpy(R)
         return dataclasses.replace(self, mount_pos=tuple(float(v) for v in T[:3, 3]),
                                    mount_rpy=tuple(float(v) for v in rpy))
 
@@ -510,16 +486,16 @@ class Scene:
     def T_world_object(self, node: int) -> np.ndarray:
         """Pose of an object's centre at its start position ``(4, 4)`` (z = the shape's axis)."""
         o = self.objects[node]
-        return self.tables[o.table].T_world_top @ _pose(_rz(o.yaw), (*o.at, 0.0)) @ _pose(p=(0, 0, o.height / 2))
+        return self.tables[o.table].T_world_top @ frames.pose(frames.rot_z(o.yaw), (*o.at, 0.0)) @ frames.pose(p=(0, 0, o.height / 2))
 
     def T_world_base_top(self, node: int) -> np.ndarray:
         """Frame on the centre of a base plate's top face ``(4, 4)``."""
         b = self.bases[node]
-        return self.tables[b.table].T_world_top @ _pose(_rz(b.yaw), (*b.at, b.size[2]))
+        return self.tables[b.table].T_world_top @ frames.pose(frames.rot_z(b.yaw), (*b.at, b.size[2]))
 
     def T_world_placed(self, base: int, obj: int) -> np.ndarray:
         """Pose of object ``obj``'s centre when placed on base ``base``."""
-        return self.T_world_base_top(base) @ _pose(p=(0, 0, self.objects[obj].height / 2))
+        return self.T_world_base_top(base) @ frames.pose(p=(0, 0, self.objects[obj].height / 2))
 
     def T_tool_obj_for(self, node: int | None) -> np.ndarray:
         """The grasp: the object frame in the tool frame (object ``node``; None → standoff only).
@@ -528,7 +504,7 @@ class Scene:
         object's x axis, the tool sits ``grasp_standoff`` above the object's top face.
         """
         h = 0.0 if node is None else self.objects[node].height
-        return _pose(np.diag([1.0, -1.0, -1.0]), (0.0, 0.0, self.spec.grasp_standoff + h / 2))
+        return frames.pose(np.diag([1.0, -1.0, -1.0]), (0.0, 0.0, self.spec.grasp_standoff + h / 2))
 
     def mass(self, node: int) -> float:
         return self.spec.object_density * self.objects[node].volume
@@ -554,7 +530,7 @@ class Scene:
             mname = mesh(f"m_{label}", _box_vertices(size))
             world.append(
                 f'<geom name="{label}" type="mesh" mesh="{mname}" pos="{_fmt(T[:3, 3])}" '
-                f'quat="{_fmt(kin.quat_wxyz(T[:3, :3]))}" rgba="{rgba}" contype="{bits[0]}" conaffinity="{bits[1]}"/>'
+                f'quat="{_fmt(frames.matrix_quat(T[:3, :3]))}" rgba="{rgba}" contype="{bits[0]}" conaffinity="{bits[1]}"/>'
             )
 
         if s.cage_size is not None:
@@ -568,7 +544,7 @@ class Scene:
         under = s.tables[0]
         top = under.T_world_top
         world.append(
-            f'<geom name="{under.name}" type="plane" pos="{_fmt(top[:3, 3])}" quat="{_fmt(kin.quat_wxyz(top[:3, :3]))}" '
+            f'<geom name="{under.name}" type="plane" pos="{_fmt(top[:3, 3])}" quat="{_fmt(frames.matrix_quat(top[:3, :3]))}" '
             f'size="{under.size[0] / 2} {under.size[1] / 2} 0.05" rgba="0.6 0.55 0.5 1" '
             f'contype="{SCENE_BITS[0]}" conaffinity="{SCENE_BITS[1]}"/>'
         )
@@ -577,22 +553,22 @@ class Scene:
             k = 0
             for sx in (-1, 1):
                 for sy in (-1, 1):
-                    box(f"cage:post{k}", _pose(p=(sx * (L - p) / 2, sy * (W - p) / 2, H / 2)), (p, p, H), "0.6 0.6 0.65 1")
+                    box(f"cage:post{k}", frames.pose(p=(sx * (L - p) / 2, sy * (W - p) / 2, H / 2)), (p, p, H), "0.6 0.6 0.65 1")
                     k += 1
             for z in (p / 2, H - p / 2):
                 for sx in (-1, 1):
-                    box(f"cage:x{k}", _pose(p=(sx * (L - p) / 2, 0, z)), (p, W - 2 * p, p), "0.6 0.6 0.65 1")
-                    box(f"cage:y{k}", _pose(p=(0, sx * (W - p) / 2, z)), (L - 2 * p, p, p), "0.6 0.6 0.65 1")
+                    box(f"cage:x{k}", frames.pose(p=(sx * (L - p) / 2, 0, z)), (p, W - 2 * p, p), "0.6 0.6 0.65 1")
+                    box(f"cage:y{k}", frames.pose(p=(0, sx * (W - p) / 2, z)), (L - 2 * p, p, p), "0.6 0.6 0.65 1")
                     k += 1
         ms = s.mount_size
-        mount_T = self.T_world_base @ _pose(p=(0, 0, -ms[2] / 2))
+        mount_T = self.T_world_base @ frames.pose(p=(0, 0, -ms[2] / 2))
         box("mount", mount_T, ms, "0.3 0.3 0.3 1", MOUNT_BITS)
         for t in s.tables[1:]:
             box(t.name, t.T_world_box, t.size, "0.75 0.8 0.9 0.6")
         bits = f'contype="{SCENE_BITS[0]}" conaffinity="{SCENE_BITS[1]}" rgba="0.55 0.6 0.7 0.8"'
         for o in s.obstacles:
             T = o.T_world
-            pose = f'pos="{_fmt(T[:3, 3])}" quat="{_fmt(kin.quat_wxyz(T[:3, :3]))}"'
+            pose = f'pos="{_fmt(T[:3, 3])}" quat="{_fmt(frames.matrix_quat(T[:3, :3]))}"'
             if o.shape == "sphere":
                 world.append(f'<geom name="{o.name}" type="sphere" size="{o.dims[0]!r}" {pose} {bits}/>')
             elif o.shape == "capsule":  # primitive: arm capsule vs capsule is exact in MuJoCo
@@ -605,22 +581,22 @@ class Scene:
                 mname = mesh(f"m_obstacle_{o.name}", o.hull_vertices())
                 world.append(f'<geom name="{o.name}" type="mesh" mesh="{mname}" {pose} {bits}/>')
         for b in s.bases:
-            T = self.T_world_base_top(b.node) @ _pose(p=(0, 0, -b.size[2] / 2))
+            T = self.T_world_base_top(b.node) @ frames.pose(p=(0, 0, -b.size[2] / 2))
             box(f"n{b.node}:{b.name}", T, b.size, "0.9 0.3 0.2 1")
         for o in s.objects:
             T = self.T_world_object(o.node)
             mname = mesh(f"m_{o.name}", o.vertices())
             world.append(
                 f'<geom name="n{o.node}:{o.name}" type="mesh" mesh="{mname}" pos="{_fmt(T[:3, 3])}" '
-                f'quat="{_fmt(kin.quat_wxyz(T[:3, :3]))}" rgba="1 0.55 0.1 1" contype="{SCENE_BITS[0]}" conaffinity="{SCENE_BITS[1]}"/>'
+                f'quat="{_fmt(frames.matrix_quat(T[:3, :3]))}" rgba="1 0.55 0.1 1" contype="{SCENE_BITS[0]}" conaffinity="{SCENE_BITS[1]}"/>'
             )
 
         robot = self.robot
-        arm = ET.fromstring(robots.mjcf_body(robot, s.mount_pos, kin.quat_wxyz(self.T_world_base[:3, :3]), s.jaws_open))
+        arm = ET.fromstring(robots.mjcf_body(robot, s.mount_pos, frames.matrix_quat(self.T_world_base[:3, :3]), s.jaws_open))
         assets += robots.mjcf_assets(robot)  # the description's meshes, boxes and cylinders of the arm
         last = arm.find(".//site[@name='tool']/..")
         tool_site = last.find("site[@name='tool']")
-        T_link_tool = _pose(_quat_matrix(tool_site.get("quat")), [float(v) for v in tool_site.get("pos").split()])
+        T_link_tool = frames.pose(frames.quat_matrix(tool_site.get("quat")), [float(v) for v in tool_site.get("pos").split()])
         base = robots.base_body(robot)
         shoulder = {b for _, b in self._base_pairs()}
         finger_length = 0.0
@@ -645,7 +621,7 @@ class Scene:
             mname = f"m_{o.name}"
             ET.SubElement(last, "geom", {
                 "name": f"held_{o.name}", "type": "mesh", "mesh": mname, "pos": _fmt(T[:3, 3]),
-                "quat": _fmt(kin.quat_wxyz(T[:3, :3])), "rgba": "1 0.55 0.1 0.8", "contype": "0", "conaffinity": "0",
+                "quat": _fmt(frames.matrix_quat(T[:3, :3])), "rgba": "1 0.55 0.1 0.8", "contype": "0", "conaffinity": "0",
             })
         excludes = "".join(f'<exclude body1="{a}" body2="{b}"/>' for a, b in self.self_collision["always"]
                            if base not in (a, b))

@@ -44,18 +44,13 @@ import numba
 import numpy as np
 from scipy.spatial import ConvexHull
 
+from uvms_jax import frames
 from uvms_jax.plan._collision import CollisionChecker
 from uvms_jax.plan._scene import Context
 
 __all__ = ["SphereChecker", "coarse_to_fine"]
 
 _FACE_ATOL = 1e-9  # coplanar triangles of a hull give one face equation up to round-off
-
-
-def _quat_matrix(quat) -> np.ndarray:
-    R = np.empty(9)
-    mujoco.mju_quat2Mat(R, np.asarray(quat, dtype=float))
-    return R.reshape(3, 3)
 
 
 def _capsule_spheres(pos, R, radius: float, half_length: float, spacing: float) -> tuple[np.ndarray, np.ndarray]:
@@ -432,7 +427,7 @@ class SphereChecker:
         self._origin = d.xpos[bodies[0]].copy()  # fixed: the first joint turns about it
         self._chain = (d.xmat[root].reshape(3, 3).copy(), d.xpos[root].copy(),
                        np.array([slot.get(m.body_parentid[b], -1) for b in bodies]),
-                       np.stack([_quat_matrix(m.body_quat[b]) for b in bodies]),
+                       np.stack([frames.quat_matrix(m.body_quat[b]) for b in bodies]),
                        np.stack([m.body_pos[b] for b in bodies]).astype(float),
                        np.stack([m.jnt_axis[m.body_jntadr[b]] for b in bodies]).astype(float),
                        np.array([m.jnt_qposadr[m.body_jntadr[b]] for b in bodies]))
@@ -444,7 +439,7 @@ class SphereChecker:
         for g in range(m.ngeom):
             b = m.geom_bodyid[g]
             moving = m.body_weldid[b] != 0
-            pos, R = ((m.geom_pos[g].astype(float), _quat_matrix(m.geom_quat[g])) if moving else
+            pos, R = ((m.geom_pos[g].astype(float), frames.quat_matrix(m.geom_quat[g])) if moving else
                       (d.geom_xpos[g].copy(), d.geom_xmat[g].reshape(3, 3).copy()))
             t = m.geom_type[g]
             seg, cap = np.zeros((2, 3)), 0.0

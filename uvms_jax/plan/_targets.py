@@ -25,9 +25,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from uvms_jax import evo, indices, kin
+from uvms_jax import evo, frames, indices, kin
 from uvms_jax.plan._collision import CollisionChecker
-from uvms_jax.plan._scene import Context, Scene, rpy_to_matrix
+from uvms_jax.plan._scene import Context, Scene
 
 __all__ = ["NodeTarget", "STEPS", "docking_task", "node_contexts", "pick_place_targets", "tool_poses"]
 
@@ -85,7 +85,7 @@ def tool_poses(scene: Scene, node: int, n_yaw_continuous: int = 8) -> tuple[np.n
         raise ValueError(f"node {node} is neither an object {sorted(scene.objects)} nor a base {sorted(scene.bases)}")
     yaws = _yaws(scene.objects[obj].symmetry, n_yaw_continuous)
     T_obj_tool = np.linalg.inv(scene.T_tool_obj_for(obj))
-    at = np.stack([T_obj @ _rot_z(y) @ T_obj_tool for y in yaws])
+    at = np.stack([T_obj @ frames.pose(frames.rot_z(y)) @ T_obj_tool for y in yaws])
     pre = at @ _shift(-scene.spec.approach)
     return yaws, at, pre
 
@@ -106,12 +106,6 @@ def docking_task(scene: Scene, n_yaw_continuous: int = 8) -> evo.ArmTask:
     T_box = np.stack([t.T_world_box for t in tables])
     half = np.stack([np.asarray(t.size) / 2 for t in tables])
     return evo.ArmTask(np.concatenate(poses), np.asarray(group), names, T_box, half)
-
-
-def _rot_z(yaw: float) -> np.ndarray:
-    T = np.eye(4)
-    T[:3, :3] = rpy_to_matrix((0.0, 0.0, yaw))
-    return T
 
 
 def node_contexts(scene: Scene, node: int) -> dict[str, Context]:

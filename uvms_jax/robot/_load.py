@@ -22,6 +22,7 @@ import mujoco
 import numpy as np
 import yaml
 
+from uvms_jax.frames import pose
 from uvms_jax.kin import _import
 from uvms_jax.robot._geometry import description_shapes
 from uvms_jax.robot._model import BASE, BodyInertial, Gripper, Hardware, Robot
@@ -117,11 +118,8 @@ def _mjcf_robot(source, base: str | None, tip: str | None, gripper: str | None):
     names = [model.body(b).name or f"body{b}" for b in range(model.nbody)]
     base_name = names[0] if base is None else base
 
-    def world(p, xmat):
-        T = np.eye(4)
-        T[:3, :3] = np.asarray(xmat).reshape(3, 3)
-        T[:3, 3] = p
-        return T
+    def world(p, xmat) -> np.ndarray:
+        return pose(np.reshape(xmat, (3, 3)), p)
 
     T_base_world = np.linalg.inv(world(data.xpos[names.index(base_name)], data.xmat[names.index(base_name)]))
     bodies = {base_name: BASE, **{j.link: i for i, j in enumerate(joints)}}

@@ -19,7 +19,7 @@ import itertools
 import mujoco
 import numpy as np
 
-from uvms_jax import kin
+from uvms_jax import frames
 from uvms_jax.kin._chain import REVOLUTE
 from uvms_jax.robot._geometry import Shape
 from uvms_jax.robot._model import BASE, Robot
@@ -88,7 +88,7 @@ def mjcf_assets(robot: Robot) -> list[str]:
 
 def _shape_geom(shape: Shape, name: str) -> str:
     T = shape.T
-    pose = f'pos="{_fmt(T[:3, 3])}" quat="{_fmt(kin.quat_wxyz(T[:3, :3]))}"'
+    pose = f'pos="{_fmt(T[:3, 3])}" quat="{_fmt(frames.matrix_quat(T[:3, :3]))}"'
     if shape.kind == "sphere":
         return f'<geom name="{name}" type="sphere" size="{shape.size[0]!r}" {pose}/>'
     if shape.kind == "capsule":
@@ -139,23 +139,23 @@ def mjcf_body(robot: Robot, pos=(0.0, 0.0, 0.0), quat=(1.0, 0.0, 0.0, 0.0), jaws
         queries do not).
     """
     chain = robot.chain
-    frames = np.asarray(chain.T_base_joint0, dtype=np.float64)
+    T_joint = np.asarray(chain.T_base_joint0, dtype=np.float64)
     twists = np.asarray(chain.twists, dtype=np.float64)
     tool = np.asarray(chain.T_base_tool0, dtype=np.float64)
     n = robot.n_joints
     lines = [f'<body name="{base_body(robot)}" pos="{_fmt(pos)}" quat="{_fmt(quat)}">']
     if inertial and _inertial(robot, BASE):
         lines.append("  " + _inertial(robot, BASE))
-    lines += ["  " + g for g in _body_geoms(robot, BASE, frames[0, :3, 3])]
+    lines += ["  " + g for g in _body_geoms(robot, BASE, T_joint[0, :3, 3])]
     previous = np.eye(4)
     for i in range(n):
         pad = "  " * (i + 1)
-        local = np.linalg.inv(previous) @ frames[i]
-        R = frames[i, :3, :3]
+        local = np.linalg.inv(previous) @ T_joint[i]
+        R = T_joint[i, :3, :3]
         axis = R.T @ (twists[i, 3:] if chain.kinds[i] == REVOLUTE else twists[i, :3])
         lines.append(f'{pad}<body name="{robot.link_names[i]}" pos="{_fmt(local[:3, 3])}" '
-                     f'quat="{_fmt(kin.quat_wxyz(local[:3, :3]))}">')
-        geoms = _body_geoms(robot, i, (np.linalg.inv(frames[i]) @ (frames[i + 1] if i + 1 < n else tool))[:3, 3])
+                     f'quat="{_fmt(frames.matrix_quat(local[:3, :3]))}">')
+        geoms = _body_geoms(robot, i, (np.linalg.inv(T_joint[i]) @ (T_joint[i + 1] if i + 1 < n else tool))[:3, 3])
         if inertial and _inertial(robot, i):
             lines.append(f"{pad}  " + _inertial(robot, i))
         elif not geoms:
@@ -164,10 +164,10 @@ def mjcf_body(robot: Robot, pos=(0.0, 0.0, 0.0), quat=(1.0, 0.0, 0.0, 0.0), jaws
         lines.append(f'{pad}  <joint name="{robot.joint_names[i]}" type="{kind}" axis="{_fmt(axis)}" '
                      f'range="{float(chain.lower[i])!r} {float(chain.upper[i])!r}" limited="true"/>')
         lines += [f"{pad}  " + g for g in geoms]
-        previous = frames[i]
+        previous = T_joint[i]
     pad = "  " * (n + 1)
-    T_link_tool = np.linalg.inv(frames[-1]) @ tool
-    tool_quat = _fmt(kin.quat_wxyz(T_link_tool[:3, :3]))
+    T_link_tool = np.linalg.inv(T_joint[-1]) @ tool
+    tool_quat = _fmt(frames.matrix_quat(T_link_tool[:3, :3]))
     lines.append(f'{pad}<site name="{TOOL_SITE}" pos="{_fmt(T_link_tool[:3, 3])}" quat="{tool_quat}" size="0.01"/>')
     g = robot.gripper
     if g is not None:
