@@ -1,0 +1,337 @@
+"""What defines a scene, as data (``configs/scenario/*.yaml``): tables, the objects on them and
+the bases they go to, extra obstacles, the arm's mount, materials and the grasp geometry
+(:class:`SceneSpec`), and the arm a scenario names (:func:`scenario_robot`).
+
+World frame: origin at the centre of the cage floor, z up; metres and radians. Objects and
+bases are task-graph nodes: given numbers, or by default the objects 1 … k and the bases
+k + 1 … in the file's order; a base's ``fits`` names objects by name or number.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from uvms_jax import frames
+from uvms_jax import robot as robots
+
+__all__ = ["MOUNT_KEYS", "Base", "Box", "Item", "Obstacle", "SceneSpec", "box_vertices", "scenario_robot"]
+
+_CYLINDER_SIDES = 32  # inscribed polygon: radius error r(1 - cos(π/32)) ≈ 0.2 mm for r = 40 mm
+
+
+@dataclasses.dataclass(frozen=True)
+class Box:
+    """A box obstacle: centre ``pos`` [m], full ``size`` [m], orientation ``rpy`` [rad] (world)."""
+
+    name: str
+    pos: tuple[float, float, float]
+    size: tuple[float, float, float]
+    rpy: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+    @property
+    def T_world_box(self) -> np.ndarray:
+        return frames.pose(frames.rpy_matrix(self.rpy), self.pos)
+
+    @property
+    def T_world_top(self) -> np.ndarray:
+        """Frame on the centre of the top face, z along the face normal."""
+        return self.T_world_box @ frames.pose(p=(0.0, 0.0, self.size[2] / 2.0))
+
+
+@dataclasses.dataclass(frozen=True)
+class Item:
+    """A pick object standing on a table.
+
+    Attributes:
+      node: task-graph node number (thesis Table 5.1).
+      name: label.
+      shape: ``box`` (dims = full edges x, y, z), ``cylinder`` (radius, height) or
+        ``hex_prism`` (edge, height).
+      dims: see ``shape`` [m].
+      table: name of the supporting table.
+      at: (u, v) position on the table top [m]; yaw [rad] about the top's normal.
+    """
+
+    node: int
+    name: str
+    shape: str
+    dims: tuple[float, ...]
+    table: str
+    at: tuple[float, float]
+    yaw: float = 0.0
+
+    def __post_init__(self) -> None:
+        need = {"box": 3, "cylinder": 2, "hex_prism": 2}
+        if self.shape not in need:
+            raise ValueError(f"object {self.name!r}: unknown shape {self.shape!r} (box, cylinder, hex_prism)")
+        if len(self.dims) != need[self.shape] or min(self.dims) <= 0:
+            raise ValueError(f"object {self.name!r}: {self.shape} needs {need[self.shape]} positive dims, got {self.dims}")
+
+    @property
+    def height(self) -> float:
+        return self.dims[2] if self.shape == "box" else self.dims[1]
+
+    @property
+    def volume(self) -> float:
+        if self.shape == "box":
+            return float(np.prod(self.dims))
+        if self.shape == "cylinder":
+            return float(np.pi * self.dims[0] ** 2 * self.dims[1])
+        return float(1.5 * np.sqrt(3.0) * self.dims[0] ** 2 * self.dims[1])
+
+    @property
+    def symmetry(self) -> float:
+        """Yaw period of the shape about its axis [rad] (0 = any yaw)."""
+        if self.shape == "box":
+            return np.pi / 2 if np.isclose(self.dims[0], self.dims[1]) else np.pi
+        return 0.0 if self.shape == "cylinder" else np.pi / 3
+
+    def vertices(self) -> np.ndarray:
+        """Convex-hull vertices ``(k, 3)`` in the object frame (centre, z = axis) [m]."""
+        if self.shape == "box":
+            return box_vertices(self.dims)
+        r, h = (self.dims[0], self.dims[1])
+        n = _CYLINDER_SIDES if self.shape == "cylinder" else 6
+        # Hexagon (edge = circumradius): flats face ±x, so the jaws (opening along x) grip
+        # across flats, 69 mm for a 40 mm edge.
+        a = np.arange(n) * 2 * np.pi / n + (np.pi / 6 if self.shape == "hex_prism" else 0.0)
+        ring = np.stack([r * np.cos(a), r * np.sin(a)], axis=-1)
+        return np.concatenate([np.c_[ring, np.full(n, -h / 2)], np.c_[ring, np.full(n, h / 2)]])
+
+
+@dataclasses.dataclass(frozen=True)
+class Base:
+    """A destination base plate: full ``size`` [m] on ``table`` at (u, v), yaw; ``fits`` object nodes."""
+
+    node: int
+    name: str
+    size: tuple[float, float, float]
+    table: str
+    at: tuple[float, float]
+    yaw: float
+    fits: tuple[int, ...]
+
+
+_OBSTACLE_DIMS = {"box": ("size",), "cylinder": ("radius", "height"), "sphere": ("radius",),
+                  "capsule": ("radius", "length"), "mesh": ()}
+
+
+@dataclasses.dataclass(frozen=True)
+class Obstacle:
+    """A static obstacle of the scenario's ``obstacles`` list (world frame, m, rad).
+
+    Attributes:
+      name: label (unique in the scene; a :class:`Context` can ignore it by this name).
+      shape: ``box`` (``size``: full edges x, y, z), ``cylinder`` (``radius``, ``height``; axis
+        z), ``sphere`` (``radius``), ``capsule`` (``radius``, ``length`` of its axis segment,
+        along z) or ``mesh`` (``file``: an STL or OBJ file that MuJoCo reads, path absolute or
+        relative to the working directory, times ``scale``; MuJoCo collides with its convex
+        hull).
+      pos, rpy: pose of its centre (the mesh file's origin).
+      dims: the numbers of ``shape`` above, in that order.
+    """
+
+    name: str
+    shape: str
+    pos: tuple[float, float, float]
+    rpy: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    dims: tuple[float, ...] = ()
+    file: str = ""
+    scale: float = 1.0
+
+    def __post_init__(self) -> None:
+        if self.shape not in _OBSTACLE_DIMS:
+            raise ValueError(f"obstacle {self.name!r}: unknown shape {self.shape!r} ({', '.join(_OBSTACLE_DIMS)})")
+        n = 3 if self.shape == "box" else len(_OBSTACLE_DIMS[self.shape])
+        if len(self.dims) != n or (n and min(self.dims) <= 0):
+            raise ValueError(f"obstacle {self.name!r}: a {self.shape} needs {n} positive numbers "
+                             f"({', '.join(_OBSTACLE_DIMS[self.shape]) or 'none'}), got {list(self.dims)}")
+        if self.shape == "mesh":
+            if not self.scale > 0:
+                raise ValueError(f"obstacle {self.name!r}: scale must be > 0, got {self.scale}")
+            if not Path(self.file).is_file():
+                raise ValueError(f"obstacle {self.name!r}: cannot read mesh file {self.file!r} (no such file)")
+
+    @staticmethod
+    def from_mapping(m: Mapping[str, Any]) -> "Obstacle":
+        shape = str(m.get("shape"))
+        if shape not in _OBSTACLE_DIMS:
+            raise ValueError(f"obstacle {m.get('name')!r}: unknown shape {shape!r} ({', '.join(_OBSTACLE_DIMS)})")
+        known = {"name", "shape", "pos", "rpy", "file", "scale", *_OBSTACLE_DIMS[shape]}
+        extra = sorted(set(m) - known)
+        if extra:
+            raise ValueError(f"obstacle {m.get('name')!r}: unknown keys {extra} for a {shape} (keys: {sorted(known)})")
+        dims: list[float] = []
+        for key in _OBSTACLE_DIMS[shape]:
+            if key not in m:
+                raise ValueError(f"obstacle {m.get('name')!r}: a {shape} needs {key!r}")
+            v = m[key]
+            dims += [float(x) for x in v] if isinstance(v, (list, tuple)) else [float(v)]
+        return Obstacle(str(m["name"]), shape, tuple(float(x) for x in m["pos"]),
+                        tuple(float(x) for x in m.get("rpy", (0.0, 0.0, 0.0))), tuple(dims),
+                        str(m.get("file", "")), float(m.get("scale", 1.0)))
+
+    @property
+    def T_world(self) -> np.ndarray:
+        return frames.pose(frames.rpy_matrix(self.rpy), self.pos)
+
+    def hull_vertices(self) -> np.ndarray:
+        """``(k, 3)`` vertices of the convex mesh standing for a box or a cylinder, in its frame
+        [m]. A cylinder is the prism *around* it (circumscribed polygon): never smaller."""
+        if self.shape == "box":
+            return box_vertices(self.dims)
+        if self.shape == "cylinder":
+            r, h = self.dims
+            a = np.arange(_CYLINDER_SIDES) * 2 * np.pi / _CYLINDER_SIDES
+            ring = np.stack([np.cos(a), np.sin(a)], -1) * r / np.cos(np.pi / _CYLINDER_SIDES)
+            return np.concatenate([np.c_[ring, np.full(len(a), -h / 2)], np.c_[ring, np.full(len(a), h / 2)]])
+        raise ValueError(f"obstacle {self.name!r}: a {self.shape} has no vertices here (MuJoCo primitive or file)")
+
+
+@dataclasses.dataclass(frozen=True)
+class SceneSpec:
+    """Everything that defines the scene (``configs/scenario/*.yaml``); see that file for units.
+    ``cage_size`` None: no cage and no ceiling (open water, e.g. the arm under a vehicle).
+    ``start_q`` None: the start configuration is computed (:func:`uvms_jax.plan.start_configuration`).
+    The arm itself is not part of the spec: :func:`build_scene` receives it."""
+
+    cage_size: tuple[float, float, float] | None
+    profile: float
+    ceiling_thickness: float
+    mount_pos: tuple[float, float, float]
+    mount_rpy: tuple[float, float, float]
+    mount_size: tuple[float, float, float]
+    jaws_open: float
+    tables: tuple[Box, ...]
+    objects: tuple[Item, ...]
+    bases: tuple[Base, ...]
+    object_density: float
+    water_density: float
+    gravity: float
+    start_q: tuple[float, ...] | None
+    grasp_standoff: float = 0.05
+    approach: float = 0.08
+    obstacles: tuple[Obstacle, ...] = ()
+
+    @property
+    def T_world_base(self) -> np.ndarray:
+        """``(4, 4)`` pose of the arm's base link in the world (``mount_pos``, ``mount_rpy``)."""
+        return frames.pose(frames.rpy_matrix(self.mount_rpy), self.mount_pos)
+
+    def with_base(self, T_world_base) -> "SceneSpec":
+        """The same scene with the arm's base link at ``T_world_base (4, 4)`` (world frame, m).
+
+        The mount plate, the IK targets, the planned motions, the metrics (torques in the base
+        frame) and the video all follow the base, e.g. a docking stage placing the arm under a
+        vehicle. ``start_q`` stays as given (joint angles, so the start pose moves with the arm).
+
+        Raises:
+          ValueError: ``T_world_base`` is not a rigid transform.
+        """
+        T = np.asarray(T_world_base, dtype=float)
+        if T.shape != (4, 4) or not np.all(np.isfinite(T)):
+            raise ValueError(f"T_world_base must be a finite (4, 4) pose, got shape {T.shape}")
+        R = T[:3, :3]
+        if not (np.allclose(R.T @ R, np.eye(3), atol=1e-9) and np.isclose(np.linalg.det(R), 1.0, atol=1e-9)
+                and np.allclose(T[3], (0, 0, 0, 1))):
+            raise ValueError(f"T_world_base must be a rigid transform (rotation block orthonormal, det +1, last row "
+                             f"0 0 0 1), got\n{np.round(T, 6)}")
+        rpy = frames.matrix_rpy(R)
+        return dataclasses.replace(self, mount_pos=tuple(float(v) for v in T[:3, 3]),
+                                   mount_rpy=tuple(float(v) for v in rpy))
+
+    @staticmethod
+    def from_mapping(m: Mapping[str, Any]) -> "SceneSpec":
+        """Build from the scenario mapping (a plain dict, e.g. ``OmegaConf.to_container(cfg)``)."""
+        t = lambda x: tuple(float(v) for v in x)  # noqa: E731
+        objects = []
+        # Nodes: the given numbers, or by default the objects 1 … k and the bases k + 1 … in the
+        # file's order (the task graph's start is 0, its goal one past the last base).
+        auto = {str(x["name"]): i + 1 for i, x in enumerate([*m["objects"], *m["bases"]])}
+        node_of = lambda x: int(x["node"]) if x.get("node") is not None else auto[str(x["name"])]  # noqa: E731
+        names = {str(o["name"]): node_of(o) for o in m["objects"]}
+
+        def fits(b) -> tuple[int, ...]:  # objects by name or node number
+            unknown = [f for f in b["fits"] if isinstance(f, str) and f not in names]
+            if unknown:
+                raise ValueError(f"base {b.get('name')!r} fits unknown objects {unknown} (objects: {sorted(names)})")
+            return tuple(names[f] if isinstance(f, str) else int(f) for f in b["fits"])
+
+        for o in m["objects"]:
+            dims = {"box": lambda: o["size"], "cylinder": lambda: (o["radius"], o["height"]),
+                    "hex_prism": lambda: (o["edge"], o["height"])}
+            if o["shape"] not in dims:
+                raise ValueError(f"object {o.get('name')!r}: unknown shape {o['shape']!r}")
+            objects.append(Item(node_of(o), str(o["name"]), str(o["shape"]), t(dims[o["shape"]]()),
+                                str(o["table"]), t(o["at"]), float(o.get("yaw", 0.0))))
+        grasp = m.get("grasp", {})
+        cage = m.get("cage")
+        spec = SceneSpec(
+            cage_size=None if cage is None else t(cage["size"]),
+            profile=0.0 if cage is None else float(cage["profile"]),
+            ceiling_thickness=0.0 if cage is None else float(cage["ceiling_thickness"]),
+            mount_pos=t(m["arm"]["mount_pos"]),
+            mount_rpy=t(m["arm"]["mount_rpy"]),
+            mount_size=t(m["arm"]["mount_size"]),
+            jaws_open=float(m["arm"]["jaws_open"]),
+            tables=tuple(Box(str(b["name"]), t(b["pos"]), t(b["size"]), t(b.get("rpy", (0, 0, 0)))) for b in m["tables"]),
+            objects=tuple(objects),
+            bases=tuple(Base(node_of(b), str(b["name"]), t(b["size"]), str(b["table"]), t(b["at"]),
+                             float(b.get("yaw", 0.0)), fits(b)) for b in m["bases"]),
+            object_density=float(m["object_density"]),
+            water_density=float(m["water_density"]),
+            gravity=float(m["gravity"]),
+            start_q=None if m.get("start_q") is None else t(m["start_q"]),
+            grasp_standoff=float(grasp.get("standoff", 0.05)),
+            approach=float(grasp.get("approach", 0.08)),
+            obstacles=tuple(Obstacle.from_mapping(o) for o in m.get("obstacles", ()) or ()),
+        )
+        spec.validate()
+        return spec
+
+    def validate(self) -> None:
+        """Raise ValueError naming the problem for an inconsistent spec."""
+        tables = {b.name for b in self.tables}
+        names = [b.name for b in self.tables] + [o.name for o in self.obstacles]
+        reserved = {"ceiling", "mount", "cage"}
+        clash = sorted({n for n in names if names.count(n) > 1 or n in reserved or ":" in n
+                        or (n[:1] == "n" and n[1:].isdigit())})
+        if clash:
+            raise ValueError(f"table/obstacle names must be unique, without ':', not {sorted(reserved)} and not "
+                             f"'n<digits>' (node labels); got {clash}")
+        nodes = [o.node for o in self.objects] + [b.node for b in self.bases]
+        if len(set(nodes)) != len(nodes) or 0 in nodes:
+            raise ValueError(f"object/base node numbers must be unique and not 0, got {nodes}")
+        for x in (*self.objects, *self.bases):
+            if x.table not in tables:
+                raise ValueError(f"{x.name!r} stands on unknown table {x.table!r} (tables: {sorted(tables)})")
+        objs = {o.node for o in self.objects}
+        for b in self.bases:
+            if not b.fits or not set(b.fits) <= objs:
+                raise ValueError(f"base {b.name!r} fits unknown objects {b.fits} (objects: {sorted(objs)})")
+        if self.start_q is not None and not np.all(np.isfinite(self.start_q)):
+            raise ValueError(f"start_q must be finite joint values, got {self.start_q}")
+
+
+def box_vertices(size) -> np.ndarray:
+    h = np.asarray(size, dtype=float) / 2.0
+    return np.array([[sx * h[0], sy * h[1], sz * h[2]] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
+
+
+#: Keys of a scenario's ``arm`` mapping that place the arm in the scene; the others are the
+#: arm's own settings (:func:`uvms_jax.robot.robot_from_config`: ``card``, ``description``, …).
+MOUNT_KEYS = ("mount_pos", "mount_rpy", "mount_size", "jaws_open")
+
+
+def scenario_robot(scenario: Mapping[str, Any]) -> robots.Robot:
+    """The arm a scenario names: its ``arm`` mapping less the mount keys (:data:`MOUNT_KEYS`),
+    e.g. ``{card: NAME}`` (a shipped arm) or ``{description: my_arm.urdf, tip: tool0, link_radius: 0.05}``."""
+    arm = scenario.get("arm")
+    if not isinstance(arm, Mapping):
+        raise ValueError("the scenario needs an `arm` mapping: the arm (card or description) and its mount")
+    return robots.robot_from_config({k: v for k, v in arm.items() if k not in MOUNT_KEYS})
