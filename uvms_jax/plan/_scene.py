@@ -1,10 +1,10 @@
-"""The thesis's test cage as a MuJoCo model, generated from a scenario config (thesis 5.1),
-with any extra obstacles of the config (:class:`Obstacle`: box, cylinder, sphere, capsule,
-mesh file) and the arm's base at a pose given by the config or by code
-(:meth:`SceneSpec.with_base`, ``build_scene(..., T_world_base=...)``).
+"""A scene as a MuJoCo model: a scenario (:class:`~uvms_jax.plan.SceneSpec`, e.g. the thesis's
+test cage, thesis 5.1, with any extra obstacles) with the robot built into it by the robot's
+one MuJoCo builder, its base at a pose given by the config or by code
+(:meth:`SceneSpec.with_base`, ``build_scene(robot, spec, T_world_base=...)``).
 
-World frame: origin at the centre of the cage floor, z up; metres and radians. The arm hangs
-from the top of the cage (its base frame's z points down). Every box of the scene — tables,
+World frame: origin at the centre of the cage floor, z up; metres and radians. In the thesis's
+cage the arm hangs from the top (its base frame's z points down). Every box of the scene — tables,
 cage profiles, ceiling, base plates, cubes, and the arm's jaw fingers — is a convex *mesh*
 of 8 vertices, because MuJoCo's primitive capsule–box test misses a capsule whose axis runs
 right through a thin box (it reports a positive distance and no contact); cylinders and hexagonal prisms are convex meshes too.
