@@ -12,7 +12,7 @@ import yaml
 from uvms_jax.plan import (CollisionChecker, Context, SphereChecker, build_scene, densify, plan_motion, seed_ompl,
                            task_edges)
 from uvms_jax.plan._collision import BOUND_SLACK
-from uvms_jax.plan._spheres import _box_distance, _segment_distance, coarse_to_fine
+from uvms_jax.plan._sphere_kernels import _box_distance, _segment_distance, coarse_to_fine
 from uvms_jax.plan._tasks import _edge_set
 from uvms_jax.robot import load_arm  # noqa: E402
 
