@@ -93,6 +93,8 @@ class Scene:
       obstacle_geoms: label (object/base node or table name, "cage", "ceiling", "mount")
         → geom ids.
       T_obj_tool: ``(4, 4)`` grasp: the tool in the object frame.
+      derived: what the stages compute once from the built scene and keep with it (e.g. the
+        task graph's edges); a scene is not changed after it is built.
     """
 
     def __init__(self, spec: SceneSpec, robot: robots.Robot, self_collision_samples: int = 200):
@@ -135,6 +137,7 @@ class Scene:
             self.obstacle_geoms[key] = self.obstacle_geoms.get(key, ()) + (g,)
         self.T_obj_tool = np.linalg.inv(self.T_tool_obj_for(None))
         self.default_bits = (m.geom_contype.copy(), m.geom_conaffinity.copy())
+        self.derived: dict[str, Any] = {}
         self.start_q = np.asarray(spec.start_q if spec.start_q is not None else self._start_configuration(), float)
 
     def _start_configuration(self, clearance: float = SELF_COLLISION_MARGIN, per_ring: int = 64,

@@ -17,7 +17,6 @@ start positions as obstacles, except the one held or being grasped.
 from __future__ import annotations
 
 import dataclasses
-import weakref
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -72,17 +71,12 @@ def task_edges(scene: Scene) -> list[tuple[int, int]]:
     return [(int(i), int(j)) for i, j in np.argwhere(np.asarray(problem.rule)[:n, :n])]
 
 
-_EDGE_SETS: dict[int, tuple[weakref.ref, frozenset[tuple[int, int]]]] = {}
-
-
 def _edge_set(scene: Scene) -> frozenset[tuple[int, int]]:
-    """:func:`task_edges` of ``scene`` as a set, computed once per scene object (a scene is
-    not changed after it is built; the rules cost ~1 ms, as much as planning an edge)."""
-    hit = _EDGE_SETS.get(id(scene))
-    if hit is None or hit[0]() is not scene:
-        hit = (weakref.ref(scene, lambda _, key=id(scene): _EDGE_SETS.pop(key, None)), frozenset(task_edges(scene)))
-        _EDGE_SETS[id(scene)] = hit
-    return hit[1]
+    """:func:`task_edges` of ``scene`` as a set, computed once and kept by the scene (it is not
+    changed after it is built; the rules cost ~1 ms, as much as planning an edge)."""
+    if "task_edges" not in scene.derived:
+        scene.derived["task_edges"] = frozenset(task_edges(scene))
+    return scene.derived["task_edges"]
 
 
 def _q_at_node(scene: Scene, targets: Mapping[int, NodeTarget], node: int) -> np.ndarray:
