@@ -122,5 +122,6 @@ def test_cli_base_rpy_reaches_the_simulated_arm(plan_file, tmp_path, monkeypatch
     hanging_plan.write_text(json.dumps({**plan_to_dict(short_plan()), "base_rpy": list(HANGING)}))
     seen.clear()
     for flags, want in (([], HANGING), (["--base-rpy", "0", "0.2", "0"], (0.0, 0.2, 0.0))):
-        assert cli.main(["run", str(hanging_plan), "--sim", *flags, "--no-plot", "--out", str(tmp_path / "o")]) == 0
+        assert cli.main(["run", str(hanging_plan), "--sim", *flags, "--no-plot", "--overwrite",
+                        "--out", str(tmp_path / "o")]) == 0
         assert seen[-1].base_rpy == tuple(want)

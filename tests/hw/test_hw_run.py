@@ -13,7 +13,7 @@ from uvms_jax import bravo7
 from uvms_jax.hw import (HwConfig, HwRun, PlanError, SimArm, SimConfig, SimServer,
                          UdpTransport, plan_to_dict, parse_plan, run_plan, run_report, sim_spec, write_run)
 
-REPORT_KEYS = {"ok", "reason", "gates", "max_gate_error_rad", "max_gate_error_mm", "grips", "duration_s",
+REPORT_KEYS = {"ok", "status", "reason", "gates", "max_gate_error_rad", "max_gate_error_mm", "grips", "duration_s",
                "abort_after_s", "ticks", "link_timeouts", "rejected_states", "wall_s", "link"}
 
 

@@ -66,6 +66,7 @@ from ._config import config_from_mapping
 from ._executor import AbortRun
 from ._executor import Executor
 from ._executor import GateRecord
+from ._executor import RunInterrupted
 from ._executor import RunResult
 from ._ids import BASE_COMPUTER
 from ._ids import BASE_ROUTER
@@ -79,9 +80,11 @@ from ._joints import device_ids
 from ._joints import joint_specs
 from ._joints import wire_position
 from ._joints import wire_velocity
+from ._run import RUN_FILES
 from ._run import SIM_LINKS
 from ._run import HwRun
 from ._run import SimCounts
+from ._run import prepare_out
 from ._run import run_plan
 from ._run import run_report
 from ._run import write_run
@@ -105,6 +108,7 @@ __all__ = [
     "BROADCAST",
     "CRC8_CONFIG",
     "MAX_PACKET_LEN",
+    "RUN_FILES",
     "SIM_LINKS",
     "AbortRun",
     "AnswerFormat",
@@ -130,6 +134,7 @@ __all__ = [
     "ReachArm",
     "ReaderStats",
     "RunLog",
+    "RunInterrupted",
     "RunResult",
     "Segment",
     "SerialTransport",
@@ -157,6 +162,7 @@ __all__ = [
     "parse_host_port",
     "parse_plan",
     "plan_to_dict",
+    "prepare_out",
     "run_plan",
     "run_report",
     "sim_spec",

@@ -40,11 +40,27 @@ from ._joints import LimitError
 from ._runlog import RunLog
 from ._transport import LinkError
 
-__all__ = ["AbortRun", "Executor", "GateRecord", "RunResult"]
+__all__ = ["AbortRun", "Executor", "GateRecord", "RunInterrupted", "RunResult"]
+
+INTERRUPTED = "interrupted (SIGINT): the arm was told to hold"  # RunResult.reason of an interrupted run
 
 
 class AbortRun(RuntimeError):
     """The run was stopped for safety; the arm was told to hold."""
+
+
+class RunInterrupted(KeyboardInterrupt):
+    """The run was interrupted (Ctrl-C, SIGINT); the arm was told to hold.
+
+    A :class:`KeyboardInterrupt`, so a caller that does not look for it still stops, with the
+    partial outcome attached: ``result`` (:class:`RunResult`, ``interrupted=True``) and, from
+    :func:`~uvms_jax.hw.run_plan`, ``run`` (the :class:`~uvms_jax.hw.HwRun` to write).
+    """
+
+    def __init__(self, result: RunResult) -> None:
+        super().__init__(result.reason)
+        self.result = result
+        self.run = None
 
 
 @dataclasses.dataclass(frozen=True)
@@ -84,6 +100,7 @@ class RunResult:
       summary: the dry-run summary.
       rejected_states: received states skipped as implausible (a jump no joint can make:
         a corrupted frame that passed the CRC).
+      interrupted: the run was stopped by SIGINT (Ctrl-C), not by a fault; ``ok`` is False.
     """
 
     ok: bool
@@ -96,6 +113,7 @@ class RunResult:
     abort_after_s: float
     summary: PlanSummary
     rejected_states: int = 0
+    interrupted: bool = False
 
     @property
     def max_gate_error_mm(self) -> float:
@@ -196,15 +214,23 @@ class Executor:
             self.client.hold()
             ok, reason = False, f"{type(e).__name__}: {e}"
             after = self.clock() - self._move_start
+        except KeyboardInterrupt:  # Ctrl-C: hold, then stop with what was done so far
+            self.client.hold()  # the stream is stopped below, as for every end
+            raise RunInterrupted(self._result(False, INTERRUPTED, gates, t0, self.clock() - self._move_start,
+                                              summary, interrupted=True)) from None
         except BaseException:
             self.client.hold()
             raise
         finally:
             if self.config.stream_hz:
                 self.client.stop_stream()
+        return self._result(ok, reason, gates, t0, after, summary)
+
+    def _result(self, ok: bool, reason: str, gates: list[GateRecord], t0: float, after: float,
+                summary: PlanSummary, interrupted: bool = False) -> RunResult:
         errs = [g.error_rad for g in gates]
-        return RunResult(ok, reason, tuple(gates), max(errs) if errs else math.nan,
-                         self.clock() - t0, self._ticks, self._timeouts, after, summary, self._rejected)
+        return RunResult(ok, reason, tuple(gates), max(errs) if errs else math.nan, self.clock() - t0,
+                         self._ticks, self._timeouts, after, summary, self._rejected, interrupted)
 
     # -- steps -----------------------------------------------------------------------------
     def _connect(self, plan: Plan) -> None:

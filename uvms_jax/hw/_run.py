@@ -15,19 +15,24 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
+from uvms_jax.files import RUNNING, clear_running, mark_running, write_atomic
 from uvms_jax.planfile import Plan
 
 from ._check import PlanSummary, check_arm, check_plan
 from ._client import ReachArm
 from ._config import HwConfig, SimConfig
-from ._executor import Executor, RunResult
+from ._executor import Executor, RunInterrupted, RunResult
 from ._joints import joint_specs
 from ._runlog import RunLog
 from ._sim import SimArm
 from ._sim_link import LoopbackTransport, SimLink, SimServer, VirtualClock
 from ._transport import UdpTransport
 
-__all__ = ["SIM_LINKS", "HwRun", "SimCounts", "run_plan", "run_report", "write_run"]
+__all__ = ["RUN_FILES", "SIM_LINKS", "HwRun", "SimCounts", "existing_run_files", "prepare_out", "run_plan",
+           "run_report", "write_run"]
+
+# What a run writes into its folder (and the marker it carries while it runs).
+RUN_FILES = ("result.json", "run.csv", "run.png", RUNNING)
 
 # Simulated links by name: the arm in-process on a virtual clock (a run costs only its
 # computation), or behind a UDP socket on 127.0.0.1 in real time (the real arm's code path).
@@ -42,11 +47,14 @@ class SimCounts:
       limit_violations: demands outside the limits the device received (and ignored).
       dropped: datagrams lost by fault injection (both directions).
       corrupted: replies with a byte changed by fault injection.
+      overflowed: replies dropped because the link's bounded queue was full (the oldest go
+        first, as on a flooded device; ``QUEUE_LIMIT``).
     """
 
     limit_violations: int
     dropped: int
     corrupted: int
+    overflowed: int = 0
 
 
 @dataclasses.dataclass(frozen=True)
@@ -60,6 +68,8 @@ class HwRun:
         ``"udp 192.168.2.3:6789"`` or ``"serial /dev/ttyUSB0"``.
       wall_s: wall-clock time of the run, simulator start-up included [s].
       sim: the simulated arm's counters (None on a real arm).
+      status: ``"completed"``, ``"aborted"`` (stopped for safety) or ``"interrupted"``
+        (SIGINT); the last two held the arm.
     """
 
     result: RunResult
@@ -72,6 +82,13 @@ class HwRun:
     def ok(self) -> bool:
         """Every segment completed."""
         return self.result.ok
+
+    @property
+    def status(self) -> str:
+        """``"completed"``, ``"aborted"`` or ``"interrupted"``."""
+        if self.result.interrupted:
+            return "interrupted"
+        return "completed" if self.result.ok else "aborted"
 
     @property
     def check(self) -> PlanSummary:
@@ -110,6 +127,9 @@ def run_plan(
       not an exception.
 
     Raises:
+      RunInterrupted: SIGINT (Ctrl-C) arrived while the plan ran: the arm was told to hold,
+        the simulator (if any) stopped; the exception's ``run`` is the partial
+        :class:`HwRun` (``status == "interrupted"``) to write. It is a KeyboardInterrupt.
       PlanError: the plan was made for another arm (one line naming both), or the dry run
         refused it; nothing was started or sent.
       ValueError: ``link`` is neither a simulated link name nor a client, a client of another
@@ -129,12 +149,25 @@ def run_plan(
     log = RunLog(tuple(j.name for j in specs))
     t0 = time.perf_counter()
     if isinstance(link, ReachArm):
-        result = Executor(link, config, log=log, progress=progress).run(plan)
+        try:
+            result = Executor(link, config, log=log, progress=progress).run(plan)
+        except RunInterrupted as e:
+            e.run = HwRun(e.result, log, _link_name(link), time.perf_counter() - t0)
+            raise
         return HwRun(result, log, _link_name(link), time.perf_counter() - t0)
+    interrupted = None
     with _simulated(link, plan, robot, config, sim) as (client, sleep, sim_link):
-        result = Executor(client, config, sleep=sleep, log=log, progress=progress).run(plan)
-    counts = SimCounts(sim_link.arm.limit_violations, sim_link.dropped, sim_link.corrupted)
-    return HwRun(result, log, link, time.perf_counter() - t0, counts)
+        try:
+            result = Executor(client, config, sleep=sleep, log=log, progress=progress).run(plan)
+        except RunInterrupted as e:  # the simulator stops first (leaving the with), then it is raised
+            interrupted, result = e, e.result
+    counts = SimCounts(sim_link.arm.limit_violations, sim_link.dropped, sim_link.corrupted,
+                       sim_link.overflowed)
+    run = HwRun(result, log, link, time.perf_counter() - t0, counts)
+    if interrupted is not None:
+        interrupted.run = run
+        raise interrupted
+    return run
 
 
 @contextlib.contextmanager
@@ -169,15 +202,17 @@ def _finite(value: float, digits: int | None = None) -> float | None:
 def run_report(run: HwRun, out: Path | str | None = None, plan_path: Path | str | None = None) -> dict[str, Any]:
     """``result.json``'s content: the run's key figures, plain JSON values.
 
-    Keys: ``ok``, ``reason``, ``gates``, ``max_gate_error_rad`` [rad], ``max_gate_error_mm`` [mm]
+    Keys: ``ok``, ``status`` (``completed``, ``aborted`` or ``interrupted``: :attr:`HwRun.status`),
+    ``reason``, ``gates``, ``max_gate_error_rad`` [rad], ``max_gate_error_mm`` [mm]
     (None without gates), ``grips``, ``duration_s`` (on the link's clock, virtual for
     ``loopback``) [s], ``abort_after_s`` [s] (None if ok), ``ticks``, ``link_timeouts``,
     ``rejected_states`` (implausible states skipped), ``wall_s`` [s], ``link``, then ``plan`` and ``out`` (paths, when given) and, on a simulated
-    arm, ``sim``: ``{limit_violations, dropped, corrupted}``.
+    arm, ``sim``: ``{limit_violations, dropped, corrupted, overflowed}``.
     """
     r = run.result
     report: dict[str, Any] = {
         "ok": r.ok,
+        "status": run.status,
         "reason": r.reason,
         "gates": len(r.gates),
         "max_gate_error_rad": _finite(r.max_gate_error_rad),
@@ -200,15 +235,45 @@ def run_report(run: HwRun, out: Path | str | None = None, plan_path: Path | str 
     return report
 
 
+def existing_run_files(out: Path | str) -> list[str]:
+    """The names of :data:`RUN_FILES` that folder ``out`` holds ([] for a fresh or missing folder)."""
+    return [name for name in RUN_FILES if (Path(out) / name).exists()]
+
+
+def prepare_out(out: Path | str, *, overwrite: bool = False) -> Path:
+    """Make ``out`` the folder of a run about to start: created, refused if it already holds a
+    run's files (:data:`RUN_FILES`: results, or the marker of a run that did not end) unless
+    ``overwrite`` (then those files are removed), and marked :data:`~uvms_jax.files.RUNNING`
+    until :func:`write_run` writes the results.
+
+    Raises:
+      FileExistsError: ``out`` holds a run's files and ``overwrite`` is off (one line naming them).
+    """
+    out = Path(out)
+    found = existing_run_files(out)
+    if found and not overwrite:
+        raise FileExistsError(f"{out} already holds a run ({', '.join(found)}): choose another --out "
+                              "or pass --overwrite")
+    out.mkdir(parents=True, exist_ok=True)
+    for name in found:
+        (out / name).unlink()
+    mark_running(out)
+    return out
+
+
 def write_run(run: HwRun, out: Path | str, *, plot: bool = True,
               plan_path: Path | str | None = None) -> dict[str, Any]:
-    """Write ``run.csv`` (every tick), ``run.png`` (if ``plot`` and anything was logged) and
-    ``result.json`` (:func:`run_report`) into ``out`` (created); returns the report."""
+    """Write ``run.csv`` (every tick), ``result.json`` (:func:`run_report`) and ``run.png``
+    (if ``plot`` and anything was logged) into ``out`` (created), each atomically (a temporary
+    file renamed over it), then remove the folder's :data:`~uvms_jax.files.RUNNING` marker;
+    returns the report. The plot comes last: a run interrupted again while plotting has its
+    results written already."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     run.log.write_csv(out / "run.csv")
+    report = run_report(run, out, plan_path)
+    write_atomic(out / "result.json", json.dumps(report, indent=2) + "\n")
+    clear_running(out)
     if plot and run.log.rows:
         run.log.plot(out / "run.png")
-    report = run_report(run, out, plan_path)
-    (out / "result.json").write_text(json.dumps(report, indent=2))
     return report

@@ -8,6 +8,7 @@ import math
 from collections.abc import Sequence
 from pathlib import Path
 
+from uvms_jax.files import atomic_path
 from uvms_jax.plotting import pyplot
 
 __all__ = ["RunLog"]
@@ -36,10 +37,10 @@ class RunLog:
                 + [f"meas_{n}" for n in self.joint_names])
 
     def write_csv(self, path: str | Path) -> Path:
-        """Write the log to ``path`` (parent folders created)."""
+        """Write the log to ``path`` (parent folders created), atomically: a run stopped while
+        writing leaves the previous file or none, never a truncated one."""
         path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        with path.open("w", newline="") as f:
+        with atomic_path(path) as tmp, tmp.open("w", newline="") as f:
             w = csv.writer(f)
             w.writerow(self.header())
             w.writerows(self.rows)
@@ -63,6 +64,7 @@ class RunLog:
         fig.suptitle(title)
         # one legend for all panels, above them: never over the data
         fig.legend(*axes[0, 0].get_legend_handles_labels(), loc="outside upper right", ncols=2, fontsize=8)
-        fig.savefig(path, dpi=100)
+        with atomic_path(path) as tmp:
+            fig.savefig(tmp, dpi=100, format="png")
         plt.close(fig)
         return path

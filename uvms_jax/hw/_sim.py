@@ -9,7 +9,10 @@ simulated weightless (gravity compensated, no buoyancy): servoed kinematically.
 The device firmware is modelled as a servo that turns the demand into a joint speed every
 physics step — POSITION mode ``v = clip(gain·(q* - q), ±v_max)``, VELOCITY mode
 ``v = clip(v*, ±v_max)``, other modes ``v = 0`` — tracked by a MuJoCo velocity actuator plus an
-integral of the speed error (a second, torque actuator) that carries the load.
+integral of the speed error (a second, torque actuator) that carries the load. As the real
+controller, it keeps the position limits: a demand towards a limit is cut to
+``gain·(limit - q)`` (the joint slows and stops there), and a joint the drive's lag carries past
+a limit is stopped on it (MuJoCo's own limits are soft).
 
 The devices answer every request of the protocol listing (docs/hardware.md §1), each answer
 in its own datagram. :class:`SimArm` is the device: physics, modes, demands, BPL request
@@ -97,6 +100,10 @@ class SimArm:
         self._iact = np.array([self.model.actuator(f"i_{n}").id for n in names])
         self._scale = np.array([_MM if j.unit == "mm" else 1.0 for j in self.joints])  # wire → MuJoCo
         self._vmax = np.array([j.max_velocity for j in self.joints])
+        # Position limits, wire units and MuJoCo units: the firmware's limit stop.
+        self._lower = np.array([j.lower for j in self.joints])
+        self._upper = np.array([j.upper for j in self.joints])
+        self._lower_mj, self._upper_mj = self._lower * self._scale, self._upper * self._scale
         self._index = {j.device_id: i for i, j in enumerate(self.joints)}
         if q0 is None:
             q0 = [j.lower if j.unit == "mm" else 0.5 * (j.lower + j.upper) for j in self.joints]
@@ -200,9 +207,14 @@ class SimArm:
         held = np.where(self.mode == int(Mode.VELOCITY), self.vel_target, 0.0)
         gain, vmax, lo, hi = self.config.servo_gain, self._vmax, -self._max_integral, self._max_integral
         act, iact, integral = self._act, self._iact, self._integral
+        lower, upper, lower_mj, upper_mj = self._lower, self._upper, self._lower_mj, self._upper_mj
         steps = int(math.floor((t - d.time) / dt + 0.5))
         for _ in range(steps):
-            v = np.where(position, gain * (self.target - qpos[q_idx] / scale), held)
+            q = qpos[q_idx] / scale
+            v = np.where(position, gain * (self.target - q), held)
+            # the limit stop: no demand drives a joint on past its limit (a velocity demand
+            # slows as the position loop would, to stop there)
+            np.clip(v, gain * (lower - q), gain * (upper - q), out=v)
             np.clip(v, -vmax, vmax, out=v)
             if self.stuck >= 0:
                 v[self.stuck] = 0.0
@@ -215,6 +227,12 @@ class SimArm:
             ctrl[iact] = _KI * integral
             self._apply_buoyancy()
             self._mj.mj_step(self.model, d)
+            # what the drive's lag still carries past a limit (MuJoCo's limits are soft) stops there
+            qn = qpos[q_idx]
+            if np.any(qn > upper_mj) or np.any(qn < lower_mj):
+                past = np.flatnonzero((qn > upper_mj) | (qn < lower_mj))
+                qpos[q_idx[past]] = np.clip(qn[past], lower_mj[past], upper_mj[past])
+                qvel[d_idx[past]] = 0.0
             if self.stuck >= 0:
                 qpos[q_idx[self.stuck]] = self._stuck_q[self.stuck]
                 qvel[d_idx[self.stuck]] = 0.0

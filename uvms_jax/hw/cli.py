@@ -15,8 +15,12 @@ another arm is refused (exit 2).
 PLAN is a ``plan.json`` or a ``trajectory_msgs/JointTrajectory``-shaped file, YAML or JSON by
 its suffix (:mod:`uvms_jax.planfile`); ``export`` writes a plan as the latter.
 Exit status: 0 plan completed (or dry run passed, or exported); 1 run aborted safely (arm told
-to hold); 2 plan refused or bad arguments. Outputs in ``--out`` (default ``outputs/hw/<time>``):
-``run.csv`` (commanded vs measured), ``run.png`` and ``result.json``.
+to hold); 2 plan refused or bad arguments; 130 interrupted (Ctrl-C, SIGINT: the arm told to hold,
+the partial results written, ``result.json`` ``"status": "interrupted"``). Outputs in ``--out``
+(default ``outputs/hw/<time>``; a folder that already holds a run is refused unless
+``--overwrite``): ``run.csv`` (commanded vs measured), ``result.json`` and ``run.png``, each
+written atomically; the folder carries a ``RUNNING`` marker until they are written, so a run
+killed outright (SIGKILL) is recognisable.
 Defaults come from :class:`~uvms_jax.hw.HwConfig` / ``SimConfig`` (or ``--config``, a YAML
 file shaped like ``configs/hw/default.yaml``); flags override them. ``run`` is
 :func:`~uvms_jax.hw.run_plan` + :func:`~uvms_jax.hw.write_run`, as in the pipeline.
@@ -33,12 +37,14 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from uvms_jax import __version__, progress
+from uvms_jax.files import clear_running, write_atomic
 from uvms_jax.planfile import PlanError, load_plan, save_plan
 
 from ._check import check_plan
 from ._client import ReachArm
 from ._config import HwConfig, SimConfig, config_from_mapping
-from ._run import run_plan, write_run
+from ._executor import RunInterrupted
+from ._run import HwRun, existing_run_files, prepare_out, run_plan, write_run
 from ._joints import joint_specs
 from ._sim import SimArm
 from ._sim_link import SimServer
@@ -46,13 +52,14 @@ from ._transport import LinkError, SerialTransport, Transport, UdpTransport, par
 
 __all__ = ["build_parser", "main"]
 
-EXIT_OK, EXIT_ABORTED, EXIT_REFUSED = 0, 1, 2
+EXIT_OK, EXIT_ABORTED, EXIT_REFUSED, EXIT_INTERRUPTED = 0, 1, 2, 130  # 130 = 128 + SIGINT, as shells report it
 DEFAULT_ROBOT = "bravo7"  # the arm card used when --robot is not given
 
 _EPILOG = """exit status:
   0  plan completed, dry run passed or plan exported
   1  run aborted safely (the arm was told to hold)
-  2  plan refused or bad arguments"""
+  2  plan refused or bad arguments
+  130  interrupted (Ctrl-C): the arm was told to hold, partial results written"""
 
 
 class _HelpFormatter(argparse.ArgumentDefaultsHelpFormatter, argparse.RawDescriptionHelpFormatter):
@@ -135,6 +142,8 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--dry-run", action="store_true", help="only check the plan; send nothing")
     r.add_argument("--config", type=Path, help="YAML with executor/sim sections (configs/hw/default.yaml)")
     r.add_argument("--out", type=Path, help="output folder (default: outputs/hw/<time>)")
+    r.add_argument("--overwrite", action="store_true",
+                   help="replace the results of an earlier run in --out (default: refuse such a folder)")
     r.add_argument("--rate", type=float, help=f"streaming rate [Hz] {_hw_default('rate_hz')}")
     r.add_argument("--threshold", type=float,
                    help=f"reached-gate threshold [rad] {_hw_default('gate_threshold_rad')}")
@@ -203,7 +212,17 @@ def _load_robot(name: str):
     return load_arm(name)
 
 
+def _refuse_out(out: Path | None, overwrite: bool) -> str | None:
+    """The one-line refusal of ``--out`` when it holds a run and ``--overwrite`` is off."""
+    found = existing_run_files(out) if out is not None and not overwrite else []
+    return f"{out} already holds a run ({', '.join(found)}): choose another --out or pass --overwrite" if found \
+        else None
+
+
 def _run(args: argparse.Namespace) -> int:
+    if not args.dry_run and (refusal := _refuse_out(args.out, args.overwrite)):
+        print(f"uvms-hw: {refusal}", file=sys.stderr)  # before anything is loaded or checked
+        return EXIT_REFUSED
     hw, sim_cfg = _configs(args)
     robot = _load_robot(args.robot)
     try:
@@ -232,10 +251,17 @@ def _run(args: argparse.Namespace) -> int:
         if robot.hardware is None:
             print(f"uvms-hw: robot {robot.name!r} has no hardware profile (device ids): use --sim", file=sys.stderr)
             return EXIT_REFUSED
+    try:
+        prepare_out(out, overwrite=args.overwrite)
+    except FileExistsError as e:
+        print(f"uvms-hw: {e}", file=sys.stderr)
+        return EXIT_REFUSED
+    if not args.sim:
         try:
             client = ReachArm(_real_transport(args), joint_specs(robot), request_timeout=hw.request_timeout_s)
         except (LinkError, ValueError) as e:
             print(f"uvms-hw: {e}", file=sys.stderr)
+            clear_running(out)  # nothing ran
             return EXIT_REFUSED
     try:
         with progress.bar(total=len(plan.segments), desc="run", unit="seg") as bar:
@@ -243,6 +269,10 @@ def _run(args: argparse.Namespace) -> int:
                            progress=lambda i, n, name: bar.update(i - bar.n))  # i: segments finished
             if run.ok:
                 bar.update(bar.total - bar.n)
+    except RunInterrupted as e:  # the arm was told to hold; write what was done
+        return _interrupted(e.run, out, args)
+    except KeyboardInterrupt:  # before the executor started (the simulator starting): nothing sent
+        return _interrupted(None, out, args)
     finally:
         if client is not None:
             client.close()
@@ -251,6 +281,20 @@ def _run(args: argparse.Namespace) -> int:
     if not run.ok:
         print(f"uvms-hw: aborted, arm told to hold: {run.result.reason}", file=sys.stderr)
     return EXIT_OK if run.ok else EXIT_ABORTED
+
+
+def _interrupted(run: HwRun | None, out: Path, args: argparse.Namespace) -> int:
+    """Write an interrupted run's partial results (no plot: Ctrl-C asks for a quick end)."""
+    if run is not None:
+        report = write_run(run, out, plot=False, plan_path=args.plan)
+        print(json.dumps(report))
+    else:
+        write_atomic(out / "result.json", json.dumps(
+            {"ok": False, "status": "interrupted", "reason": "interrupted (SIGINT) before the run started: "
+             "nothing was sent", "plan": str(args.plan), "out": str(out)}, indent=2) + "\n")
+        clear_running(out)
+    print(f"uvms-hw: interrupted, arm told to hold; partial results in {out}", file=sys.stderr)
+    return EXIT_INTERRUPTED
 
 
 def _export(args: argparse.Namespace) -> int:
@@ -291,6 +335,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (ValueError, OSError) as e:  # bad config values, unreadable files
         print(f"uvms-hw: {e}", file=sys.stderr)
         return EXIT_REFUSED
+    except KeyboardInterrupt:  # before the arm was driven (loading, checking) or while writing
+        print("uvms-hw: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
 
 
 if __name__ == "__main__":

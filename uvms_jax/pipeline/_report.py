@@ -13,6 +13,8 @@ from typing import Any
 
 import jax
 
+from uvms_jax.files import write_atomic
+
 __all__ = ["StageReport", "md_table", "write_summary"]
 
 
@@ -81,6 +83,4 @@ def write_summary(out: Path, reports: Sequence[StageReport], total_s: float, con
             lines += ["Figures: " + " · ".join(f"[{p.relative_to(out)}]({p.relative_to(out)})" for p in pngs), ""]
             lines += [f"![{p.stem}]({p.relative_to(out)})" for p in pngs[:4]] + [""]
     lines += ["## Config", "", "```yaml", config_yaml.rstrip(), "```", ""]
-    path = out / "summary.md"
-    path.write_text("\n".join(lines))
-    return path
+    return write_atomic(out / "summary.md", "\n".join(lines))

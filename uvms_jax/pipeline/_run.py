@@ -11,6 +11,7 @@ import jax
 
 from uvms_jax import plan as planning
 from uvms_jax import progress
+from uvms_jax.files import RUNNING, clear_running, mark_running, write_atomic
 from uvms_jax.pipeline._report import write_summary
 from uvms_jax.pipeline._settings import STAGES, PipelineSettings
 from uvms_jax.pipeline._stages import STAGE_FNS, Flow, chain
@@ -25,13 +26,41 @@ def run_pipeline(settings: PipelineSettings, out: Path, config_text: str = "") -
     Each stage calls its package's stage function and writer; results pass from stage to stage
     in memory (planning metrics → cost matrix, the winning schedule → its plan → execution).
 
+    The folder carries a ``RUNNING`` marker (:data:`uvms_jax.files.RUNNING`) from the start
+    until results.json and summary.md are written (each atomically), so a killed run is
+    recognisable: it has the marker and no results.json (a results.json or summary.md left in
+    ``out`` by an earlier run is removed at the start). A run stopped by an exception or
+    Ctrl-C keeps the marker too, rewritten to say so: ``status`` (``interrupted`` or
+    ``failed``), the stage it stopped in, the error, and the finished stages' results (their
+    folders keep what they wrote); results.json is never written for it, so nothing reads a
+    partial run as a finished one.
+
     Args:
       settings: every stage's settings.
       out: the run directory.
       config_text: the config as YAML, copied into summary.md.
     """
     out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
+    mark_running(out)
+    # A folder used before: its results are not this run's, and must not stand for it if this
+    # run stops early (it writes them anew at the end).
+    for name in ("results.json", "summary.md"):
+        (out / name).unlink(missing_ok=True)
+    done: dict = {}
+    try:
+        results = _run_stages(settings, out, config_text, done)
+    except BaseException as e:
+        status = "interrupted" if isinstance(e, KeyboardInterrupt) else "failed"
+        stage = next((s for s in STAGES if s in settings.stages and s not in done), None)
+        mark_running(out, status=status, stage=stage, error=f"{type(e).__name__}: {e}", finished=done)
+        log.error("pipeline %s in stage %s; partial run in %s (marker %s)", status, stage, out, RUNNING)
+        raise
+    clear_running(out)
+    return results
+
+
+def _run_stages(settings: PipelineSettings, out: Path, config_text: str, done: dict) -> dict:
+    """:func:`run_pipeline`'s work; ``done`` collects each finished stage's results."""
     order = [s for s in STAGES if s in settings.stages]
     log.info("pipeline stages %s into %s; devices %s", order, out, jax.devices())
     # One arm for every stage: the scenario's (planning.scenario_robot).
@@ -47,12 +76,13 @@ def run_pipeline(settings: PipelineSettings, out: Path, config_text: str = "") -
         report.seconds, report.cpu_seconds = time.perf_counter() - t0, time.process_time() - c0
         reports.append(report)
         flow.reports[name] = report
+        done[name] = report.results
         log.info("== stage %s done in %.1f s: %s", name, report.seconds, report.results)
     total = time.perf_counter() - t_start
     results = {"total_seconds": total, "stage_seconds": {r.name: r.seconds for r in reports},
                "stage_cpu_seconds": {r.name: r.cpu_seconds for r in reports},
                "arm": None if robot is None else robot.record(), **{r.name: r.results for r in reports}}
-    (out / "results.json").write_text(json.dumps(results, indent=1, default=str))
+    write_atomic(out / "results.json", json.dumps(results, indent=1, default=str))
     summary = write_summary(out, reports, total, config_text, chain(flow, out))
     log.info("pipeline done in %.1f s; summary: %s", total, summary)
     return results
