@@ -2,13 +2,17 @@
 probing, and a ``--help`` that lists the experiment's own config groups.
 
 An experiment reads its config inside ``with _cli.config_errors():`` and ends with
-``_cli.run(main)`` instead of ``main()``. A configuration error — a value of the wrong type
-(``uvms_jax.settings.SettingsError``), an unknown key or group option, an override that cannot
-be parsed, a missing ``???`` value — then prints one line naming the key and exits with status
-2, without a traceback::
+``_cli.run(main)`` instead of ``main()``. A configuration error — a value of the wrong type or
+outside its allowed values, a file that does not exist (``uvms_jax.settings.SettingsError``,
+raised while the settings are built, before any stage runs), an unknown key or group option, an
+override that cannot be parsed, a missing ``???`` value — then prints one line naming the key
+(every bad key of the settings) and its allowed values, and exits with status 2, without a
+traceback::
 
     $ python experiments/schedule.py sched.grasp.iterations=abc
     error: sched.grasp.iterations: expected an integer, got 'abc'
+    $ python experiments/docking.py ga.mutation_rate=2.0 n_runs=-1
+    error: ga.mutation_rate: expected a value in [0, 1], got 2.0; n_runs: expected a value >= 1, got -1
 
 Any other exception keeps its full traceback; ``HYDRA_FULL_ERROR=1`` shows it for
 configuration errors too. Importing this module (the scripts' folder is on ``sys.path``) also

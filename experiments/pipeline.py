@@ -35,10 +35,15 @@ import jax  # noqa: E402
 from hydra.core.hydra_config import HydraConfig  # noqa: E402
 from omegaconf import DictConfig, OmegaConf  # noqa: E402
 
+from uvms_jax import evo  # noqa: E402
 from uvms_jax.pipeline import PipelineSettings, run_pipeline  # noqa: E402
-from uvms_jax.settings import from_mapping  # noqa: E402
+from uvms_jax.settings import SettingsError, check_keys, from_mapping  # noqa: E402
 
 EXAMPLE_PLAN = Path(__file__).resolve().parents[1] / "examples" / "thesis_plan.json"
+# The keys of configs/pipeline.yaml (anything else, e.g. a `+foo=1` override, is an error), and
+# of its sections that are not settings dataclasses themselves.
+KEYS = ("seed", "stages", "reach", "ga", "docking", "docking_fitness", "scenario", "baseline", "plan", "sched", "hw")
+SECTION_KEYS = {"docking": ("overrides",), "sched": ("planner", "overrides", "weights")}
 
 
 def _stage_config(name: str, overrides, **merge) -> dict:
@@ -50,8 +55,17 @@ def _stage_config(name: str, overrides, **merge) -> dict:
 
 
 def settings_of(cfg: DictConfig) -> PipelineSettings:
-    """Typed settings of the composed pipeline config (call inside a Hydra context)."""
+    """Typed settings of the composed pipeline config (call inside a Hydra context): every
+    stage's settings are checked here, before any stage runs, whichever stages run.
+
+    Raises:
+      SettingsError: an unknown key, or values out of range (every one, named by its key path
+        as this config writes it, e.g. ``ga.mutation_rate``).
+    """
     c = OmegaConf.to_container(cfg, resolve=True)
+    check_keys(c, KEYS)
+    for section, keys in SECTION_KEYS.items():
+        check_keys(c[section], keys, section)
     stages = c["stages"]
     sched_overrides = list(c["sched"]["overrides"])
     if "plan" in stages:  # the planning stage's metrics become the cost matrix (the compat: its scene's)
@@ -65,10 +79,22 @@ def settings_of(cfg: DictConfig) -> PipelineSettings:
         hw_stage["plan"] = str(EXAMPLE_PLAN)
     docking = _stage_config("docking", c["docking"]["overrides"], ga=c["ga"], seed=c["seed"])
     docking.pop("scenario", None)  # the pipeline's own scenario is the task
-    return from_mapping(PipelineSettings, {
-        "seed": c["seed"], "stages": stages, "reach": c["reach"], "docking": docking,
-        "docking_fitness": c["docking_fitness"], "scenario": c["scenario"], "baseline": c.get("baseline"),
-        "plan": c["plan"], "sched": schedule, "sched_planner": c["sched"]["planner"], "hw": hw_stage})
+    errors = []
+    try:  # this config's own `ga` section, named as it writes it (not docking.ga)
+        docking["ga"] = from_mapping(evo.GASettings, docking["ga"], "ga")
+    except SettingsError as e:
+        errors.append(str(e))
+        docking["ga"] = evo.GASettings()  # the other sections are still checked
+    try:
+        settings = from_mapping(PipelineSettings, {
+            "seed": c["seed"], "stages": stages, "reach": c["reach"], "docking": docking,
+            "docking_fitness": c["docking_fitness"], "scenario": c["scenario"], "baseline": c.get("baseline"),
+            "plan": c["plan"], "sched": schedule, "sched_planner": c["sched"]["planner"], "hw": hw_stage})
+    except SettingsError as e:
+        errors.append(str(e))
+    if errors:
+        raise SettingsError("; ".join(errors))
+    return settings
 
 
 @hydra.main(version_base="1.3", config_path="../configs", config_name="pipeline")

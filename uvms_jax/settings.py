@@ -11,23 +11,142 @@ never sees a ``DictConfig``.
 ...     chunk_size: int = 1024
 >>> from_mapping(Grid, {"counts": [4, 5]})
 Grid(counts=(4, 5), chunk_size=1024)
+
+A field declared with :func:`setting` carries its allowed values (a range, a list of choices,
+an existing file); :func:`from_mapping` checks them and names the key path as the config writes
+it, every bad key of a mapping in one message:
+
+>>> @dataclasses.dataclass(frozen=True)
+... class GA:
+...     mutation_rate: float = setting(0.08, ge=0, le=1)
+...     population_size: int = setting(60, ge=1)
+>>> from_mapping(GA, {"mutation_rate": 2.0, "population_size": -8}, "ga")
+Traceback (most recent call last):
+...
+uvms_jax.settings.SettingsError: ga.mutation_rate: expected a value in [0, 1], got 2.0; \
+ga.population_size: expected a value >= 1, got -8
 """
 
 from __future__ import annotations
 
 import dataclasses
+import os
 import types
 import typing
 from collections.abc import Mapping
 from typing import Any, TypeVar
 
-__all__ = ["SettingsError", "from_mapping"]
+__all__ = ["Check", "SettingsError", "check_keys", "from_mapping", "setting"]
 
 T = TypeVar("T")
 
 
 class SettingsError(ValueError):
     """A settings mapping that does not fit its dataclass; the message names the key."""
+
+
+@dataclasses.dataclass(frozen=True)
+class Check:
+    """Allowed values of one setting (in a field's metadata, see :func:`setting`).
+
+    A list or tuple value is checked element by element, ``None`` (an optional setting left
+    unset) always passes.
+
+    Attributes:
+      ge, gt, le, lt: bounds (``>=``, ``>``, ``<=``, ``<``) of a number.
+      choices: the allowed values (e.g. names of solvers or dtypes).
+      file: the value is the path of an existing file (relative: to the working directory);
+        with ``choices``, one of those or an existing file.
+    """
+
+    ge: float | None = None
+    gt: float | None = None
+    le: float | None = None
+    lt: float | None = None
+    choices: tuple[Any, ...] | None = None
+    file: bool = False
+
+    def allowed(self) -> str:
+        """The allowed values in words, e.g. ``"a value in [0, 1]"``."""
+        if self.choices is not None and self.file:
+            return f"one of {list(self.choices)} or an existing file"
+        if self.choices is not None:
+            return f"one of {list(self.choices)}"
+        if self.file:
+            return "an existing file"
+        lo = f"[{self.ge:g}" if self.ge is not None else f"({self.gt:g}" if self.gt is not None else None
+        hi = f"{self.le:g}]" if self.le is not None else f"{self.lt:g})" if self.lt is not None else None
+        if lo and hi:
+            return f"a value in {lo}, {hi}"
+        if lo:
+            return f"a value {'>=' if lo[0] == '[' else '>'} {lo[1:]}"
+        if hi:
+            return f"a value {'<=' if hi[-1] == ']' else '<'} {hi[:-1]}"
+        return "any value"
+
+    def ok(self, value: Any) -> bool:
+        """Whether one (non-list) value is allowed."""
+        if self.choices is not None and value in self.choices:
+            return True
+        if self.file:
+            return isinstance(value, (str, os.PathLike)) and os.path.isfile(value)
+        if self.choices is not None:
+            return False
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            return True  # not a number: the type check has the say
+        return not ((self.ge is not None and not value >= self.ge) or (self.gt is not None and not value > self.gt)
+                    or (self.le is not None and not value <= self.le) or (self.lt is not None and not value < self.lt))
+
+    def problems(self, value: Any, where: str) -> list[str]:
+        """One message per value (or list element) not allowed, naming its key path."""
+        if value is None:
+            return []
+        if isinstance(value, (list, tuple)):
+            bad = [v for v in value if v is not None and not isinstance(v, (list, tuple)) and not self.ok(v)]
+            if len(bad) > 1:  # e.g. grid.counts: [0, 0, 0, 0]
+                return [f"{where}: expected each {self.allowed()}, got {list(value)!r}"]
+            return [m for i, v in enumerate(value) for m in self.problems(v, f"{where}[{i}]")]
+        if self.ok(value):
+            return []
+        if self.file and self.choices is None and isinstance(value, (str, os.PathLike)):
+            relative = "" if os.path.isabs(value) else f" (relative to the working directory {os.getcwd()})"
+            return [f"{where}: no such file {os.fspath(value)!r}{relative}"]
+        return [f"{where}: expected {self.allowed()}, got {value!r}"]
+
+
+def setting(default: Any = dataclasses.MISSING, *, default_factory: Any = dataclasses.MISSING,
+            ge: float | None = None, gt: float | None = None, le: float | None = None, lt: float | None = None,
+            choices: tuple[Any, ...] | None = None, file: bool = False) -> Any:
+    """A dataclass field whose allowed values :func:`from_mapping` checks (see :class:`Check`).
+
+    >>> @dataclasses.dataclass(frozen=True)
+    ... class Solvers:
+    ...     names: tuple[str, ...] = setting(("greedy",), choices=("greedy", "exact"))
+    >>> from_mapping(Solvers, {"names": ["greedy", "bogus"]}, "sched")
+    Traceback (most recent call last):
+    ...
+    uvms_jax.settings.SettingsError: sched.names[1]: expected one of ['greedy', 'exact'], got 'bogus'
+    """
+    check = Check(ge=ge, gt=gt, le=le, lt=lt, choices=None if choices is None else tuple(choices), file=file)
+    return dataclasses.field(default=default, default_factory=default_factory, metadata={"check": check})
+
+
+def check_keys(mapping: Mapping[str, Any], known: Any, where: str = "") -> None:
+    """Raise :class:`SettingsError` naming the keys of ``mapping`` (at key path ``where``; ``""``:
+    the top level of a config) that are not in ``known``.
+
+    >>> check_keys({"seed": 0, "foo": 1}, ["seed", "stages"])
+    Traceback (most recent call last):
+    ...
+    uvms_jax.settings.SettingsError: foo: unknown key; known: ['seed', 'stages']
+    """
+    unknown = sorted(set(mapping) - set(known), key=str)
+    if not unknown:
+        return
+    if where:
+        raise SettingsError(f"{where}: unknown keys {unknown}; known: {sorted(known)}")
+    raise SettingsError(f"{', '.join(map(str, unknown))}: unknown key{'s' if len(unknown) > 1 else ''}; "
+                        f"known: {sorted(known)}")
 
 
 def _convert(tp: Any, value: Any, where: str) -> Any:
@@ -91,19 +210,31 @@ def from_mapping(cls: type[T], mapping: Mapping[str, Any] | None, where: str = "
     """``cls`` (a dataclass) built from ``mapping``, converting nested mappings and lists.
 
     Keys absent from ``mapping`` take the dataclass defaults; unknown keys, missing required
-    keys, values of the wrong type and values that the dataclass's ``__post_init__`` rejects
-    (``ValueError``) raise :class:`SettingsError` naming the key path.
+    keys, values of the wrong type, values outside a field's :class:`Check` (:func:`setting`)
+    and values that the dataclass's ``__post_init__`` rejects (``ValueError``) raise
+    :class:`SettingsError` naming the key path (``where`` is the mapping's own, e.g. ``ga``).
+    Every bad key of the mapping (and of its nested mappings) is named, in one message.
     """
     if mapping is None:
         mapping = {}
     if not isinstance(mapping, Mapping):
         raise SettingsError(f"{where or cls.__name__}: expected a mapping, got {mapping!r}")
     hints = typing.get_type_hints(cls)
-    names = {f.name for f in dataclasses.fields(cls) if f.init}
-    unknown = sorted(set(mapping) - names)
-    if unknown:
-        raise SettingsError(f"{where or cls.__name__}: unknown keys {unknown}; known: {sorted(names)}")
-    kwargs = {k: _convert(hints[k], v, f"{where}.{k}" if where else k) for k, v in mapping.items()}
+    fields = {f.name: f for f in dataclasses.fields(cls) if f.init}
+    check_keys(mapping, fields, where or cls.__name__)
+    kwargs, errors = {}, []
+    for k, v in mapping.items():
+        path = f"{where}.{k}" if where else k
+        try:
+            kwargs[k] = _convert(hints[k], v, path)
+        except SettingsError as e:
+            errors.append(str(e))
+            continue
+        check = fields[k].metadata.get("check")
+        if check is not None:
+            errors += check.problems(kwargs[k], path)
+    if errors:
+        raise SettingsError("; ".join(errors))
     try:
         return cls(**kwargs)
     except SettingsError:

@@ -1,4 +1,5 @@
-"""The experiments' command lines (subprocesses): a bad override is one line and exit status 2,
+"""The experiments' command lines (subprocesses): a bad override (a wrong type, a value out of
+range, an unknown key or name, a missing file) is one line and exit status 2 before any stage runs,
 an override that changes nothing is an error, ``--help`` lists the experiment's own groups, and
 a good run logs no backend probing."""
 
@@ -41,6 +42,32 @@ def _one_error_line(proc: subprocess.CompletedProcess) -> str:
 ])
 def test_bad_override_is_one_line(tmp_path, script, override, expected):
     assert expected in _one_error_line(_run(script, override, tmp_path=tmp_path))
+
+
+# Values out of range, unknown keys, missing files, unknown names: refused with every bad key
+# named in the one line, before any stage starts (no results). Several overrides per run.
+@pytest.mark.parametrize(("script", "overrides", "expected"), [
+    ("docking.py", ["ga.mutation_rate=2.0", "ga.population_size=-8", "grid.counts=[0,0,0,0]", "n_runs=-1",
+                    "dtype=float16"],
+     ["ga.mutation_rate: expected a value in [0, 1], got 2.0", "ga.population_size: expected a value >= 1, got -8",
+      "grid.counts: expected each a value >= 1, got [0, 0, 0, 0]", "n_runs: expected a value >= 1, got -1",
+      "dtype: expected one of ['float32', 'float64'], got 'float16'"]),
+    ("schedule.py", ["sched/source=edges_csv", "sched.source.path=no_such_edges.csv", "sched.solvers=[greedy,bogus]",
+                     "sched.grasp.iterations=-5", "sched.timing_repeats=0"],
+     ["sched.source.path: no such file 'no_such_edges.csv'",
+      "sched.solvers[1]: expected one of ['greedy', 'grasp', 'astar', 'exact'], got 'bogus'",
+      "sched.grasp.iterations: expected a value >= 1, got -5", "sched.timing_repeats: expected a value >= 1, got 0"]),
+    # Every stage's settings are checked, also of stages that don't run.
+    ("pipeline.py", ["stages=[hw]", "ga.mutation_rate=2.0", "ga.population_size=-8", "hw.plan=no_such_plan.json"],
+     ["ga.mutation_rate: expected a value in [0, 1], got 2.0", "ga.population_size: expected a value >= 1, got -8",
+      "hw.plan: no such file '", "no_such_plan.json'"]),
+    ("pipeline.py", ["+foo=1"], ["error: foo: unknown key; known: ['baseline', 'docking',"]),
+])
+def test_bad_values_are_refused_before_any_stage(tmp_path, script, overrides, expected):
+    line = _one_error_line(_run(script, *overrides, tmp_path=tmp_path))
+    for part in expected:
+        assert part in line, line
+    assert not (tmp_path / "results.json").exists() and not (tmp_path / "summary.md").exists()
 
 
 @pytest.mark.parametrize(("script", "overrides"), [

@@ -11,9 +11,10 @@ import math
 from collections.abc import Mapping
 from typing import Any
 
-from uvms_jax.settings import from_mapping
+from uvms_jax.settings import from_mapping, setting
 
 FIELDS = ("x", "y", "z", "psi")  # the variables of a docking pose, in chromosome order
+DTYPES = ("float32", "float64")  # DockingSettings.dtype
 
 
 @dataclasses.dataclass(frozen=True)
@@ -89,27 +90,28 @@ class ArmSceneSettings:
       pose_low, pose_high: box of vehicle poses ``[x, y, z, ψ]`` [m, rad] (holds Wd).
       p_dock: docking point in V [m]; p_init: its initial position in W [m] (D of eq. 3).
       a, b: weights of eq. 8.
-      ik_seeds, ik_iterations, ik_damping, ik_seed: numerical IK (seeds fixed for the run).
+      ik_seeds, ik_iterations, ik_damping, ik_seed: numerical IK (seeds fixed for the run):
+        seeds ≥ 1, iterations ≥ 1, damping > 0.
     """
 
     arm: str = "bravo7"
     arm_tip: str | None = None
     mount_xyz: tuple[float, float, float] = (0.35, 0.0, -0.2)
     mount_rpy: tuple[float, float, float] = (math.pi, 0.0, 0.0)
-    link_radius: float | None = None
+    link_radius: float | None = setting(None, gt=0)
     vehicle_boxes: tuple[BoxSettings, ...] = (BoxSettings("hull", (0.0, 0.0, 0.0), (0.9, 0.7, 0.4)),)
     scene_boxes: tuple[BoxSettings, ...] = ()
     panel: PanelSettings | None = None
-    alternatives: int | None = None
+    alternatives: int | None = setting(None, ge=1)
     pose_low: tuple[float, float, float, float] = (-1.6, -0.8, -0.4, -math.pi)
     pose_high: tuple[float, float, float, float] = (-0.4, 0.8, 0.8, math.pi)
     p_dock: tuple[float, float, float] = (0.0, 0.0, 0.0)
     p_init: tuple[float, float, float] = (-2.5, -1.5, 1.0)
     a: float = 300.0
     b: float = 0.5
-    ik_seeds: int = 32
-    ik_iterations: int = 40
-    ik_damping: float = 0.5
+    ik_seeds: int = setting(32, ge=1)
+    ik_iterations: int = setting(40, ge=1)
+    ik_damping: float = setting(0.5, gt=0)
     ik_seed: int = 0
 
     def __post_init__(self):
@@ -119,63 +121,85 @@ class ArmSceneSettings:
 
 @dataclasses.dataclass(frozen=True)
 class FieldBits:
-    """Bits per chromosome field (resolution over the box of Wd)."""
+    """Bits per chromosome field (resolution over the box of Wd), each ≥ 1."""
 
-    x: int = 11
-    y: int = 11
-    z: int = 8
-    psi: int = 6
+    x: int = setting(11, ge=1)
+    y: int = setting(11, ge=1)
+    z: int = setting(8, ge=1)
+    psi: int = setting(6, ge=1)
 
 
 @dataclasses.dataclass(frozen=True)
 class GASettings:
-    """Binary GA (``configs/ga/*.yaml``): sizes of :class:`BinaryGA`, codec and :class:`GAParams`."""
+    """Binary GA (``configs/ga/*.yaml``): sizes of :class:`BinaryGA`, codec and :class:`GAParams`.
 
-    population_size: int = 60
-    max_generations: int = 500
-    n_elites: int = 1
-    tournament_size: int = 2
+    Attributes:
+      population_size: individuals per run, ≥ 1; max_generations: ≥ 1.
+      n_elites: best individuals copied unchanged, ≥ 0; tournament_size: ≥ 1.
+      bits: bits per chromosome field; gray: reflected Gray code per field.
+      crossover_rate: probability per pair in [0, 1], scaled by the parents' fitness rank;
+        crossover_bias: β in [0, 1] of that scaling.
+      mutation_rate: probability per bit in [0, 1].
+      rate_decay, improvement_decay: factors in [0, 1] of both rates every generation and
+        on improvement; crossover_rate_min, mutation_rate_min: floors in [0, 1].
+      stall_generations: stop after this many generations (≥ 1) without improvement;
+        improvement_tol: smaller relative improvements (≥ 0) don't count.
+      eval_chunk: chromosomes per evaluation call, ≥ 1 (None: all in one call).
+    """
+
+    population_size: int = setting(60, ge=1)
+    max_generations: int = setting(500, ge=1)
+    n_elites: int = setting(1, ge=0)
+    tournament_size: int = setting(2, ge=1)
     bits: FieldBits = FieldBits()
     gray: bool = True
-    crossover_rate: float = 0.20
-    crossover_bias: float = 1.0
-    mutation_rate: float = 0.08
-    rate_decay: float = 0.99
-    improvement_decay: float = 0.95
-    crossover_rate_min: float = 0.05
-    mutation_rate_min: float = 0.005
-    stall_generations: int = 50
-    improvement_tol: float = 1.0e-3
-    eval_chunk: int | None = 40
+    crossover_rate: float = setting(0.20, ge=0, le=1)
+    crossover_bias: float = setting(1.0, ge=0, le=1)
+    mutation_rate: float = setting(0.08, ge=0, le=1)
+    rate_decay: float = setting(0.99, ge=0, le=1)
+    improvement_decay: float = setting(0.95, ge=0, le=1)
+    crossover_rate_min: float = setting(0.05, ge=0, le=1)
+    mutation_rate_min: float = setting(0.005, ge=0, le=1)
+    stall_generations: int = setting(50, ge=1)
+    improvement_tol: float = setting(1.0e-3, ge=0)
+    eval_chunk: int | None = setting(40, ge=1)
 
 
 @dataclasses.dataclass(frozen=True)
 class GridSettings:
-    """Dense grid reference and its zoom stages (x, y, z, ψ counts)."""
+    """Dense grid reference and its zoom stages.
 
-    counts: tuple[int, ...] = (81, 81, 16, 12)
-    chunk_size: int = 16384
-    refine_stages: int = 12
-    refine_counts: tuple[int, ...] = (11, 11, 11, 11)
-    refine_shrink: float = 0.5
+    Attributes:
+      counts: grid points along x, y, z, ψ, each ≥ 1.
+      chunk_size: candidates per jitted evaluation (bounds memory), ≥ 1.
+      refine_stages: zoom grids around the best point, ≥ 0; refine_counts: their points per
+        axis, each ≥ 1; refine_shrink: each zoom box as a fraction of the previous, in (0, 1].
+    """
+
+    counts: tuple[int, ...] = setting((81, 81, 16, 12), ge=1)
+    chunk_size: int = setting(16384, ge=1)
+    refine_stages: int = setting(12, ge=0)
+    refine_counts: tuple[int, ...] = setting((11, 11, 11, 11), ge=1)
+    refine_shrink: float = setting(0.5, gt=0, le=1)
 
 
 @dataclasses.dataclass(frozen=True)
 class CMAESSettings:
-    """CMA-ES baseline (evosax); ``std_init`` in units of the search box."""
+    """CMA-ES baseline (evosax): runs, population and generations each ≥ 1 (population ≥ 2);
+    ``std_init`` > 0 in units of the search box."""
 
     enabled: bool = True
-    n_runs: int = 7
-    population_size: int = 16
-    generations: int = 300
-    std_init: float = 0.3
+    n_runs: int = setting(7, ge=1)
+    population_size: int = setting(16, ge=2)
+    generations: int = setting(300, ge=1)
+    std_init: float = setting(0.3, gt=0)
 
 
 @dataclasses.dataclass(frozen=True)
 class WmaxSettings:
-    """Resolution of the eq. 16 maps over the task area."""
+    """Resolution of the eq. 16 maps over the task area: points per side, ≥ 2."""
 
-    n_per_side: int = 41
+    n_per_side: int = setting(41, ge=2)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -184,22 +208,22 @@ class DockingSettings:
 
     Attributes:
       seed: PRNG seed; GA run r uses ``split(key(seed), n_runs)[r]``, CMA-ES ``key(seed + 1)``.
-      n_runs: independent GA runs.
-      dtype: ``"float32"`` or ``"float64"`` (the latter needs ``jax_enable_x64``).
+      n_runs: independent GA runs, ≥ 1.
+      dtype: ``"float32"`` or ``"float64"`` (:data:`DTYPES`; the latter needs ``jax_enable_x64``).
       time_single_runs: also time each GA run alone (else each run gets the batch time).
       ill_placed_pose: ``[x, y, z, ψ]`` [m, rad] of the paper's ill-placed pose (Fig. 10);
         used with the paper's scene only.
-      accept_ratio: a GA best ≥ ``accept_ratio`` × grid optimum counts as found.
+      accept_ratio: a GA best ≥ ``accept_ratio`` × grid optimum counts as found; in (0, 1].
       scene: the paper's scene (:class:`SceneSettings`) or an arm under a vehicle
         (:class:`ArmSceneSettings`).
     """
 
     seed: int = 0
-    n_runs: int = 7
-    dtype: str = "float32"
+    n_runs: int = setting(7, ge=1)
+    dtype: str = setting("float32", choices=DTYPES)
     time_single_runs: bool = True
     ill_placed_pose: tuple[float, float, float, float] = (-0.491, -0.464, 0.213, 0.83)
-    accept_ratio: float = 0.99
+    accept_ratio: float = setting(0.99, gt=0, le=1)
     # SceneSettings | ArmSceneSettings; a mapping is converted in __post_init__, by its keys.
     scene: Any = SceneSettings()
     ga: GASettings = GASettings()

@@ -8,6 +8,7 @@ from typing import Any, Literal
 
 from uvms_jax import evo, hw, sched, surrogate
 from uvms_jax import plan as planning
+from uvms_jax.settings import setting
 
 STAGES = ("surrogate", "docking", "plan", "schedule", "hw", "baseline")
 
@@ -19,13 +20,14 @@ class HwStageSettings:
     Attributes:
       link: ``"loopback"`` (simulated arm in-process, virtual clock) or ``"udp"`` (simulated
         arm behind a UDP socket, real time).
-      plan: a plan.json to execute instead of the scheduled plan (None: the schedule's).
+      plan: an existing plan.json to execute instead of the scheduled plan (None: the
+        schedule's); relative: to the working directory.
       plot: write run.png.
       executor, sim: the executor's and the simulated arm's settings.
     """
 
     link: Literal["loopback", "udp"] = "loopback"
-    plan: str | None = None
+    plan: str | None = setting(None, file=True)
     plot: bool = True
     executor: hw.HwConfig = hw.HwConfig()
     sim: hw.SimConfig = hw.SimConfig()

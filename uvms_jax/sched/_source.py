@@ -16,18 +16,20 @@ from uvms_jax.sched._costs import normalise_metrics
 from uvms_jax.sched._problem import PickPlaceProblem
 from uvms_jax.sched._random import random_metrics
 from uvms_jax.sched._thesis import THESIS_COMPAT, THESIS_EQ41
+from uvms_jax.settings import setting
 
 
 @dataclass(frozen=True)
 class WeightSettings:
-    """The five metric weights ``K`` (configs/sched/weights/*.yaml; default thesis Table 4.3)."""
+    """The five metric weights ``K`` (configs/sched/weights/*.yaml; default thesis Table 4.3),
+    each ≥ 0."""
 
     name: str = "equal"
-    planning_time: float = 0.2
-    joint_movement: float = 0.2
-    ee_distance: float = 0.2
-    security: float = 0.2
-    max_torque: float = 0.2
+    planning_time: float = setting(0.2, ge=0)
+    joint_movement: float = setting(0.2, ge=0)
+    ee_distance: float = setting(0.2, ge=0)
+    security: float = setting(0.2, ge=0)
+    max_torque: float = setting(0.2, ge=0)
 
     def values(self) -> tuple[float, ...]:
         """``(5,)`` weights in ``METRICS`` order."""
@@ -41,26 +43,27 @@ class SourceSettings:
     Attributes:
       kind: ``"matrix"`` (a ready cost matrix, weights unused), ``"synthetic"``
         (``random_metrics`` on the thesis graph) or ``"edges_csv"`` (a planner's edges.csv).
-      matrix: ``"thesis_eq41"`` (built in) or the path of an ``n × n`` .csv/.npy matrix.
-      path: edges.csv path (``edges_csv``).
+      matrix: ``"thesis_eq41"`` (built in) or the path of an existing ``n × n`` .csv/.npy
+        matrix (relative: to the working directory).
+      path: an existing edges.csv (``edges_csv``; relative: to the working directory).
       planner: rows of this planner only (``edges_csv``).
-      n_nodes: ``None``: the largest node index + 1 (``edges_csv``).
-      seed, object_mass_kg: synthetic metrics (``synthetic``).
+      n_nodes: ≥ 1; ``None``: the largest node index + 1 (``edges_csv``).
+      seed, object_mass_kg: synthetic metrics (``synthetic``; mass ≥ 0 [kg]).
       compat: object node → allowed base nodes; ``None``: the thesis's.
-      start: start node; goal: goal node (``None``: the last node).
+      start: start node (≥ 0); goal: goal node (≥ 0; ``None``: the last node).
       mirror_goal: moves into the goal missing → use the moves into the start (``edges_csv``).
     """
 
     kind: Literal["matrix", "synthetic", "edges_csv"] = "matrix"
-    matrix: str = "thesis_eq41"
-    path: str | None = None
+    matrix: str = setting("thesis_eq41", choices=("thesis_eq41",), file=True)
+    path: str | None = setting(None, file=True)
     planner: str = "RRTConnect"
-    n_nodes: int | None = None
+    n_nodes: int | None = setting(None, ge=1)
     seed: int = 0
-    object_mass_kg: float = 0.5
+    object_mass_kg: float = setting(0.5, ge=0)
     compat: Mapping[int, tuple[int, ...]] | None = None
-    start: int = 0
-    goal: int | None = None
+    start: int = setting(0, ge=0)
+    goal: int | None = setting(None, ge=0)
     mirror_goal: bool = True
 
 

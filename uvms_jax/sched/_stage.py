@@ -18,11 +18,12 @@ import numpy as np
 from uvms_jax.sched._astar import astar
 from uvms_jax.sched._costs import METRICS, path_metric_sums
 from uvms_jax.sched._exact import exact
-from uvms_jax.sched._grasp import DEFAULT_ROUNDS, THESIS_ALPHAS, THESIS_NEIGHBOURHOOD, grasp
+from uvms_jax.sched._grasp import DEFAULT_ROUNDS, LOCAL_SEARCHES, THESIS_ALPHAS, THESIS_NEIGHBOURHOOD, grasp
 from uvms_jax.sched._greedy import greedy
 from uvms_jax.sched._problem import PickPlaceProblem
 from uvms_jax.sched._schedule import Schedule
 from uvms_jax.sched._source import SourceSettings, WeightSettings, load_source, problem_from_metrics
+from uvms_jax.settings import setting
 
 log = logging.getLogger(__name__)
 
@@ -35,18 +36,18 @@ class GraspSettings:
     """GRASP settings (``sched.grasp`` of configs/schedule.yaml); ``None``: the default.
 
     Attributes:
-      iterations: GRASP iterations (thesis 5.3: 1000).
-      alphas: α values (``None``: thesis eq. 4.6, ``THESIS_ALPHAS``).
-      neighbourhood: local-search neighbourhood (``None``: thesis 4.7.2.2, three).
-      rounds: local-search rounds (``None``: ``GRASP_ROUNDS``).
+      iterations: GRASP iterations, ≥ 1 (thesis 5.3: 1000).
+      alphas: α values, each in [0, 1] (``None``: thesis eq. 4.6, ``THESIS_ALPHAS``).
+      neighbourhood: local-search neighbourhood, ≥ 1 (``None``: thesis 4.7.2.2, three).
+      rounds: local-search rounds, ≥ 0 (``None``: ``GRASP_ROUNDS``).
       local_search: ``"deliveries"`` (ours, default) or ``"thesis"`` (Algorithm 4: node swaps).
     """
 
-    iterations: int = 1000
-    alphas: tuple[float, ...] | None = None
-    neighbourhood: int | None = None
-    rounds: int | None = None
-    local_search: str = "deliveries"
+    iterations: int = setting(1000, ge=1)
+    alphas: tuple[float, ...] | None = setting(None, ge=0, le=1)
+    neighbourhood: int | None = setting(None, ge=1)
+    rounds: int | None = setting(None, ge=0)
+    local_search: str = setting("deliveries", choices=LOCAL_SEARCHES)
 
     def kwargs(self, iterations: int | None = None) -> dict[str, Any]:
         """Keyword arguments of ``grasp`` (``iterations`` overrides the setting)."""
@@ -68,20 +69,25 @@ class SchedSettings:
       weights: metric weights (default: thesis Table 4.3, all 1/5).
       solvers: solver names, a subset of ``SOLVERS``.
       grasp: GRASP settings.
-      timing_repeats: each solver is timed this often (median reported), after a warm-up.
-      iterations_sweep: GRASP iteration counts of the sweep (thesis Figs 5.9–5.12); empty: none.
-      sweep_repeats: GRASP runs (different keys) per sweep point.
+      timing_repeats: each solver is timed this often (median reported), after a warm-up; ≥ 1.
+      iterations_sweep: GRASP iteration counts of the sweep (thesis Figs 5.9–5.12), each ≥ 1;
+        empty: none.
+      sweep_repeats: GRASP runs (different keys) per sweep point, ≥ 1.
       plots: whether ``write_schedule`` draws the figures.
     """
 
     source: SourceSettings = field(default_factory=SourceSettings)
     weights: WeightSettings = field(default_factory=WeightSettings)
-    solvers: tuple[str, ...] = SOLVERS
+    solvers: tuple[str, ...] = setting(SOLVERS, choices=SOLVERS)
     grasp: GraspSettings = field(default_factory=GraspSettings)
-    timing_repeats: int = 20
-    iterations_sweep: tuple[int, ...] = (1, 10, 50, 100, 250, 500, 1000, 2000, 3000)
-    sweep_repeats: int = 10
+    timing_repeats: int = setting(20, ge=1)
+    iterations_sweep: tuple[int, ...] = setting((1, 10, 50, 100, 250, 500, 1000, 2000, 3000), ge=1)
+    sweep_repeats: int = setting(10, ge=1)
     plots: bool = True
+
+    def __post_init__(self):
+        if not self.solvers:
+            raise ValueError(f"solvers: name at least one of {list(SOLVERS)}")
 
 
 @dataclass(frozen=True)

@@ -12,6 +12,7 @@ import math
 
 from uvms_jax.surrogate._dataset import INDEX_NAMES, Sampling
 from uvms_jax.surrogate._design import TRAINERS
+from uvms_jax.settings import setting
 from uvms_jax.surrogate._form import IndexForm
 
 NETWORK_KINDS = ("ffbn", "rbfn")
@@ -102,10 +103,10 @@ class SamplingSettings:
 
 @dataclasses.dataclass(frozen=True)
 class DataSettings:
-    """Dataset sizes: training samples per index and test samples (Table 3: T = 1000)."""
+    """Dataset sizes: training samples per index and test samples (Table 3: T = 1000), each ≥ 1."""
 
     n_train: IndexInts = IndexInts(w=3000, kci=6000)
-    n_test: int = 1000
+    n_test: int = setting(1000, ge=1)
 
     def __post_init__(self):
         if self.n_test < 1:
@@ -114,10 +115,11 @@ class DataSettings:
 
 @dataclasses.dataclass(frozen=True)
 class AdamSettings:
-    """Full-batch Adam, the first-order alternative to Levenberg–Marquardt."""
+    """Full-batch Adam, the first-order alternative to Levenberg–Marquardt: steps ≥ 1, learning
+    rate > 0."""
 
-    steps: int = 3000
-    learning_rate: float = 0.01
+    steps: int = setting(3000, ge=1)
+    learning_rate: float = setting(0.01, gt=0)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -126,18 +128,18 @@ class FFBNSettings:
 
     Attributes:
       trainer: "lm" (Levenberg–Marquardt, the paper's) or "adam".
-      error_goal: E, goal of the max relative test error (eq. 21).
-      max_hidden: L_iter per index; hidden_step: neurons added per step.
-      target_mse: E_mse per index [index units²]; max_epochs: L_epochs.
+      error_goal: E > 0, goal of the max relative test error (eq. 21).
+      max_hidden: L_iter per index; hidden_step: neurons added per step, ≥ 1.
+      target_mse: E_mse per index [index units²]; max_epochs: L_epochs, ≥ 1.
       adam: Adam settings (trainer "adam").
     """
 
-    trainer: str = "lm"
-    error_goal: float = 0.02
+    trainer: str = setting("lm", choices=TRAINERS)
+    error_goal: float = setting(0.02, gt=0)
     max_hidden: IndexInts = IndexInts(w=100, kci=100)
-    hidden_step: int = 1
+    hidden_step: int = setting(1, ge=1)
     target_mse: IndexFloats = IndexFloats(w=1.0e-3, kci=5.0e-6)
-    max_epochs: int = 100
+    max_epochs: int = setting(100, ge=1)
     adam: AdamSettings = AdamSettings()
 
     def __post_init__(self):
@@ -150,16 +152,17 @@ class RBFNSettings:
     """RBFN spread search (paper Fig. 6b).
 
     Attributes:
-      error_goal: E; spread_start, spread_step, spread_max: spreads tried (normalised input units).
+      error_goal: E > 0; spread_start, spread_step, spread_max: spreads tried (normalised input
+        units), each > 0.
       target_mse: E_th per index [index units²]; the paper's 1e-2 (w) and 1e-4 (KCI) are for its
         own index scales, these give a comparable relative fit for w ≈ 9.4 and KCI ≈ 0.42.
       max_centres: unit limit per index.
     """
 
-    error_goal: float = 0.02
-    spread_start: float = 1.0
-    spread_step: float = 1.0
-    spread_max: float = 10.0
+    error_goal: float = setting(0.02, gt=0)
+    spread_start: float = setting(1.0, gt=0)
+    spread_step: float = setting(1.0, gt=0)
+    spread_max: float = setting(10.0, gt=0)
     target_mse: IndexFloats = IndexFloats(w=1.0e-4, kci=1.0e-6)
     max_centres: IndexInts = IndexInts(w=300, kci=300)
 
@@ -171,9 +174,9 @@ class TimingSettings:
     Batches above ``chunk`` are evaluated in chunks (bounds the memory of the analytic index).
     """
 
-    batches: tuple[int, ...] = (1000, 100000, 1000000)
-    repeats: int = 5
-    chunk: int = 100000
+    batches: tuple[int, ...] = setting((1000, 100000, 1000000), ge=1)
+    repeats: int = setting(5, ge=1)
+    chunk: int = setting(100000, ge=1)
 
     def __post_init__(self):
         if not self.batches or min(self.batches) < 1:
@@ -199,7 +202,7 @@ class SurrogateSettings:
 
     Attributes:
       seed: recorded with the datasets (the caller derives the PRNG key from it).
-      train_dtype: "float64" or "float32" for datasets and training; float64 needs
+      train_dtype: "float64" or "float32" (``TRAIN_DTYPES``) for datasets and training; float64 needs
         ``jax_enable_x64``, which the caller sets at start. Timing is always float32.
       networks: names of the networks to design, each of ``NETWORK_NAMES``.
       index_form: Jacobian form and eq. 7 normalisation the indices are computed from
@@ -207,7 +210,7 @@ class SurrogateSettings:
     """
 
     seed: int = 0
-    train_dtype: str = "float64"
+    train_dtype: str = setting("float64", choices=TRAIN_DTYPES)
     networks: tuple[str, ...] = NETWORK_NAMES
     index_form: IndexForm = IndexForm()
     sampling: SamplingSettings = SamplingSettings()
