@@ -77,12 +77,18 @@ def config_errors() -> Iterator[None]:
 
 def run(main: Callable[[], Any]) -> None:
     """Run a ``@hydra.main`` function; errors in composing the config (unknown key or group
-    option, bad override) → one line on stderr, exit 2."""
+    option, bad override) → one line on stderr, exit 2; Ctrl-C → one line, exit 130 (what the
+    run had finished is on disk, its folder marked)."""
     # Hydra prints its own multi-line report and exits 1 unless HYDRA_FULL_ERROR is set; with
     # it set, the exception reaches this frame.
     os.environ["HYDRA_FULL_ERROR"] = "1"
-    with config_errors():
-        main()
+    try:
+        with config_errors():
+            main()
+    except KeyboardInterrupt:
+        print("interrupted: the partial results and the run folder's RUNNING marker say how far it got",
+              file=sys.stderr)
+        sys.exit(130)
 
 
 def overridden(*keys: str) -> list[str]:

@@ -25,6 +25,7 @@ def _config(*groups: str) -> dict:
     cfg = OmegaConf.load(CONFIGS / "surrogate.yaml")
     for g in groups:
         cfg = OmegaConf.merge(cfg, OmegaConf.load(CONFIGS / "surrogate" / f"{g}.yaml"))
+    cfg.pop("hydra")  # Hydra's own node (run folders), not the experiment's
     d = OmegaConf.to_container(cfg, resolve=True)
     d.pop("defaults")
     return d

@@ -272,8 +272,12 @@ def execute(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
     # The simulated arm's gravity and buoyancy follow the base the plan was made for.
     sim = hs.sim if the_plan.base_rpy is None else dataclasses.replace(hs.sim, base_rpy=the_plan.base_rpy)
     with progress.bar(total=len(the_plan.segments), desc="hw", unit="seg") as bar:
-        run = hw.run_plan(the_plan, flow.robot, link=hs.link, config=hs.executor, sim=sim,
-                          progress=lambda i, n, name: bar.update(i - bar.n))  # i: segments finished
+        try:
+            run = hw.run_plan(the_plan, flow.robot, link=hs.link, config=hs.executor, sim=sim,
+                              progress=lambda i, n, name: bar.update(i - bar.n))  # i: segments finished
+        except hw.RunInterrupted as stop:  # the arm was told to hold: keep what it did
+            hw.write_run(stop.run, out, plot=False, plan_path=source)
+            raise
         if run.ok:
             bar.update(bar.total - bar.n)
     res = hw.write_run(run, out, plot=hs.plot, plan_path=source)
