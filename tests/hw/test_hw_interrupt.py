@@ -66,11 +66,18 @@ def test_interrupted_run_plan_writes_its_partial_results(tmp_path):
 SIGINT_TO_EXIT_S = 5.0
 
 
+# The CLI in a child Python whose SIGINT raises KeyboardInterrupt, as from a terminal: a test
+# worker's process may have come to ignore SIGINT, an ignored signal stays ignored across exec,
+# and Python installs its handler only where SIGINT is not ignored.
+CLI = ("import signal, sys; signal.signal(signal.SIGINT, signal.default_int_handler); "
+       "from uvms_jax.hw.cli import main; sys.exit(main())")
+
+
 def _start(out: Path, *flags: str) -> tuple[subprocess.Popen, list[str]]:
     """``uvms-hw run`` of the thesis plan on the simulated arm (UDP) in its own process, once the
     executor is driving the arm (its progress line on stderr; the folder marked); returns the
     process and the stderr read so far (a thread keeps reading it)."""
-    proc = subprocess.Popen([sys.executable, "-m", "uvms_jax.hw.cli", "run", str(THESIS_PLAN), "--sim",
+    proc = subprocess.Popen([sys.executable, "-c", CLI, "run", str(THESIS_PLAN), "--sim",
                              "--out", str(out), *flags], cwd=ROOT, stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True)
     err: list[str] = []
