@@ -28,7 +28,9 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-__all__ = ["Shape", "SHAPE_KINDS", "description_shapes", "resolve_mesh"]
+from uvms_jax.frames import pose, quat_matrix
+
+__all__ = ["Shape", "SHAPE_KINDS", "description_shapes", "fixed_to", "resolve_mesh"]
 
 log = logging.getLogger(__name__)
 
@@ -141,12 +143,13 @@ def _mesh(file: str, scale, body: int, T: np.ndarray, link: str, folder: Path | 
     return Shape(body, "mesh", _pose(T), file=str(path), scale=scale, link=link)
 
 
-def _moving_ancestor(name: str, parent_of: Mapping[str, str], bodies: Mapping[str, int],
-                     moves: Mapping[str, bool]) -> int | None:
-    """The body a link is fixed to; None above the base or where a joint off the chain moves
-    it (``moves[link]``: the joint to its parent is not fixed)."""
+def fixed_to(name: str, parent_of: Mapping[str, str], bodies: Mapping[str, int],
+             moves: Mapping[str, bool] | None = None) -> int | None:
+    """The body a link/body is fixed to: itself or its nearest ancestor that is a body; None
+    above the base, or (given ``moves``: link → the joint to its parent is not fixed) where a
+    joint off the chain moves it. Without ``moves`` such joints are taken at ``q = 0``."""
     while name not in bodies:
-        if name not in parent_of or moves.get(name, False):
+        if name not in parent_of or (moves is not None and moves.get(name, False)):
             return None
         name = parent_of[name]
     return bodies[name]
@@ -161,7 +164,7 @@ def _urdf_shapes(urdf, folder: Path | None, bodies: Mapping[str, int], frames: M
     for link in robot.links:
         if not link.collisions:
             continue
-        body = _moving_ancestor(link.name, parent_of, bodies, moves)
+        body = fixed_to(link.name, parent_of, bodies, moves)
         if body is None or link.name not in frames:
             off_chain.append(link.name)
             continue
@@ -184,22 +187,14 @@ def _urdf_shapes(urdf, folder: Path | None, bodies: Mapping[str, int], frames: M
 
 
 def _mat(pos, quat) -> np.ndarray:
-    R = np.empty(9)
-    mujoco.mju_quat2Mat(R, np.asarray(quat, dtype=float))
-    T = np.eye(4)
-    T[:3, :3] = R.reshape(3, 3)
-    T[:3, 3] = pos
-    return T
+    return pose(quat_matrix(quat), pos)
 
 
-def _mjcf_shapes(source, bodies: Mapping[str, int], frames: Mapping[str, np.ndarray],
-                 body_frames: Mapping[int, np.ndarray]) -> tuple[list[Shape], list[str]]:
-    spec = mujoco.MjSpec.from_file(str(source)) if isinstance(source, Path) else mujoco.MjSpec.from_string(source)
-    model = spec.compile()
+def _mjcf_shapes(spec: mujoco.MjSpec, model: mujoco.MjModel, folder: Path | None, bodies: Mapping[str, int],
+                 frames: Mapping[str, np.ndarray], body_frames: Mapping[int, np.ndarray]) -> tuple[list[Shape], list[str]]:
     names = [model.body(b).name or f"body{b}" for b in range(model.nbody)]
     parent_of = {names[b]: names[int(model.body_parentid[b])] for b in range(1, model.nbody)}
     moves = {names[b]: bool(model.body_jntnum[b]) for b in range(1, model.nbody)}
-    folder = source.parent if isinstance(source, Path) else None
     mesh_dir = folder / spec.meshdir if folder is not None and spec.meshdir else folder
     spec_meshes = list(spec.meshes)
     G = mujoco.mjtGeom
@@ -208,7 +203,7 @@ def _mjcf_shapes(source, bodies: Mapping[str, int], frames: Mapping[str, np.ndar
         if not (model.geom_contype[g] or model.geom_conaffinity[g]):
             continue  # a visual geom
         name = names[int(model.geom_bodyid[g])]
-        body = _moving_ancestor(name, parent_of, bodies, moves)
+        body = fixed_to(name, parent_of, bodies, moves)
         if body is None or name not in frames:
             off_chain.append(name)
             continue
@@ -246,8 +241,8 @@ def description_shapes(name: str, fmt: str, parsed, bodies: Mapping[str, int], f
     Args:
       name: the arm's name (for the log).
       fmt: ``"urdf"`` or ``"mjcf"``.
-      parsed: URDF: the parsed ``yourdfpy.URDF`` and the file's path or None, as a pair; MJCF:
-        the file's path or the text.
+      parsed: URDF: ``(yourdfpy.URDF, folder)``; MJCF: ``(MjSpec, its compiled MjModel,
+        folder)`` — folder: the description file's, or None for a description given as text.
       bodies: description link/body name → body number (the base and the chain's links).
       frames: every link's/body's frame in the base frame at ``q = 0``.
       body_frames: body number → its frame in the base frame at ``q = 0``.
@@ -255,11 +250,9 @@ def description_shapes(name: str, fmt: str, parsed, bodies: Mapping[str, int], f
     """
     try:
         if fmt == "urdf":
-            urdf, path = parsed
-            shapes, off_chain = _urdf_shapes(urdf, None if path is None else Path(path).parent, bodies, frames,
-                                             body_frames)
+            shapes, off_chain = _urdf_shapes(*parsed, bodies, frames, body_frames)
         else:
-            shapes, off_chain = _mjcf_shapes(parsed, bodies, frames, body_frames)
+            shapes, off_chain = _mjcf_shapes(*parsed, bodies, frames, body_frames)
     except _Fallback as why:
         log.warning("arm %s: collision model of capsules along the links (radius %g m): %s", name, link_radius, why)
         return ()

@@ -24,7 +24,7 @@ import yaml
 
 from uvms_jax.frames import pose
 from uvms_jax.kin import _import
-from uvms_jax.robot._geometry import description_shapes
+from uvms_jax.robot._geometry import description_shapes, fixed_to
 from uvms_jax.robot._model import BASE, BodyInertial, Gripper, Hardware, Robot
 
 __all__ = ["DESCRIPTIONS", "load_arm", "load_robot", "robot_from_config", "shipped_arms"]
@@ -60,17 +60,7 @@ def _fold(T_base_part: np.ndarray, mass: float, I_part: np.ndarray, T_base_body:
                          float(I[1, 2])), float(volume), tuple(map(float, cob)))
 
 
-def _body_of(name: str, parent_of: Mapping[str, str], bodies: Mapping[str, int]) -> int | None:
-    """The body a link/body is fixed to: itself or its nearest ancestor that is a body; None
-    above the base (joints off the path, e.g. the gripper's, are taken at q = 0)."""
-    while name not in bodies:
-        if name not in parent_of:
-            return None
-        name = parent_of[name]
-    return bodies[name]
-
-
-def _urdf_robot(urdf, base: str | None, tip: str | None, gripper: str | None):
+def _urdf_robot(urdf, folder: Path | None, base: str | None, tip: str | None, gripper: str | None):
     joints, T_base_tool, base_link = _import.urdf_path_joints(urdf, base, tip)
     robot = urdf.robot
     joint_of = {j.child: j for j in robot.joints}
@@ -87,7 +77,7 @@ def _urdf_robot(urdf, base: str | None, tip: str | None, gripper: str | None):
     parent_of = {c: j.parent for c, j in joint_of.items()}
     inertials = []
     for link in robot.links:
-        body = _body_of(link.name, parent_of, bodies)
+        body = fixed_to(link.name, parent_of, bodies)  # joints off the path (a gripper's) at q = 0
         if link.inertial is None or body is None or link.name not in frames:
             continue
         origin = np.eye(4) if link.inertial.origin is None else np.asarray(link.inertial.origin, float)
@@ -102,7 +92,7 @@ def _urdf_robot(urdf, base: str | None, tip: str | None, gripper: str | None):
         if g.kind != "prismatic":
             raise ValueError(f"gripper joint {gripper!r} must be prismatic (its opening in metres), it is {g.kind}")
         grip = (g.lower, g.upper, g.speed, g.effort)
-    return joints, T_base_tool, base_link, robot.name, inertials, body_frames, frames, grip
+    return joints, T_base_tool, base_link, robot.name, inertials, bodies, body_frames, frames, grip, (urdf, folder)
 
 
 def _mjcf_robot(source, base: str | None, tip: str | None, gripper: str | None):
@@ -127,7 +117,7 @@ def _mjcf_robot(source, base: str | None, tip: str | None, gripper: str | None):
     parent_of = {names[b]: names[int(model.body_parentid[b])] for b in range(1, model.nbody)}
     inertials = []
     for b in range(1, model.nbody):
-        body = _body_of(names[b], parent_of, bodies)
+        body = fixed_to(names[b], parent_of, bodies)
         if body is None or model.body_mass[b] <= 0:
             continue
         T_com = T_base_world @ world(data.xipos[b], data.ximat[b])  # principal axes of inertia
@@ -142,7 +132,8 @@ def _mjcf_robot(source, base: str | None, tip: str | None, gripper: str | None):
         effort = float(model.jnt_actfrcrange[jid, 1]) if model.jnt_actfrclimited[jid] else 0.0
         grip = (float(model.jnt_range[jid, 0]), float(model.jnt_range[jid, 1]), None, effort)
     frames = {n: T_base_world @ world(data.xpos[b], data.xmat[b]) for b, n in enumerate(names)}
-    return joints, T_base_tool, base_name, name, inertials, body_frames, frames, grip
+    folder = source.parent if isinstance(source, Path) else None
+    return joints, T_base_tool, base_name, name, inertials, bodies, body_frames, frames, grip, (spec, model, folder)
 
 
 def load_robot(
@@ -191,10 +182,10 @@ def load_robot(
     in_file = gripper if isinstance(gripper, str) else None
     if fmt == "urdf":
         urdf = _import.read_urdf(path if path is not None else data.decode())
-        parts = _urdf_robot(urdf, base, tip, in_file)
+        parts = _urdf_robot(urdf, None if path is None else path.parent, base, tip, in_file)
     else:
         parts = _mjcf_robot(path if path is not None else data.decode(), base, tip, in_file)
-    joints, T_base_tool, base_link, file_name, raw_inertials, body_frames, frames, grip = parts
+    joints, T_base_tool, base_link, file_name, raw_inertials, bodies, body_frames, frames, grip, parsed = parts
     chain = _import._build(joints, T_base_tool, file_name if name is None else name)
     buoyancy = dict(buoyancy or {})
     unknown = sorted(set(buoyancy) - set(frames))
@@ -212,9 +203,7 @@ def load_robot(
         raise ValueError(f"collision must be 'description' or 'capsules', got {collision!r}")
     shapes = ()
     if collision == "description":
-        described = (urdf, path) if fmt == "urdf" else (path if path is not None else data.decode())
-        bodies = {base_link: BASE, **{j.link: i for i, j in enumerate(joints)}}
-        shapes = description_shapes(chain.name, fmt, described, bodies, frames, body_frames, float(link_radius))
+        shapes = description_shapes(chain.name, fmt, parsed, bodies, frames, body_frames, float(link_radius))
     else:
         log.info("arm %s: collision model of capsules along the links (radius %g m), as asked", chain.name,
                  float(link_radius))
