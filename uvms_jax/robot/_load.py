@@ -26,6 +26,7 @@ from uvms_jax.frames import pose
 from uvms_jax.kin import _import
 from uvms_jax.robot._geometry import description_shapes, fixed_to
 from uvms_jax.robot._model import BASE, BodyInertial, Gripper, Hardware, Robot
+from uvms_jax.settings import check_keys
 
 __all__ = ["DESCRIPTIONS", "load_arm", "load_robot", "robot_from_config", "shipped_arms"]
 
@@ -273,15 +274,11 @@ def robot_from_config(cfg: Mapping[str, Any]) -> Robot:
     in a card, relative to the card) with the keyword arguments of :func:`load_robot` by
     name; keys given beside a card override the card's. Unknown keys are refused."""
     cfg = dict(cfg)
-    unknown = sorted(set(cfg) - _CONFIG_KEYS)
-    if unknown:
-        raise ValueError(f"arm settings: unknown keys {unknown} (known: {sorted(_CONFIG_KEYS)})")
+    check_keys(cfg, _CONFIG_KEYS, "arm settings")
     folder = Path.cwd()
     if cfg.get("card") is not None:
         card, folder = _card(str(cfg.pop("card")))
-        unknown = sorted(set(card) - _CONFIG_KEYS)
-        if unknown:
-            raise ValueError(f"arm card: unknown keys {unknown} (known: {sorted(_CONFIG_KEYS - {'card'})})")
+        check_keys(card, _CONFIG_KEYS - {"card"}, "arm card")
         cfg = {**card, **{k: v for k, v in cfg.items() if v is not None}}
     cfg.pop("card", None)
     if not cfg.get("description"):
