@@ -8,6 +8,11 @@ Jacobian ``J: (..., m, n)`` (m task rows, n joints), so it is defined for every 
   joint rates span, not by a determinant that is 0 because of the shape alone.
 - ``KCI = σr / σ1`` (the inverse of the matrix condition number, as ``numpy.linalg.cond``).
 
+Both come from factorisations of J itself — Gram–Schmidt for w, one-sided Jacobi rotations
+for KCI — never from ``J Jᵀ``, whose float32 eigenvalues near a singular pose are off by
+~1e-7 of σ1² (so σr by ~3e-4 of σ1). They are written on scalars and unrolled, so a batch
+is one fused elementwise kernel on a CPU and one Pallas kernel on a GPU (``_gpu``).
+
 The task space is a choice of rows of the 6-row geometric Jacobian (``task=``): ``"full"``,
 ``"position"``, ``"orientation"`` or row names from ``vx vy vz wx wy wz`` (or indices 0–5).
 """
@@ -15,6 +20,7 @@ The task space is a choice of rows of the 6-row geometric Jacobian (``task=``): 
 from __future__ import annotations
 
 import functools
+import operator
 from typing import Sequence
 
 import jax
@@ -22,7 +28,7 @@ import jax.numpy as jnp
 from jax import Array
 
 from uvms_jax.indices import _gpu
-from uvms_jax.kin import Chain, check_joint_array, jacobian_rows
+from uvms_jax.kin import Chain, check_joint_array, jacobian, jacobian_rows
 
 ROW_NAMES = ("vx", "vy", "vz", "wx", "wy", "wz")
 TASKS = {"full": (0, 1, 2, 3, 4, 5), "position": (0, 1, 2), "orientation": (3, 4, 5)}
@@ -71,47 +77,75 @@ def _check_jacobian(J, task=None) -> Array:
     return J[..., list(task_rows(task)), :]
 
 
-def _gram(J: Array) -> Array:
-    """``J Jᵀ`` as a fused multiply-sum (fast for small matrices in large batches)."""
-    return jnp.sum(J[..., :, None, :] * J[..., None, :, :], axis=-1)
-
-
 def _safe_sqrt(x: Array) -> Array:
     """``sqrt(max(x, 0))`` whose gradient is 0, not inf/NaN, at and below zero (double where)."""
     positive = x > 0
     return jnp.where(positive, jnp.sqrt(jnp.where(positive, x, 1.0)), 0.0)
 
 
-def _gram_rows(rows) -> list:
-    """The smaller Gram matrix of J given as m rows of n scalars (see
-    :func:`uvms_jax.kin.jacobian_rows`): ``J Jᵀ`` (m × m) if ``m ≤ n``, else ``Jᵀ J`` (n × n).
-    Both have the squared singular values of J as eigenvalues, and no zero ones from the shape."""
+def _sum(terms):
+    return functools.reduce(operator.add, terms)
+
+
+def _dot(a: list, b: list):
+    return _sum([x * y for x, y in zip(a, b)])
+
+
+def _safe_inverse(x: Array) -> Array:
+    """``1 / x``, and 0 where ``x ≤ 0`` (with finite gradients there)."""
+    positive = x > 0
+    return jnp.where(positive, 1.0 / jnp.where(positive, x, 1.0), 0.0)
+
+
+def _vectors(rows) -> list:
+    """J given as m rows of n scalars → its smaller side as r = min(m, n) vectors of
+    k = max(m, n) scalars: the rows if ``m ≤ n``, else the columns. The r singular values of
+    J are those of this r × k matrix (of Jᵀ when m > n), with no zeros from the shape."""
     m, n = len(rows), len(rows[0])
-    if m <= n:
-        return [[sum(rows[a][k] * rows[b][k] for k in range(n)) for b in range(m)] for a in range(m)]
-    return [[sum(rows[k][a] * rows[k][b] for k in range(m)) for b in range(n)] for a in range(n)]
+    return [list(row) for row in rows] if m <= n else [[rows[a][k] for a in range(m)] for k in range(n)]
+
+
+def _triangular_factor(V: list) -> list:
+    """``L`` of ``V = L Q`` (modified Gram–Schmidt, orthonormal rows of Q), r × r lower
+    triangular as nested scalars: V's singular values on r × r instead of r × k numbers.
+
+    MGS's triangular factor is backward stable (Björck 1967): its singular values carry an
+    absolute error of a few ulps of ``σ1``, as those of V do — what the indices need."""
+    V = [list(v) for v in V]
+    r = len(V)
+    zero = jnp.zeros_like(V[0][0])
+    L = [[zero] * r for _ in range(r)]
+    for i in range(r):
+        norm = _safe_sqrt(_dot(V[i], V[i]))
+        unit = [x * _safe_inverse(norm) for x in V[i]]
+        L[i][i] = norm
+        for j in range(i + 1, r):
+            L[j][i] = _dot(V[j], unit)
+            V[j] = [a - L[j][i] * b for a, b in zip(V[j], unit)]
+    return L
 
 
 def manipulability_from_rows(rows):
-    """``w = ∏ diag(chol(G)) = sqrt(det G)`` for J as m rows of n scalars, G its smaller Gram
-    matrix (``J Jᵀ`` if ``m ≤ n``, else ``Jᵀ J``): the product of the min(m, n) singular values.
+    """``w = σ1 ⋯ σr`` for J as m rows of n scalars, ``r = min(m, n)``: the volume spanned by
+    the r vectors of J's smaller side, the product of their Gram–Schmidt residual lengths
+    (``|det R|`` of a QR factorisation of J or Jᵀ; equal to ``sqrt(det J Jᵀ)`` for m ≤ n).
 
-    The Cholesky factorisation is unrolled on scalars, so over a batch it is one fused
-    elementwise kernel. A pivot that is not positive (rank-deficient J) gives 0 for that
-    factor and for every later entry that divides by it: w stays finite, is 0 at
+    The factorisation is of J itself, never of ``J Jᵀ``: forming ``J Jᵀ`` squares the
+    condition number, which in float32 leaves w near singular poses with an absolute error
+    of ~3e-4 of the largest w; this one stays within ~1e-6 (docs/theory.md §2). Unrolled on
+    scalars, so over a batch it is one fused elementwise kernel. A residual of length 0
+    (rank-deficient J) contributes 0 and is projected out of nothing: w stays finite, is 0 at
     singularities, and has finite gradients there.
     """
-    A = _gram_rows(rows)
-    m = len(A)
-    L = [[None] * m for _ in range(m)]
+    V = _vectors(rows)
     w = 1.0
-    for j in range(m):
-        d = _safe_sqrt(A[j][j] - sum((L[j][k] ** 2 for k in range(j)), start=0.0))
-        inv_d = jnp.where(d > 0, 1.0 / jnp.where(d > 0, d, 1.0), 0.0)
-        w = w * d
-        for i in range(j + 1, m):
-            L[i][j] = (A[i][j] - sum((L[i][k] * L[j][k] for k in range(j)), start=0.0)) * inv_d
-        L[j][j] = d
+    for i in range(len(V)):
+        length2 = _dot(V[i], V[i])
+        w = w * _safe_sqrt(length2)
+        inverse = _safe_inverse(length2)
+        for j in range(i + 1, len(V)):
+            c = _dot(V[j], V[i]) * inverse
+            V[j] = [a - c * b for a, b in zip(V[j], V[i])]
     return w
 
 
@@ -128,9 +162,9 @@ def manipulability(J, task=None) -> Array:
     """Manipulability ``w = σ1 ⋯ σr``, ``r = min(m, n)``, shape ``(...)``.
 
     ``sqrt(det J Jᵀ)`` (Yoshikawa) for ``m ≤ n``; ``sqrt(det Jᵀ J)`` for ``m > n`` (fewer
-    joints than task dimensions). From an unrolled Cholesky factorisation of the smaller Gram
-    matrix (no SVD, no pivoting). ``w ≥ 0``, exactly 0 at singular configurations, with
-    finite gradients there. For w of a chain at many configurations,
+    joints than task dimensions). From an unrolled Gram–Schmidt factorisation of J itself
+    (accurate in float32 near singularities; no SVD, no pivoting). ``w ≥ 0``, 0 at singular
+    configurations, with finite gradients there. For w of a chain at many configurations,
     :func:`manipulability_of` is much faster (it never stores J).
 
     Args:
@@ -148,8 +182,10 @@ def _manipulability_of(chain: Chain, q: Array, rows: tuple[int, ...]) -> Array:
 
 @functools.partial(jax.jit, static_argnames="rows")
 def _kci_of(chain: Chain, q: Array, rows: tuple[int, ...]) -> Array:
-    J = jacobian_rows(chain, q)
-    return kci_from_rows([J[r] for r in rows])
+    # J from the scanned pass, stored: the Jacobi sweeps need it whole, and XLA on a CPU would
+    # copy the unrolled pass into each of J's 6 n entries (for the 12-DOF UVMS, 1.7× slower).
+    J = jacobian(chain, q)
+    return kci_from_rows([[J[..., r, k] for k in range(chain.n_joints)] for r in rows])
 
 
 def _index_of(index_from_rows, xla_path, chain: Chain, q, task) -> Array:
@@ -179,78 +215,81 @@ def kci_of(chain: Chain, q, task="full") -> Array:
     return _index_of(kci_from_rows, _kci_of, chain, q, task)
 
 
-JACOBI_SWEEPS = 8  # cyclic sweeps; quadratic convergence reaches float64 round-off on 6×6 by ~6
+#: Cyclic sweeps by dtype. Convergence is quadratic: on the test arms' near-singular poses
+#: (tests/indices/test_float32_accuracy.py) the 5th sweep reaches float32 round-off and the
+#: 6th float64's.
+JACOBI_SWEEPS = {"float32": 5, "float64": 6}
 
 
-def _jacobi(A, vectors: bool) -> tuple[list, list | None]:
-    """Cyclic Jacobi on a small symmetric matrix as nested scalar lists: its eigenvalues and,
-    with ``vectors``, the eigenvectors as the columns of ``V`` (nested lists, ``A V = V Λ``)."""
-    m = len(A)
+def _jacobi_sweeps(V: list, with_rotations: bool) -> tuple[list, list | None]:
+    """Hestenes' one-sided Jacobi on r vectors of k scalars: plane rotations of pairs of them
+    until they are mutually orthogonal. Returns the rotated vectors B (their lengths are the
+    singular values of V) and, ``with_rotations``, the orthogonal U (r × r) with ``U V = B``.
+
+    Each rotation makes the pair (p, q) orthogonal with ``t = 2γ sgn(d) / (|d| + sqrt(d² + 4γ²))``,
+    ``γ = v_p·v_q``, ``d = |v_q|² − |v_p|²`` (Golub & Van Loan §8.6.3, written without dividing
+    by γ). The rotations act on the vectors themselves, not on their Gram matrix, so small
+    singular values keep an absolute error of a few ulps of σ1 instead of sqrt(ulp)·σ1.
+    """
+    r = len(V)
+    one, zero = jnp.ones_like(V[0][0]), jnp.zeros_like(V[0][0])
+    U = [[one if i == j else zero for j in range(r)] for i in range(r)] if with_rotations else None
+
+    def rotate(a: list, b: list, c, s) -> tuple[list, list]:
+        return [c * x - s * y for x, y in zip(a, b)], [s * x + c * y for x, y in zip(a, b)]
 
     def sweep(_, state):
-        A, V = ([list(row) for row in M] if M is not None else None for M in state)
-        for p in range(m - 1):
-            for q in range(p + 1, m):
-                apq, d = A[p][q], A[q][q] - A[p][p]
-                den = jnp.abs(d) + _safe_sqrt(d * d + 4.0 * apq * apq)
-                t = jnp.where(den > 0, 2.0 * apq * jnp.where(d < 0, -1.0, 1.0) / jnp.where(den > 0, den, 1.0), 0.0)
+        V, U = ([list(v) for v in M] if M is not None else None for M in state)
+        for p in range(r - 1):
+            for q in range(p + 1, r):
+                gamma, d = _dot(V[p], V[q]), _dot(V[q], V[q]) - _dot(V[p], V[p])
+                den = jnp.abs(d) + _safe_sqrt(d * d + 4.0 * gamma * gamma)
+                t = 2.0 * gamma * jnp.where(d < 0, -1.0, 1.0) * _safe_inverse(den)
                 c = 1.0 / jnp.sqrt(1.0 + t * t)
-                s = t * c
-                for r in range(m):
-                    if r not in (p, q):
-                        arp, arq = A[r][p], A[r][q]
-                        A[r][p] = A[p][r] = c * arp - s * arq
-                        A[r][q] = A[q][r] = s * arp + c * arq
-                A[p][p], A[q][q] = A[p][p] - t * apq, A[q][q] + t * apq
-                A[p][q] = A[q][p] = jnp.zeros_like(apq)
-                if V is not None:  # the same plane rotation, applied to the columns p and q of V
-                    for r in range(m):
-                        vrp, vrq = V[r][p], V[r][q]
-                        V[r][p], V[r][q] = c * vrp - s * vrq, s * vrp + c * vrq
-        return A, V
+                V[p], V[q] = rotate(V[p], V[q], c, t * c)
+                if U is not None:
+                    U[p], U[q] = rotate(U[p], U[q], c, t * c)
+        return V, U
 
-    flat = jnp.broadcast_arrays(*[x for row in A for x in row])
-    A = [list(flat[i * m : (i + 1) * m]) for i in range(m)]
-    one, zero = jnp.ones_like(flat[0]), jnp.zeros_like(flat[0])
-    V = [[one if i == j else zero for j in range(m)] for i in range(m)] if vectors else None
     # One sweep is unrolled; the sweeps run in a loop to keep compile time small.
-    A, V = jax.lax.fori_loop(0, JACOBI_SWEEPS, sweep, (A, V))
-    return [A[i][i] for i in range(m)], V
+    return jax.lax.fori_loop(0, JACOBI_SWEEPS.get(jnp.dtype(one.dtype).name, 6), sweep, (V, U))
 
 
 @jax.custom_jvp
-def symmetric_eigenvalues_from_rows(A) -> list:
-    """Eigenvalues of a small symmetric matrix given as nested scalar lists (cyclic Jacobi).
+def _singular_values(V: list) -> list:
+    """The r singular values (unordered) of r vectors of k ≥ r scalars (:func:`_vectors`).
 
-    Unrolled on scalars, so a batch is one fused elementwise kernel (batched LAPACK/cuSOLVER
-    calls are slow for 6×6 and cuSOLVER's batched ``syevj`` rejects some batch shapes). Each
-    rotation zeroes ``a_pq`` with ``t = 2 a_pq sgn(d) / (|d| + sqrt(d² + 4 a_pq²))``,
-    ``d = a_qq − a_pp`` (Golub & Van Loan §8.5, written without dividing by ``a_pq``).
-
-    Derivatives use the eigenvectors, ``dλ_i = v_iᵀ dA v_i`` (exact for simple eigenvalues),
-    instead of differentiating through the sweeps: the same numbers in a program a tenth the
-    size, which XLA compiles in seconds rather than half a minute.
-
-    Returns the m eigenvalues, unordered.
+    With k > r the vectors are first reduced to their r × r triangular factor (fewer numbers
+    to rotate: 36 instead of 72 for a 12-joint chain). Derivatives use the singular vectors,
+    ``dσ_i = u_iᵀ dV w_i`` (exact for simple singular values), instead of differentiating
+    through the sweeps: the same numbers from a far smaller program, compiled in seconds.
     """
-    return _jacobi(A, vectors=False)[0]
+    if len(V[0]) > len(V):
+        V = _triangular_factor(V)
+    B, _ = _jacobi_sweeps(V, with_rotations=False)
+    return [_safe_sqrt(_dot(b, b)) for b in B]
 
 
-@symmetric_eigenvalues_from_rows.defjvp
-def _symmetric_eigenvalues_jvp(primals, tangents):
-    (A,), (dA,) = primals, tangents
-    lam, V = _jacobi(A, vectors=True)
-    m = len(A)
-    dlam = [sum(V[r][i] * dA[r][s] * V[s][i] for r in range(m) for s in range(m)) for i in range(m)]
-    return lam, dlam
+@_singular_values.defjvp
+def _singular_values_jvp(primals, tangents):
+    (V,), (dV,) = primals, tangents
+    B, U = _jacobi_sweeps(V, with_rotations=True)
+    sigma = [_safe_sqrt(_dot(b, b)) for b in B]
+    r = len(V)
+    # V = Σ_i u_i σ_i ŵ_iᵀ with u_i the rows of U and ŵ_i = b_i / σ_i: dσ_i = u_iᵀ dV ŵ_i.
+    dsigma = [_sum([U[i][a] * _dot(dV[a], B[i]) for a in range(r)]) * _safe_inverse(sigma[i]) for i in range(r)]
+    return sigma, dsigma
 
 
 def kci_from_rows(rows):
-    """KCI ``σ_r / σ_1 = sqrt(λ_min / λ_max)`` of the smaller Gram matrix, J as m rows of n scalars."""
-    eig = symmetric_eigenvalues_from_rows(_gram_rows(rows))
-    lmin, lmax = functools.reduce(jnp.minimum, eig), functools.reduce(jnp.maximum, eig)
-    ratio = jnp.maximum(lmin, 0.0) / jnp.where(lmax > 0, lmax, 1.0)
-    return jnp.where(lmax > 0, _safe_sqrt(ratio), 0.0)
+    """KCI ``σr / σ1`` for J as m rows of n scalars (0 for J = 0), from one-sided Jacobi
+    rotations of J's smaller side: accurate in float32 near singular poses, where the
+    eigenvalues of ``J Jᵀ`` are not (docs/theory.md §2)."""
+    V = _vectors(rows)
+    flat = jnp.broadcast_arrays(*[x for v in V for x in v])
+    k = len(V[0])
+    sigma = _singular_values([list(flat[i * k : (i + 1) * k]) for i in range(len(V))])
+    return functools.reduce(jnp.minimum, sigma) * _safe_inverse(functools.reduce(jnp.maximum, sigma))
 
 
 @jax.jit
