@@ -38,6 +38,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from uvms_jax import indices, kin, progress
+from uvms_jax.pipeline import md_table
 from uvms_jax.plotting import pyplot
 
 log = logging.getLogger("papers")
@@ -89,13 +90,6 @@ PRESETS = {
                     surrogate={}, grasp_sweep=(1, 10, 50, 100, 250, 500, 1000, 2000, 3000), sweep_repeats=20,
                     plan_budget_s=5.0),
 }
-
-
-def md_table(header: list[str], rows: list[list]) -> str:
-    """A Markdown table; floats keep the caller's formatting (pass strings)."""
-    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-    lines += ["| " + " | ".join(str(c) for c in row) + " |" for row in rows]
-    return "\n".join(lines)
 
 
 def save(fig, path: Path) -> str:

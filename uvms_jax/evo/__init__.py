@@ -17,7 +17,6 @@ from uvms_jax.evo._arm import arm_solutions
 from uvms_jax.evo._arm import arm_terms
 from uvms_jax.evo._arm import arm_tool_poses
 from uvms_jax.evo._arm import arm_solutions_jit
-from uvms_jax.evo._arm import dls_ik
 from uvms_jax.evo._arm import evaluate_arm
 from uvms_jax.evo._arm import evaluate_arm_traced
 from uvms_jax.evo._arm import make_arm_docking_problem

@@ -185,50 +185,6 @@ def make_arm_docking_problem(
     )
 
 
-def _inverse(T: Array) -> Array:
-    R, p = T[..., :3, :3], T[..., :3, 3]
-    Rt = jnp.swapaxes(R, -1, -2)
-    top = jnp.concatenate([Rt, -jnp.einsum("...ij,...j->...i", Rt, p)[..., None]], axis=-1)
-    return jnp.concatenate([top, jnp.broadcast_to(jnp.eye(4, dtype=T.dtype)[3:], T.shape[:-2] + (1, 4))], axis=-2)
-
-
-def _pose_error(T_target: Array, T: Array) -> Array:
-    """``(..., 6)`` [position error, orientation error ½ Σ rᵢ × r_target,i] in the base frame."""
-    e_p = T_target[..., :3, 3] - T[..., :3, 3]
-    e_o = 0.5 * jnp.sum(jnp.cross(T[..., :3, :3], T_target[..., :3, :3], axis=-2), axis=-1)
-    return jnp.concatenate([e_p, e_o], axis=-1)
-
-
-def _wrap(chain: Chain, q: Array) -> Array:
-    """Revolute angles shifted by multiples of 2π to ``[lower, lower + 2π)`` (the same pose)."""
-    revolute = jnp.array([kind == "revolute" for kind in chain.kinds])
-    return jnp.where(revolute, chain.lower + jnp.mod(q - chain.lower, 2.0 * jnp.pi), q)
-
-
-def dls_ik(chain: Chain, T_base_tool: Array, q0: Array, iterations: int, damping: Array) -> Array:
-    """Damped least squares from seeds ``q0 (..., n)`` towards ``T_base_tool (..., 4, 4)``
-    (broadcast together), a fixed number of ``iterations``; returns ``q (..., n)`` with
-    revolute angles wrapped into ``[lower, lower + 2π)``. Unconstrained otherwise: the caller
-    checks limits and reach."""
-    hi = jax.lax.Precision.HIGHEST  # full float32 products on GPUs too (TF32 breaks the reach check)
-    shape = jnp.broadcast_shapes(T_base_tool.shape[:-2], q0.shape[:-1])
-    q = jnp.broadcast_to(q0, shape + q0.shape[-1:])
-    eye = jnp.eye(6, dtype=q.dtype)
-
-    def step(_, q):
-        K = kin.kinematics(chain, q)
-        e = _pose_error(T_base_tool, K.T_base_tool)
-        v, w = K.twists[..., :3], K.twists[..., 3:]  # spatial twists (..., n, 3)
-        J = jnp.swapaxes(jnp.concatenate([v + jnp.cross(w, K.T_base_tool[..., None, :3, 3]), w], axis=-1), -1, -2)
-        # Error-scaled damping (Levenberg–Marquardt flavour): robust far away, fast near the target.
-        lam2 = damping**2 * (jnp.sum(e * e, axis=-1) + 1e-6)
-        JJt = jnp.einsum("...ik,...jk->...ij", J, J, precision=hi) + lam2[..., None, None] * eye
-        dq = jnp.einsum("...ji,...j->...i", J, jnp.linalg.solve(JJt, e[..., None])[..., 0], precision=hi)
-        return _wrap(chain, q + dq)
-
-    return jax.lax.fori_loop(0, iterations, step, _wrap(chain, q))
-
-
 def arm_tool_poses(problem: ArmDockingProblem, pose: Array) -> tuple[Array, Array, Array]:
     """The demanded tool poses seen from the arm at vehicle poses ``(..., 4)`` (traceable).
 
@@ -237,7 +193,7 @@ def arm_tool_poses(problem: ArmDockingProblem, pose: Array) -> tuple[Array, Arra
     """
     T_world_vehicle = base_transform(pose)
     T_world_base = T_world_vehicle @ problem.T_vehicle_base
-    return T_world_vehicle, T_world_base, _inverse(T_world_base)[..., None, :, :] @ problem.T_world_tool
+    return T_world_vehicle, T_world_base, kin.pose_inverse(T_world_base)[..., None, :, :] @ problem.T_world_tool
 
 
 def arm_solutions(problem: ArmDockingProblem, pose: Array) -> tuple[Array, Array, Array]:
@@ -250,7 +206,7 @@ def arm_solutions(problem: ArmDockingProblem, pose: Array) -> tuple[Array, Array
     """
     p = problem
     T_world_vehicle, T_world_base, T_base_tool = arm_tool_poses(p, pose)
-    q = dls_ik(p.chain, T_base_tool[..., None, :, :], p.seeds, p.iterations, p.damping)  # (..., k, S, n)
+    q = kin.dls_ik(p.chain, T_base_tool[..., None, :, :], p.seeds, p.iterations, p.damping, limits="wrap")  # (..., k, S, n)
     K = kin.kinematics(p.chain, q)
     reached = kin.reaches(T_base_tool[..., None, :, :], K.T_base_tool)
     within = jnp.all((q >= p.chain.lower) & (q <= p.chain.upper), axis=-1)

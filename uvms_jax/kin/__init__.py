@@ -36,6 +36,7 @@ from uvms_jax.kin._fk import kinematics
 from uvms_jax.kin._fk import spatial_jacobian
 from uvms_jax.kin._fk import spatial_jacobian_rows
 from uvms_jax.kin._ik import IKSolutions
+from uvms_jax.kin._ik import dls_ik
 from uvms_jax.kin._ik import elbow_branches
 from uvms_jax.kin._ik import elbow_ik
 from uvms_jax.kin._ik import numeric_ik
@@ -44,6 +45,7 @@ from uvms_jax.kin._ik import wrap_into_limits
 from uvms_jax.kin._import import CONTINUOUS_LIMITS
 from uvms_jax.kin._import import from_mjcf
 from uvms_jax.kin._import import from_urdf
+from uvms_jax.kin._lie import pose_inverse
 from uvms_jax.kin._models import BRAVO7_JOINTS
 from uvms_jax.kin._models import bravo7
 from uvms_jax.kin._models import docking_arm

@@ -151,29 +151,50 @@ def elbow_ik(chain: Chain, T_base_tool) -> IKSolutions:
     return _elbow_ik(chain, _check_pose(T_base_tool))
 
 
-def _dls_one(chain: Chain, T: Array, q0: Array, iterations: int, damping: float) -> tuple[Array, Array]:
-    """Damped least squares from one seed; returns ``q (n,)`` and its pose error ``(6,)``."""
+LIMITS = ("clip", "wrap")
+
+
+def dls_ik(chain: Chain, T_base_tool: Array, q0: Array, iterations: int, damping=1.0, *, limits: str = "clip") -> Array:
+    """Damped least squares from seeds ``q0 (..., n)`` towards ``T_base_tool (..., 4, 4)``
+    (leading axes broadcast together), a fixed number of iterations, no checks, no ``jit``
+    (for use inside other kernels: planning's targets and docking's fitness both run it).
+
+    Each step solves ``(J Jᵀ + λ² I) y = e``, ``Δq = Jᵀ y`` with the error-scaled damping
+    ``λ² = damping² (‖e‖² + 10⁻⁶)``: robust far from the target and near singularities,
+    Gauss–Newton-fast as the error vanishes (the Levenberg–Marquardt flavour of DLS). Products
+    run at full float32 precision on GPUs too (TF32 breaks the reach checks).
+
+    Args:
+      limits: ``"clip"`` keeps every iterate inside the joint limits (box-constrained DLS);
+        ``"wrap"`` only shifts revolute angles by whole turns into ``[lower, lower + 2π)`` and
+        leaves the limits to the caller (docking counts a solution outside them as invalid
+        rather than moving it).
+
+    Returns ``q (..., n)``. Solutions are not checked: compare ``fk(q)`` with the target.
+    """
+    if limits not in LIMITS:
+        raise ValueError(f"limits must be one of {LIMITS}, got {limits!r}")
+    shape = jnp.broadcast_shapes(T_base_tool.shape[:-2], q0.shape[:-1])
     eye = jnp.eye(6, dtype=q0.dtype)
+
+    def keep(q):
+        return jnp.clip(q, chain.lower, chain.upper) if limits == "clip" else wrap_into_limits(chain, q)[0]
 
     def step(_, q):
         T_q, J = pose_and_jacobian_of(chain, q)
-        e = pose_error(T, T_q)
-        # Error-scaled damping: robust far from the target and near singularities, and
-        # Gauss–Newton-fast as the error vanishes (Levenberg–Marquardt flavour of DLS).
-        lam2 = damping**2 * (jnp.sum(e * e) + 1e-6)
-        dq = matvec(J.T, jnp.linalg.solve(matmul(J, J.T) + lam2 * eye, e))
-        # Box-constrained DLS: iterates stay inside the limits (an algorithmic projection;
-        # solutions are still accepted only if FK reaches the target).
-        return jnp.clip(q + dq, chain.lower, chain.upper)
+        e = pose_error(T_base_tool, T_q)
+        lam2 = damping**2 * (jnp.sum(e * e, axis=-1) + 1e-6)
+        y = jnp.linalg.solve(matmul(J, jnp.swapaxes(J, -1, -2)) + lam2[..., None, None] * eye, e[..., None])[..., 0]
+        return keep(q + matvec(jnp.swapaxes(J, -1, -2), y))
 
-    q = jax.lax.fori_loop(0, iterations, step, q0)
-    return q, pose_error(T, fk_of(chain, q))
+    return jax.lax.fori_loop(0, iterations, step, keep(jnp.broadcast_to(q0, shape + q0.shape[-1:])))
 
 
 def _numeric_ik_one(key, chain, T, n_seeds, iterations, damping):
     u = jax.random.uniform(key, (n_seeds, chain.n_joints), dtype=T.dtype)
     seeds = chain.lower + u * (chain.upper - chain.lower)
-    q, err = jax.vmap(_dls_one, in_axes=(None, None, 0, None, None))(chain, T, seeds, iterations, damping)
+    q = dls_ik(chain, T, seeds, iterations, damping, limits="clip")
+    err = pose_error(T, fk_of(chain, q))
     pos, rot = jnp.linalg.norm(err[:, :3], axis=-1), jnp.linalg.norm(err[:, 3:], axis=-1)
     ok = (pos < POSITION_TOL[T.dtype]) & (rot < ROTATION_TOL[T.dtype])
     best = jnp.argmin(jnp.where(ok, 0.0, 1.0) * 1e3 + pos + rot)

@@ -113,6 +113,12 @@ def homogeneous(R: Array, p: Array) -> Array:
     return jnp.concatenate([top, bottom], axis=-2)
 
 
+def pose_inverse(T: Array) -> Array:
+    """``T⁻¹ = [Rᵀ, −Rᵀ p; 0, 1]`` of homogeneous poses ``(..., 4, 4)``."""
+    Rt = jnp.swapaxes(T[..., :3, :3], -1, -2)
+    return homogeneous(Rt, -matvec(Rt, T[..., :3, 3]))
+
+
 def rpy_matrix(rpy) -> Array:
     """URDF roll-pitch-yaw ``(..., 3)`` [rad] → ``R = Rz(yaw) Ry(pitch) Rx(roll)``."""
     rpy = jnp.asarray(rpy)
