@@ -37,7 +37,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from uvms_jax import indices, kin, progress
+from uvms_jax import evo, indices, kin, progress
 from uvms_jax.pipeline import md_table
 from uvms_jax.plotting import pyplot
 
@@ -153,17 +153,6 @@ READINGS = (
 )
 
 
-def yaw_pose(pose) -> jax.Array:
-    """``T_G_B (..., 4, 4)`` of base poses ``[x, y, z, ψ]`` ([D11] eq. 7)."""
-    pose = jnp.asarray(pose, jnp.float32)
-    c, s = jnp.cos(pose[..., 3]), jnp.sin(pose[..., 3])
-    z, o = jnp.zeros_like(c), jnp.ones_like(c)
-    R = jnp.stack([jnp.stack([c, -s, z], -1), jnp.stack([s, c, z], -1), jnp.stack([z, z, o], -1)], -2)
-    T = jnp.concatenate([R, pose[..., :3, None]], -1)
-    bottom = jnp.broadcast_to(jnp.array([0.0, 0.0, 0.0, 1.0]), pose.shape[:-1] + (1, 4))
-    return jnp.concatenate([T, bottom], -2)
-
-
 def offset_chain(arm: kin.Chain, offset: float) -> kin.Chain:
     """The arm with its tool point ``offset`` [m] beyond the wrist centre along the tool x
     axis (the approach axis of ``indices.approach_down``)."""
@@ -183,7 +172,7 @@ def w_max_at(reading: Reading, poses, points) -> jax.Array:
     # The wrist centre sits ``tool_offset`` above the tool point (approach axis = −z of G).
     wrist_points = jnp.asarray(points, jnp.float32) + jnp.array([0.0, 0.0, reading.tool_offset], jnp.float32)
     R = indices.approach_down(poses[..., 3])[..., None, :, :]
-    T = indices.tool_targets(yaw_pose(poses), wrist_points, R)  # (..., k, 4, 4) wrist targets in B
+    T = indices.tool_targets(evo.base_transform(jnp.asarray(poses, jnp.float32)), wrist_points, R)  # (..., k, 4, 4) wrist targets in B
     ik = kin.elbow_ik(arm, T)  # q (..., k, 8, 6); NaN on branches that do not exist
     q = jnp.where(ik.valid[..., None], ik.q, 0.0)
     valid = ik.valid & kin.reaches(T[..., None, :, :], kin.fk(arm, q))
@@ -262,7 +251,7 @@ def table4_rows(arm: kin.Chain) -> tuple[list[list], dict]:
     """FK of the Table 4 configurations under our frames, as given and with θ2, θ3, θ5 negated
     (the paper's y axes reversed), placed at Table 3's run-1 pose; and the facts quoted."""
     q = np.array([PAPER_TABLE4[k] for k in "KLMN"], np.float32)
-    T_G_B = np.asarray(yaw_pose(PAPER_TABLE3[0, :4]), np.float64)
+    T_G_B = np.asarray(evo.base_transform(jnp.asarray(PAPER_TABLE3[0, :4], jnp.float32)), np.float64)
     corners = indices.control_points((0.0, 0.0, 0.0), TASK_SIZE, 2)
     rows, facts = [], {"p": {}}
     for label, qq in (("as given", q), ("θ2, θ3, θ5 negated", q * np.array([1, -1, -1, 1, -1, 1], np.float32))):

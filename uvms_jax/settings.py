@@ -131,6 +131,22 @@ def setting(default: Any = dataclasses.MISSING, *, default_factory: Any = datacl
     return dataclasses.field(default=default, default_factory=default_factory, metadata={"check": check})
 
 
+def parameters(cls: type[T], settings: Any, **given: Any) -> T:
+    """An instance of the dataclass ``cls`` with each field taken from the same-named attribute
+    of ``settings``, apart from those ``given`` (values the settings do not hold): the one
+    mapping from a stage's settings to its static and traced parameters.
+
+    Raises:
+      TypeError: a field of ``cls`` that is neither in ``settings`` nor given (a renamed setting
+        must not fall back to a default without a word).
+    """
+    names = [f.name for f in dataclasses.fields(cls) if f.init and f.name not in given]
+    missing = [n for n in names if not hasattr(settings, n)]
+    if missing:
+        raise TypeError(f"{type(settings).__name__} has no {missing} for {cls.__name__}")
+    return cls(**given, **{n: getattr(settings, n) for n in names})
+
+
 def check_keys(mapping: Mapping[str, Any], known: Any, where: str = "") -> None:
     """Raise :class:`SettingsError` naming the keys of ``mapping`` (at key path ``where``; ``""``:
     the top level of a config) that are not in ``known``.

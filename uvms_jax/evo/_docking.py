@@ -16,6 +16,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from uvms_jax import progress
+from uvms_jax.settings import parameters
 from uvms_jax.evo._binary import BinaryCodec, make_codec
 from uvms_jax.evo._cmaes import run_cmaes
 from uvms_jax.evo._ga import BinaryGA, GAParams, ga_batch_compiled, run_ga
@@ -64,26 +65,7 @@ def make_ga(settings: GASettings, problem: Problem) -> tuple[BinaryCodec, Binary
     """Codec over the problem's box, static GA sizes and hyperparameters from the settings."""
     s = settings
     codec = make_codec(problem.pose_low, problem.pose_high, [getattr(s.bits, f) for f in FIELDS], gray=s.gray)
-    ga = BinaryGA(
-        population_size=s.population_size,
-        n_bits=codec.n_bits,
-        max_generations=s.max_generations,
-        n_elites=s.n_elites,
-        tournament_size=s.tournament_size,
-        eval_chunk=s.eval_chunk,
-    )
-    params = GAParams(
-        crossover_rate=s.crossover_rate,
-        mutation_rate=s.mutation_rate,
-        crossover_bias=s.crossover_bias,
-        rate_decay=s.rate_decay,
-        improvement_decay=s.improvement_decay,
-        crossover_rate_min=s.crossover_rate_min,
-        mutation_rate_min=s.mutation_rate_min,
-        stall_generations=s.stall_generations,
-        improvement_tol=s.improvement_tol,
-    )
-    return codec, ga, params
+    return codec, parameters(BinaryGA, s, n_bits=codec.n_bits), parameters(GAParams, s)
 
 
 @dataclasses.dataclass(frozen=True)
