@@ -21,7 +21,7 @@ from ._codec import Packet, PacketReader, decode_float, decode_floats, encode_fl
 from ._ids import BROADCAST, HardwareStatus, Mode, PacketID
 from ._joints import (JointSpec, LimitError, check_position, check_velocity, spec_for_device, wire_position,
                       wire_velocity)
-from ._transport import LinkError, Transport
+from ._transport import ClosedOnExit, LinkError, Transport
 
 __all__ = ["JointState", "ReachArm", "SENDABLE"]
 
@@ -70,7 +70,7 @@ def guard_packet(device_id: int, packet_id: int, data: bytes, joints: Sequence[J
             raise ValueError(f"mode payload {data.hex()} is not one of {sorted(m.name for m in _SAFE_MODES)}")
 
 
-class ReachArm:
+class ReachArm(ClosedOnExit):
     """Client of one Reach arm (or its simulator) over ``transport``.
 
     Args:
@@ -341,10 +341,4 @@ class ReachArm:
     def close(self) -> None:
         """Close the transport."""
         self.transport.close()
-
-    def __enter__(self) -> ReachArm:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
 

@@ -8,9 +8,9 @@ decides when silence becomes a lost link.
 from __future__ import annotations
 
 import socket
-from typing import Protocol
+from typing import Protocol, Self
 
-__all__ = ["LinkError", "SerialTransport", "Transport", "UdpTransport", "parse_host_port"]
+__all__ = ["ClosedOnExit", "LinkError", "SerialTransport", "Transport", "UdpTransport", "parse_host_port"]
 
 
 class LinkError(RuntimeError):
@@ -31,6 +31,16 @@ class Transport(Protocol):
         """Release the link."""
 
 
+class ClosedOnExit:
+    """``with`` support for anything with ``close()``: the link is released however the block ends."""
+
+    def __enter__(self) -> Self:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
 def parse_host_port(text: str) -> tuple[str, int]:
     """Parse ``"HOST:PORT"``; raises ValueError with the offending text otherwise."""
     host, sep, port = text.rpartition(":")
@@ -39,7 +49,7 @@ def parse_host_port(text: str) -> tuple[str, int]:
     return host, int(port)
 
 
-class UdpTransport:
+class UdpTransport(ClosedOnExit):
     """UDP link to ``(host, port)`` (Reach factory default 192.168.2.3:6789).
 
     Only datagrams from the arm's address are accepted. Each ``recv`` returns one datagram,
@@ -78,14 +88,8 @@ class UdpTransport:
     def close(self) -> None:
         self._sock.close()
 
-    def __enter__(self) -> UdpTransport:
-        return self
 
-    def __exit__(self, *exc: object) -> None:
-        self.close()
-
-
-class SerialTransport:
+class SerialTransport(ClosedOnExit):
     """Serial link (115200 8N1 by default). ``port`` may be a device or a pyserial URL
     such as ``loop://`` (used in tests)."""
 
@@ -121,9 +125,3 @@ class SerialTransport:
 
     def close(self) -> None:
         self._serial.close()
-
-    def __enter__(self) -> SerialTransport:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()

@@ -89,10 +89,7 @@ class FFBN(JointInputs):
         Raises:
           ValueError: ``x``'s last axis is not ``d`` long.
         """
-        x = jnp.asarray(x)
-        if x.ndim == 0 or x.shape[-1] != self.n_inputs:
-            raise ValueError(f"x must have shape (..., {self.n_inputs}), got {x.shape}")
-        return _evaluate(self, x, tuple(range(self.n_inputs)))
+        return _evaluate(self, self._checked_inputs(x), tuple(range(self.n_inputs)))
 
     def _from_joints(self, q: Array) -> Array:
         return _evaluate(self, q, self.inputs)

@@ -30,6 +30,17 @@ class JointInputs:
             q = q.astype(jnp.float32)
         return self._from_joints(q)
 
+    def _checked_inputs(self, x) -> Array:
+        """``x`` as an array of network inputs ``(..., d)``.
+
+        Raises:
+          ValueError: ``x``'s last axis is not ``d`` long.
+        """
+        x = jnp.asarray(x)
+        if x.ndim == 0 or x.shape[-1] != self.n_inputs:
+            raise ValueError(f"x must have shape (..., {self.n_inputs}), got {x.shape}")
+        return x
+
     def _from_joints(self, q: Array) -> Array:
         """The network at its inputs taken from ``q: (..., n_joints)``; a network may read the
         columns of ``q`` directly instead of this gathered copy."""

@@ -11,38 +11,41 @@ from uvms_jax.plotting import pyplot
 from uvms_jax.surrogate._design import Design
 
 
+def _design_error_axes(name: str, x: list, design: Design, error_goal: float, xlabel: str, width: float):
+    """A design loop's max relative test error over ``x`` (sizes or spreads), with the goal line."""
+    fig, ax = pyplot().subplots(figsize=(width, 3.8), layout="constrained")
+    ax.semilogy(x, [s.test_error for s in design.steps], "o-", label="max relative test error")
+    ax.axhline(error_goal, color="r", ls="--", label=f"E = {error_goal:g}")
+    ax.set(xlabel=xlabel, ylabel="max |(T − S)/T|", title=f"{name.upper()} design process")
+    return fig, ax
+
+
+def _save(fig, path: Path) -> None:
+    fig.savefig(path, dpi=120)
+    pyplot().close(fig)
+
+
 def plot_ffbn_design(name: str, design: Design, error_goal: float, path: Path) -> None:
     """Max relative test error vs hidden neurons of an FFBN design loop (Figs. 10/14) → PNG."""
-    plt = pyplot()
+    fig, ax = _design_error_axes(name, [s.size for s in design.steps], design, error_goal, "hidden neurons", 5.5)
     from matplotlib.ticker import MaxNLocator  # after pyplot(): matplotlib is imported lazily
-    fig, ax = plt.subplots(figsize=(5.5, 3.8), layout="constrained")
-    sizes = [s.size for s in design.steps]
-    ax.semilogy(sizes, [s.test_error for s in design.steps], "o-", label="max relative test error")
-    ax.axhline(error_goal, color="r", ls="--", label=f"E = {error_goal:g}")
     ax.xaxis.set_major_locator(MaxNLocator(integer=True))
-    ax.set(xlabel="hidden neurons", ylabel="max |(T − S)/T|", title=f"{name.upper()} design process")
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    _save(fig, path)
 
 
 def plot_rbfn_design(name: str, design: Design, error_goal: float, path: Path) -> None:
     """Max relative test error and RBF units vs spread of an RBFN design loop (Figs. 8/12) → PNG."""
-    plt = pyplot()
-    from matplotlib.ticker import MaxNLocator  # after pyplot(): matplotlib is imported lazily
-    fig, ax = plt.subplots(figsize=(6.5, 3.8), layout="constrained")
     spreads = [s.spread for s in design.steps]
-    ax.semilogy(spreads, [s.test_error for s in design.steps], "o-", label="max relative test error")
-    ax.axhline(error_goal, color="r", ls="--", label=f"E = {error_goal:g}")
-    ax.set(xlabel="spread [normalised input units]", ylabel="max |(T − S)/T|", title=f"{name.upper()} design process")
+    fig, ax = _design_error_axes(name, spreads, design, error_goal, "spread [normalised input units]", 6.5)
+    from matplotlib.ticker import MaxNLocator  # after pyplot(): matplotlib is imported lazily
     ax2 = ax.twinx()
     ax2.plot(spreads, [s.size for s in design.steps], "s:", color="gray", label="RBF units")
     ax2.set_ylabel("RBF units")
     ax2.yaxis.set_major_locator(MaxNLocator(integer=True))
     lines = ax.get_legend_handles_labels()[0] + ax2.get_legend_handles_labels()[0]
     ax.legend(lines, [h.get_label() for h in lines], loc="upper left", bbox_to_anchor=(1.15, 1.0), fontsize=8)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    _save(fig, path)
 
 
 def plot_training(designs: Mapping[str, Design], path: Path) -> None:

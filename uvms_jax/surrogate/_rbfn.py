@@ -77,8 +77,12 @@ class RBFN(JointInputs):
         return RBFN_OPS_PER_UNIT * self.n_centres
 
     def predict(self, x: Array) -> Array:
-        """Index estimate for network inputs ``x: (..., d)`` → ``(...)``, in the dtype of ``x``."""
-        return _predict(self, jnp.asarray(x))
+        """Index estimate for network inputs ``x: (..., d)`` → ``(...)``, in the dtype of ``x``.
+
+        Raises:
+          ValueError: ``x``'s last axis is not ``d`` long.
+        """
+        return _predict(self, self._checked_inputs(x))
 
 
 @jax.jit

@@ -29,40 +29,44 @@ def split_network_name(name: str) -> tuple[str, str]:
     return kind, index
 
 
+class _PerIndex:
+    """One value per index (w, KCI), read as ``values["w"]``; subclasses say which values are valid."""
+
+    def __post_init__(self):
+        for index in INDEX_NAMES:
+            if not self._valid(self[index]):
+                raise ValueError(f"{index}: expected {self._expected}, got {self[index]}")
+
+    def __getitem__(self, index: str):
+        if index not in INDEX_NAMES:
+            raise KeyError(f"unknown index {index!r}; expected one of {INDEX_NAMES}")
+        return getattr(self, index)
+
+
 @dataclasses.dataclass(frozen=True)
-class IndexInts:
+class IndexInts(_PerIndex):
     """One positive integer per index (w, KCI), e.g. training-set sizes or unit limits."""
 
     w: int
     kci: int
+    _expected = "a positive integer"
 
-    def __post_init__(self):
-        for index in INDEX_NAMES:
-            if self[index] < 1:
-                raise ValueError(f"{index}: expected a positive integer, got {self[index]}")
-
-    def __getitem__(self, index: str) -> int:
-        if index not in INDEX_NAMES:
-            raise KeyError(f"unknown index {index!r}; expected one of {INDEX_NAMES}")
-        return getattr(self, index)
+    @staticmethod
+    def _valid(v) -> bool:
+        return v >= 1
 
 
 @dataclasses.dataclass(frozen=True)
-class IndexFloats:
+class IndexFloats(_PerIndex):
     """One positive number per index (w, KCI), e.g. target mse [index units²]."""
 
     w: float
     kci: float
+    _expected = "a positive finite number"
 
-    def __post_init__(self):
-        for index in INDEX_NAMES:
-            if not (math.isfinite(self[index]) and self[index] > 0):
-                raise ValueError(f"{index}: expected a positive finite number, got {self[index]}")
-
-    def __getitem__(self, index: str) -> float:
-        if index not in INDEX_NAMES:
-            raise KeyError(f"unknown index {index!r}; expected one of {INDEX_NAMES}")
-        return getattr(self, index)
+    @staticmethod
+    def _valid(v) -> bool:
+        return math.isfinite(v) and v > 0
 
 
 @dataclasses.dataclass(frozen=True)
