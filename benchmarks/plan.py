@@ -31,7 +31,6 @@ import jax
 import numpy as np
 import yaml
 
-from uvms_jax import kin
 from uvms_jax import plan as P
 from uvms_jax.plan import _collision, _spheres, _tasks
 
@@ -75,7 +74,7 @@ def _timed_steps(acc: dict[str, float]):
             setattr(owner, name, fn)
 
 
-def _graph(scene, checker, fast, targets, edges, planner, settings, chain) -> dict:
+def _graph(scene, checker, fast, targets, edges, planner, settings) -> dict:
     """Plan every edge with one planner; per-edge planning times, the graph's wall time and
     its split over the steps of plan_edge."""
     times, ok, reval = {}, 0, 0
@@ -86,8 +85,9 @@ def _graph(scene, checker, fast, targets, edges, planner, settings, chain) -> di
             r = P.plan_edge(scene, checker, targets, src, dst, planner, budget_s=settings.budget_s,
                             resolution=settings.resolution, recheck_resolution=settings.recheck_resolution,
                             clearance_resolution=settings.clearance_resolution, simplify_s=settings.simplify_s,
-                            max_velocity=settings.max_velocity, max_acceleration=settings.max_acceleration,
-                            chain=chain, fast=fast, params=settings.planner_params.get(planner))
+                            max_velocity=settings.joint_velocity(scene.robot),
+                            max_acceleration=settings.max_acceleration, fast=fast,
+                            params=settings.planner_params.get(planner))
             times[f"{src}->{dst}"] = round(r.plan.planning_time_s * 1e3, 3)
             ok += r.success
             reval += r.revalidated
@@ -118,37 +118,36 @@ def main() -> None:
     checker = P.CollisionChecker(scene, margin=settings.margin, clearance_max=settings.clearance_max)
     t0 = time.perf_counter()
     fast = P.SphereChecker(checker)
-    fast.spheres_free(np.asarray(scene.spec.start_q)[None])  # Numba: compile or load its cache
+    fast.spheres_free(np.asarray(scene.spec.start_q)[None], P.Context())  # Numba: compile or load its cache
     numba_s = time.perf_counter() - t0
     t0 = time.perf_counter()
     targets = P.pick_place_targets(jax.random.PRNGKey(args.seed), scene, checker, n_seeds=settings.ik.n_seeds)
     ik_s = time.perf_counter() - t0
-    chain = kin.bravo7()
     edges = P.task_edges(scene)
     t0 = time.perf_counter()
     for planner in args.planners:  # warm-up: XLA compiles of the metrics, first OMPL calls
         for f in (None, fast):
             for src, dst in edges[:: max(1, len(edges) // 6)]:
-                P.plan_edge(scene, checker, targets, src, dst, planner, chain=chain, fast=f,
+                P.plan_edge(scene, checker, targets, src, dst, planner, fast=f,
                             params=settings.planner_params.get(planner))
     warmup_s = time.perf_counter() - t0
 
-    Q = np.random.default_rng(args.seed).uniform(checker.lower, checker.upper, (args.checks, 6))
-    checker.set_context(P.Context())
-    valid = checker.state_validator()
+    Q = np.random.default_rng(args.seed).uniform(checker.lower, checker.upper, (args.checks, len(checker.lower)))
+    ctx = P.Context()
+    valid = checker.state_validator(Q.shape[1], ctx)
     checks = {
-        "mujoco_single_is_valid_per_s": _rate(lambda: [checker.is_valid(q) for q in Q], len(Q)),
+        "mujoco_single_is_valid_per_s": _rate(lambda: [checker.is_valid(q, ctx) for q in Q], len(Q)),
         "mujoco_ompl_callback_per_s": _rate(lambda: [valid(q) for q in Q], len(Q)),
-        "mujoco_batched_is_valid_per_s": _rate(lambda: checker.is_valid_batch(Q), len(Q)),
-        "spheres_one_call_per_state_per_s": _rate(lambda: fast.spheres_free(Q), len(Q)),
-        "valid_fraction_uniform": float(checker.is_valid_batch(Q).mean()),
+        "mujoco_batched_is_valid_per_s": _rate(lambda: checker.is_valid_batch(Q, ctx), len(Q)),
+        "spheres_one_call_per_state_per_s": _rate(lambda: fast.spheres_free(Q, ctx), len(Q)),
+        "valid_fraction_uniform": float(checker.is_valid_batch(Q, ctx).mean()),
     }
     per_checker = {}
     for name in args.checkers:
         f = fast if name == "spheres" else None
         n0 = (fast.n_motions, fast.n_states, fast.n_confirmed)
         t0 = time.perf_counter()
-        runs = {planner: _graph(scene, checker, f, targets, edges, planner, settings, chain) for planner in args.planners}
+        runs = {planner: _graph(scene, checker, f, targets, edges, planner, settings) for planner in args.planners}
         per_checker[name] = {"graph_all_planners_wall_s": round(time.perf_counter() - t0, 3),
                              "graph_wall_s": {p: r["graph_wall_s"] for p, r in runs.items()}, "planners": runs}
         if f is not None:

@@ -11,7 +11,7 @@ import yaml
 from scipy.spatial.transform import Rotation
 
 from uvms_jax import kin
-from uvms_jax.plan import CollisionChecker, build_scene, pick_place_targets, plan_motion, seed_ompl
+from uvms_jax.plan import CollisionChecker, Context, build_scene, pick_place_targets, plan_motion, seed_ompl
 from uvms_jax.robot import load_arm  # noqa: E402
 
 BRAVO7 = load_arm("bravo7")
@@ -84,14 +84,15 @@ def test_paths_in_the_moved_scene_are_collision_free(scenes):
     checker = CollisionChecker(moved)
     rng = np.random.default_rng(1)
     q0 = np.asarray(moved.spec.start_q)
-    assert checker.is_valid(q0)
-    goals = [q for q in rng.uniform(checker.lower, checker.upper, (400, 6)) if checker.is_valid(q)][:3]
+    ctx = Context()
+    assert checker.is_valid(q0, ctx)
+    goals = [q for q in rng.uniform(checker.lower, checker.upper, (400, 6)) if checker.is_valid(q, ctx)][:3]
     assert len(goals) == 3
     for q1 in goals:
-        r = plan_motion(checker, q0, q1, "RRTConnect", budget_s=5.0)
+        r = plan_motion(checker, q0, q1, ctx, "RRTConnect", budget_s=5.0)
         assert r.success
         reference = CollisionChecker(moved)
-        assert reference.path_is_valid(r.path, 0.005, margin=0.0)
+        assert reference.path_is_valid(r.path, ctx, 0.005, margin=0.0)
 
 
 @pytest.mark.slow  # one numerical-IK compile (~30 s on 2 cores)
@@ -103,4 +104,4 @@ def test_ik_targets_follow_the_base(scenes):
     for tg in targets.values():
         T_reached = T_new @ np.asarray(kin.fk(chain, tg.q_at))
         np.testing.assert_allclose(T_reached, tg.T_world_at, atol=POSE_ATOL)
-        assert checker.is_valid(tg.q_pre)
+        assert checker.is_valid(tg.q_pre, Context())  # arriving at an object, leaving a base

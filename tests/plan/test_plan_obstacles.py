@@ -63,11 +63,10 @@ def test_each_shape_blocks_the_arm(raw, tmp_path, shape, dims):
         assert "thing" in scene.obstacle_geoms
         reference = CollisionChecker(scene)
         fast = SphereChecker(reference)
-        assert reference.is_valid(q) is not blocked
+        assert reference.is_valid(q, Context()) is not blocked
         if blocked:
-            assert not fast.spheres_free(q[None])[0]  # conservative
-        reference.set_context(Context(ignore=("thing",)))
-        assert reference.is_valid(q)
+            assert not fast.spheres_free(q[None], Context())[0]  # conservative
+        assert reference.is_valid(q, Context(ignore=("thing",)))
 
 
 def test_cylinder_obstacle_contains_the_cylinder(raw):
@@ -105,4 +104,4 @@ def test_preset_with_obstacles_composes(raw):
     scene = build_scene(BRAVO7, spec)
     assert {o.shape for o in scene.spec.obstacles} == {"box", "cylinder", "sphere", "capsule"}
     assert scene.spec.tables == build_scene(BRAVO7, raw).spec.tables
-    assert CollisionChecker(scene).is_valid(np.asarray(spec["start_q"]))
+    assert CollisionChecker(scene).is_valid(np.asarray(spec["start_q"]), Context())

@@ -9,6 +9,7 @@ from ompl import base as ob
 
 from uvms_jax.plan import (
     CollisionChecker,
+    Context,
     PlanSettings,
     SphereChecker,
     build_scene,
@@ -89,6 +90,7 @@ def test_other_planners_plan_with_the_sphere_checker(name, params):
     fast = SphereChecker(reference)
     q0 = np.asarray(raw["start_q"])
     q1 = q0 + np.array([0.8, -0.3, 0.2, 0.0, 0.3, 0.0])
-    assert reference.is_valid(q1)
-    r = plan_motion(reference, q0, q1, name, budget_s=0.5, fast=fast, params=params)
-    assert r.success and r.attempts == 1 and reference.path_is_valid(r.path, 0.005, margin=0.0)
+    ctx = Context()
+    assert reference.is_valid(q1, ctx)
+    r = plan_motion(reference, q0, q1, ctx, name, budget_s=0.5, fast=fast, params=params)
+    assert r.success and r.attempts == 1 and reference.path_is_valid(r.path, ctx, 0.005, margin=0.0)

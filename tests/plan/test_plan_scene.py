@@ -19,6 +19,7 @@ SCENARIO = Path(__file__).parents[2] / "configs" / "scenario" / "thesis_cage.yam
 FK_ATOL = 1e-9  # float64 FK of kin vs MuJoCo site: same maths, round-off only
 DIST_ATOL = 1e-6  # separated pairs: both MuJoCo paths solve the same convex distance problem
 PEN_ATOL = 2e-3  # penetrating pairs: depth estimates of EPA and mj_geomDistance differ by < 2 mm
+C0 = Context()  # nothing held, nothing ignored: every query names its context
 
 
 @pytest.fixture(scope="module")
@@ -86,13 +87,13 @@ def test_bad_spec_names_problem(raw):
 def test_start_is_valid_and_limits(scene):
     ch = CollisionChecker(scene)
     q = np.asarray(scene.start_q)
-    assert ch.is_valid(q) and ch.is_valid(q, margin=0.0)
-    assert ch.clearance(q) > ch.margin
+    assert ch.is_valid(q, C0) and ch.is_valid(q, C0, margin=0.0)
+    assert ch.clearance(q, C0) > ch.margin
     q_out = q.copy()
     q_out[1] = 3.6  # F's limit is 3.5
-    assert not ch.is_valid(q_out)
+    assert not ch.is_valid(q_out, C0)
     with pytest.raises(ValueError, match="margin"):
-        ch.is_valid(q, margin=0.5)
+        ch.is_valid(q, C0, margin=0.5)
 
 
 def test_capsule_through_thin_box_is_a_collision(raw, scene):
@@ -114,13 +115,13 @@ def test_capsule_through_thin_box_is_a_collision(raw, scene):
     T[:3, 3] = (a + b) / 2
     plate = _with_box(raw, "plate", T, (0.2, 0.2, 0.004))
     ch = CollisionChecker(plate)
-    assert not ch.is_valid(q, margin=0.0)
-    assert ch.clearance(q) < 0.0
-    names = {n for c in ch.contacts(q, margin=0.0) for n in c[:2]}
+    assert not ch.is_valid(q, C0, margin=0.0)
+    assert ch.clearance(q, C0) < 0.0
+    names = {n for c in ch.contacts(q, C0, margin=0.0) for n in c[:2]}
     assert {"plate", "geom_E"} <= names
     # The same plate far away: valid again (the contact came from the plate).
     T[:3, 3] += 0.5 * np.array([0, 0, -1.0]) + 0.6 * x
-    assert CollisionChecker(_with_box(raw, "plate", T, (0.2, 0.2, 0.004))).is_valid(q)
+    assert CollisionChecker(_with_box(raw, "plate", T, (0.2, 0.2, 0.004))).is_valid(q, C0)
 
 
 def test_clearance_matches_geom_distance(scene):
@@ -135,7 +136,7 @@ def test_clearance_matches_geom_distance(scene):
         d.qpos[:] = q
         mujoco.mj_kinematics(m, d)
         ref = min(mujoco.mj_geomDistance(m, d, g1, g2, 0.3, None) for g1 in scene.clearance_geoms for g2 in scene_geoms)
-        got = ch.clearance(q)
+        got = ch.clearance(q, C0)
         if ref >= 0:
             assert got == pytest.approx(min(ref, 0.3), abs=DIST_ATOL)
         else:  # penetration depths of two convex solvers (EPA vs distance query) differ slightly
@@ -144,14 +145,15 @@ def test_clearance_matches_geom_distance(scene):
 
 def test_contexts_switch_geoms(scene):
     ch = CollisionChecker(scene)
+    q = np.asarray(scene.start_q, dtype=float)
     with pytest.raises(ValueError, match="unknown held"):
-        ch.set_context(Context(held=42))
+        ch.is_valid(q, Context(held=42))
     with pytest.raises(ValueError, match="cannot ignore"):
-        ch.set_context(Context(ignore=("nope",)))
-    ch.set_context(Context(held=1, ignore=("start_left",)))
+        ch.is_valid(q, Context(ignore=("nope",)))
+    ch.is_valid(q, Context(held=1, ignore=("start_left",)))  # switches the geoms on entry
     held = scene.held_geoms[1]
     assert ch._m.geom_contype[held] != 0 and ch._m.geom_contype[scene.obstacle_geoms[1][0]] == 0
-    ch.set_context(Context())
+    ch.is_valid(q, Context())
     assert ch._m.geom_contype[held] == 0
 
 
@@ -175,11 +177,11 @@ def test_straight_path_through_obstacle_rejected(raw, scene):
     qa, qb = q.copy(), q.copy()
     qa[0] -= 0.4
     qb[0] += 0.4
-    assert ch.is_valid(qa) and ch.is_valid(qb)
-    assert not ch.path_is_valid(np.stack([qa, qb]), 0.01)
+    assert ch.is_valid(qa, C0) and ch.is_valid(qb, C0)
+    assert not ch.path_is_valid(np.stack([qa, qb]), C0, 0.01)
     dense = densify(np.stack([qa, qb]), 0.01)
-    assert not ch.is_valid_batch(dense).all() and ch.is_valid_batch(dense)[[0, -1]].all()
-    res = plan_motion(ch, qa, qb, "RRTConnect", budget_s=5.0)
+    assert not ch.is_valid_batch(dense, C0).all() and ch.is_valid_batch(dense, C0)[[0, -1]].all()
+    res = plan_motion(ch, qa, qb, C0, "RRTConnect", budget_s=5.0)
     assert res.success and res.revalidated and len(res.path) > 2
     np.testing.assert_allclose(res.path[[0, -1]], np.stack([qa, qb]))
-    assert ch.path_is_valid(res.path, 0.01, margin=0.0)
+    assert ch.path_is_valid(res.path, C0, 0.01, margin=0.0)

@@ -86,11 +86,10 @@ def test_spheres_are_conservative(checkers, context):
     """A configuration the spheres accept has no MuJoCo pair nearer than the margin; and the
     spheres accept most of what MuJoCo accepts (else the checker would be useless)."""
     reference, fast = checkers
-    fast.set_context(context)
     rng = np.random.default_rng(2)
     Q = rng.uniform(reference.lower, reference.upper, (3000, 6))
-    ok = fast.spheres_free(Q)
-    mj = reference.is_valid_batch(Q)
+    ok = fast.spheres_free(Q, context)
+    mj = reference.is_valid_batch(Q, context)
     assert not np.any(ok & ~mj), "the spheres accepted a configuration MuJoCo rejects"
     assert ok.sum() >= 0.8 * mj.sum()
 
@@ -98,15 +97,14 @@ def test_spheres_are_conservative(checkers, context):
 @pytest.mark.parametrize("context", CONTEXTS[:3], ids=str)
 def test_accepted_motions_pass_the_mujoco_recheck(checkers, context):
     reference, fast = checkers
-    fast.set_context(context)
     rng = np.random.default_rng(3)
     Q = rng.uniform(reference.lower, reference.upper, (2000, 6))
-    starts = Q[reference.is_valid_batch(Q)][:60]
+    starts = Q[reference.is_valid_batch(Q, context)][:60]
     accepted = 0
     for q0, q1 in zip(starts[:-1], starts[1:]):
         q1 = q0 + 0.4 * (q1 - q0)
-        ok = fast.motion_is_valid(q0, q1, 0.01)
-        ref = reference.path_is_valid(np.stack([q0, q1]), 0.01)
+        ok = fast.motion_is_valid(q0, q1, context, 0.01)
+        ref = reference.path_is_valid(np.stack([q0, q1]), context, 0.01)
         assert ok == ref  # spheres first, MuJoCo on each rejected sample: MuJoCo's answer
         accepted += ok
     assert 0 < accepted < len(starts) - 1  # both outcomes were exercised
@@ -117,17 +115,17 @@ def test_planning_with_spheres(checkers, raw):
     with the sphere checker, and the path passes MuJoCo's re-check at a finer step."""
     seed_ompl(0)
     reference, fast = checkers
-    fast.set_context(Context())
+    ctx = Context()
     q0 = np.asarray(raw["start_q"])
     rng = np.random.default_rng(4)
     Q = rng.uniform(reference.lower, reference.upper, (400, 6))
-    goals = [q for q in Q if reference.is_valid(q) and not reference.path_is_valid(np.stack([q0, q]), 0.01)][:2]
+    goals = [q for q in Q if reference.is_valid(q, ctx) and not reference.path_is_valid(np.stack([q0, q]), ctx, 0.01)][:2]
     assert len(goals) == 2
     n0 = fast.n_motions
     for planner in ("RRTConnect", "BKPIECE1", "PRM"):
         for q1 in goals:
-            r = plan_motion(reference, q0, q1, planner, budget_s=5.0, fast=fast)
-            assert r.success and reference.path_is_valid(r.path, 0.005, margin=0.0)
+            r = plan_motion(reference, q0, q1, ctx, planner, budget_s=5.0, fast=fast)
+            assert r.success and reference.path_is_valid(r.path, ctx, 0.005, margin=0.0)
     assert fast.n_motions > n0
 
 
@@ -136,7 +134,7 @@ def test_fast_must_wrap_the_given_checker(checkers, raw):
     other = CollisionChecker(build_scene(BRAVO7, raw))
     q = np.asarray(raw["start_q"])
     with pytest.raises(ValueError, match="SphereChecker built on the given checker"):
-        plan_motion(other, q, q + 0.1, fast=fast)
+        plan_motion(other, q, q + 0.1, Context(), fast=fast)
 
 
 @pytest.mark.parametrize("context", CONTEXTS, ids=str)
@@ -144,10 +142,9 @@ def test_bounds_are_below_mujoco(checkers, context):
     """Where a bound is non-negative (no sphere inside the scene) MuJoCo's clearance is not
     below it by more than its tolerance; and the bounds are close enough to prune."""
     reference, fast = checkers
-    fast.set_context(context)
     Q = np.random.default_rng(5).uniform(reference.lower, reference.upper, (1500, 6))
-    lb = fast.clearance_lower_bounds(Q)
-    mj = reference.clearance_batch(Q)
+    lb = fast.clearance_lower_bounds(Q, context)
+    mj = reference.clearance_batch(Q, context)
     assert lb.shape == (len(Q),) and np.all(lb <= reference.clearance_max)
     free = lb >= 0
     assert free.sum() > 100
@@ -160,17 +157,16 @@ def test_min_clearance_equals_mujoco_at_every_sample(checkers, context):
     """Valid start, random straight motions (some through obstacles): the same minimum as
     MuJoCo's clearance at every sample, to the bit."""
     reference, fast = checkers
-    fast.set_context(context)
     rng = np.random.default_rng(6)
     Q = rng.uniform(reference.lower, reference.upper, (600, 6))
-    Q = Q[reference.is_valid_batch(Q)]
+    Q = Q[reference.is_valid_batch(Q, context)]
     penetrating = 0
     for q0, q1 in zip(Q[:-1:2][:40], Q[1::2][:40]):
         dense = densify(np.stack([q0, q0 + 0.5 * (q1 - q0)]), 0.05)
-        brute = float(np.min(reference.clearance_batch(dense)))
+        brute = float(np.min(reference.clearance_batch(dense, context)))
         penetrating += brute < 0
-        assert fast.min_clearance(dense) == brute
-        assert reference.min_clearance(dense) == brute
+        assert fast.min_clearance(dense, context) == brute
+        assert reference.min_clearance(dense, context) == brute
     assert penetrating > 0  # negative bounds (never trusted to skip) were exercised
 
 
@@ -178,11 +174,41 @@ def test_min_clearance_checks_its_input(checkers, raw):
     reference, _ = checkers
     q = np.asarray(raw["start_q"], dtype=float)[None]
     with pytest.raises(ValueError, match="lower_bounds must have shape"):
-        reference.min_clearance(q, np.zeros(2))
+        reference.min_clearance(q, Context(), np.zeros(2))
     with pytest.raises(ValueError, match="at least one row"):
-        reference.min_clearance(np.zeros((0, 6)))
+        reference.min_clearance(np.zeros((0, 6)), Context())
     # A bound above the truth would be wrong; one at -inf only costs MuJoCo calls.
-    assert reference.min_clearance(q, np.array([-np.inf])) == reference.clearance(q[0])
+    assert reference.min_clearance(q, Context(), np.array([-np.inf])) == reference.clearance(q[0], Context())
+
+
+def test_answers_do_not_depend_on_earlier_contexts(checkers):
+    """Every query takes its context: interleaving queries in other contexts (equal copies
+    included) and an OMPL validator bound to one context give the answers of queries made in
+    one context alone; a non-Context is refused."""
+    reference, fast = checkers
+    rng = np.random.default_rng(7)
+    Q = rng.uniform(reference.lower, reference.upper, (300, 6))
+    alone = {c: (reference.is_valid_batch(Q, c), fast.spheres_free(Q, c), reference.clearance_batch(Q[:50], c))
+             for c in CONTEXTS}
+    validators = {c: reference.state_validator(6, c) for c in CONTEXTS}
+    for i, q in enumerate(Q):
+        for c in CONTEXTS[::-1] if i % 2 else CONTEXTS:
+            copy = Context(c.held, tuple(c.ignore))  # equal, not the same object
+            assert reference.is_valid(q, c) == alone[c][0][i]
+            assert validators[c](q) == alone[c][0][i]  # Q is inside the bounds, as OMPL's states
+            assert fast.spheres_free(q[None], copy)[0] == alone[c][1][i]
+            if i < 50:
+                assert reference.clearance(q, copy) == alone[c][2][i]
+    q0 = Q[np.all([alone[c][0] for c in CONTEXTS], axis=0)][0]  # valid in every context
+    ends = [q0 + 0.4 * (q - q0) for q in Q[:20]]
+    ref = {c: [reference.path_is_valid(np.stack([q0, q]), c, 0.01) for q in ends] for c in CONTEXTS}
+    for j, q in enumerate(ends):
+        for c in CONTEXTS[::-1] if j % 2 else CONTEXTS:
+            assert fast.motion_is_valid(q0, q, c, 0.01) == ref[c][j]
+    assert 0 < sum(map(sum, ref.values())) < len(CONTEXTS) * len(ends)  # both outcomes exercised
+    with pytest.raises(TypeError, match="plan.Context"):
+        reference.is_valid(q0, 0.0)
+    assert not hasattr(reference, "set_context") and not hasattr(fast, "set_context")
 
 
 def test_edge_set_is_the_task_graph_per_scene(raw):

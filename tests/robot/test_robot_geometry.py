@@ -15,7 +15,7 @@ import yaml
 
 from uvms_jax import robot
 from uvms_jax.hw._sim_model import sim_spec
-from uvms_jax.plan import CollisionChecker, SphereChecker, build_scene
+from uvms_jax.plan import CollisionChecker, Context, SphereChecker, build_scene
 from uvms_jax.robot._geometry import resolve_mesh
 
 ROBOTS = importlib.metadata.distribution("example-robot-data").locate_file("cmeel.prefix/share/example-robot-data/robots")
@@ -291,10 +291,11 @@ def test_panda_scene_and_sphere_checker(panda):
                   or m.geom(g).name.startswith("geom_base")]
     assert len(arm_meshes) == 9 and all(m.geom_type[g] == mujoco.mjtGeom.mjGEOM_MESH for g in arm_meshes)
     reference = CollisionChecker(scene)
-    assert reference.is_valid(scene.start_q)
+    ctx = Context()
+    assert reference.is_valid(scene.start_q, ctx)
     fast = SphereChecker(reference)
     Q = np.random.default_rng(2).uniform(reference.lower, reference.upper, (400, panda.n_joints))
-    ok, mj = fast.spheres_free(Q), reference.is_valid_batch(Q)
+    ok, mj = fast.spheres_free(Q, ctx), reference.is_valid_batch(Q, ctx)
     assert not np.any(ok & ~mj), "the spheres accepted a configuration MuJoCo rejects"
     # The Panda's wrist links 5 and 7 are 2 cm apart at most: their sphere grids (3 cm cells)
     # meet, so the spheres reject nearly everything and MuJoCo decides; motions still get
@@ -302,4 +303,4 @@ def test_panda_scene_and_sphere_checker(panda):
     starts = Q[mj][:6]
     for q0, q1 in zip(starts[:-1], starts[1:]):
         q1 = q0 + 0.2 * (q1 - q0)
-        assert fast.motion_is_valid(q0, q1, 0.02) == reference.path_is_valid(np.stack([q0, q1]), 0.02)
+        assert fast.motion_is_valid(q0, q1, ctx, 0.02) == reference.path_is_valid(np.stack([q0, q1]), ctx, 0.02)

@@ -14,6 +14,8 @@ as the thesis's test cage (thesis ch. 4–5).
 * collision: :class:`CollisionChecker` (MuJoCo, the reference) — ``is_valid``, ``clearance``,
   their batched versions, ``path_is_valid``, ``min_clearance`` (exact, MuJoCo only where the sphere bounds leave it open); :func:`densify`; :class:`SphereChecker` (the arm
   as spheres, compiled; whole motions per call, conservative, MuJoCo confirms rejections);
+  every query (and :func:`plan_motion`) takes its :class:`Context` as an argument, the checkers
+  hold no context a caller must set or reset;
 * targets: :func:`pick_place_targets` (batched numerical IK of the eight pick-and-place steps),
   :class:`NodeTarget`, :data:`STEPS`; :func:`docking_task` (the grasp and place poses as a
   docking optimiser's task, ``uvms_jax.evo.ArmTask``);

@@ -1,11 +1,19 @@
 """Collision and clearance queries on a :class:`~uvms_jax.plan.Scene` (MuJoCo, CPU).
 
-``is_valid(q)``: inside the joint limits, no arm–scene contact and no self-contact between
-non-adjacent links closer than the safety ``margin``. ``clearance(q)``: the smallest signed
-distance between the moving arm (links F…B, jaws, held object) and the scene. Both run
+``is_valid(q, context)``: inside the joint limits, no arm–scene contact and no self-contact
+between non-adjacent links closer than the safety ``margin``. ``clearance(q, context)``: the
+smallest signed distance between the moving arm (links F…B, jaws, held object) and the scene.
+Every query takes the :class:`~uvms_jax.plan.Context` it is asked in (which object is held,
+which obstacles are ignored) as an argument rather than reading it from the checker: one
+checker serves the approach, the lift and the transfer of a pick and place, and a context
+left behind by an earlier caller can then never leak into a later check. Both run
 ``mj_kinematics`` + ``mj_collision`` (a few µs per configuration); clearance uses a second
 copy of the model whose geom margins are ``clearance_max``, so that MuJoCo's broad and narrow
 phases return every arm–scene pair nearer than that with its signed distance in one call.
+A context is the models' ``contype``/``conaffinity`` bits (computed once per context); a query
+writes them on entry when they are set for another context (a few µs) and skips that when they
+already match (one identity test), so consecutive queries in one context cost nothing extra
+and no result depends on the queries made before it.
 Batched versions take ``(k, n)`` arrays (a whole trajectory or population) and loop over
 MuJoCo calls without per-state Python objects. Validity never reads ``MjData.contact`` (building
 that view costs ~100 µs): the checker keeps one model copy whose geom margins are the safety
@@ -67,7 +75,10 @@ class CollisionChecker:
       margin: safety distance [m]: ``is_valid`` rejects any pair nearer than this.
       clearance_max: distances are reported up to this value [m] (farther pairs read as it).
 
-    The checker owns two model copies and one ``MjData`` each; it is not thread-safe.
+    Every query takes its :class:`~uvms_jax.plan.Context` as an argument (no default: the
+    context of a check is part of its question). The checker owns three model copies and one
+    ``MjData`` each, whose geom bits it switches to the context of each query; it is not
+    thread-safe.
     """
 
     def __init__(self, scene: Scene, margin: float = 0.005, clearance_max: float = 0.3):
@@ -84,16 +95,42 @@ class CollisionChecker:
         self._m0, self._d0 = _compile(scene.xml, 0.0)
         self._mc, self._dc = _compile(scene.xml, self.clearance_max / 2)
         self.n_checks = 0
-        self.context = Context()
-        self._apply(Context())
+        # The context the models' geom bits are set for: a private cache of MuJoCo state that
+        # spares the switch when consecutive queries share a context, never an input.
+        self._context: Context | None = None
+        self._bits: dict[Context, tuple[np.ndarray, ...]] = {}  # context → its geom bits
+        self._enter(Context())
 
     # -- context -------------------------------------------------------------------------
-    def set_context(self, context: Context) -> None:
-        """Switch the geoms for ``context`` (held object on, ignored obstacles off)."""
-        if context != self.context:
+    def _enter(self, context: Context) -> None:
+        """Set the models' geoms for ``context`` (held object on, ignored obstacles off) unless
+        they already are; called on entry of every query. Raises ValueError for a context
+        naming an unknown object or obstacle, TypeError for anything but a Context."""
+        if context is self._context:
+            return
+        if not isinstance(context, Context):
+            raise TypeError(f"context must be a plan.Context, got {context!r}")
+        if context != self._context:
             self._apply(context)
+        # Keep the caller's instance: its next query is then one identity test.
+        self._context = context
 
     def _apply(self, context: Context) -> None:
+        """Write the geom bits of ``context`` into the three models (a few µs: the bits of
+        each context are computed once, :meth:`_bits_of`)."""
+        bits = self._bits.get(context)
+        if bits is None:
+            bits = self._bits[context] = self._bits_of(context)
+        contype, conaffinity, c_contype, c_conaffinity = bits
+        for m in (self._m, self._m0):
+            m.geom_contype[:] = contype
+            m.geom_conaffinity[:] = conaffinity
+        self._mc.geom_contype[:] = c_contype
+        self._mc.geom_conaffinity[:] = c_conaffinity
+
+    def _bits_of(self, context: Context) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """``(ngeom,)`` ``contype`` and ``conaffinity`` of the validity models, then of the
+        clearance model, in ``context``; ValueError for an unknown held object or obstacle."""
         sc = self.scene
         if context.held is not None and context.held not in sc.held_geoms:
             raise ValueError(f"unknown held object node {context.held} (objects: {sorted(sc.held_geoms)})")
@@ -107,6 +144,7 @@ class CollisionChecker:
             off.update(sc.obstacle_geoms.get(context.held, ()))
         held_on = sc.held_geoms.get(context.held) if context.held is not None else None
         moving = set(sc.arm_geoms)
+        out = np.zeros((4, sc.model.ngeom), dtype=self._m.geom_contype.dtype)
         for g in range(sc.model.ngeom):
             if g in sc.base_geoms:
                 bits = BASE_BITS
@@ -120,8 +158,6 @@ class CollisionChecker:
                 bits = OFF_BITS
             else:
                 bits = OFF_BITS if g in off else MOUNT_BITS if g in sc.mount_geoms else SCENE_BITS
-            self._m.geom_contype[g], self._m.geom_conaffinity[g] = bits
-            self._m0.geom_contype[g], self._m0.geom_conaffinity[g] = bits
             # Clearance model: only the clearance geoms (and the held object) against the scene.
             if g in sc.clearance_geoms or g == held_on:
                 cbits = (1, 0)
@@ -129,8 +165,9 @@ class CollisionChecker:
                 cbits = (0, 1)
             else:
                 cbits = OFF_BITS
-            self._mc.geom_contype[g], self._mc.geom_conaffinity[g] = cbits
-        self.context = context
+            out[:, g] = (*bits, *cbits)
+        out.flags.writeable = False
+        return out[0], out[1], out[2], out[3]
 
     # -- single configurations ------------------------------------------------------------
     def in_limits(self, q: np.ndarray) -> bool:
@@ -144,13 +181,15 @@ class CollisionChecker:
             return self._m0, self._d0
         raise ValueError(f"margin must be the checker's margin ({self.margin}) or 0, got {margin}")
 
-    def is_valid(self, q, margin: float | None = None) -> bool:
-        """Whether ``q (n,)`` [rad] is inside the limits and no pair is nearer than ``margin``
-        [m]: the checker's safety margin (default) or 0 (no penetration)."""
+    def is_valid(self, q, context: Context, margin: float | None = None) -> bool:
+        """Whether ``q (n,)`` [rad] is inside the limits and no pair active in ``context`` is
+        nearer than ``margin`` [m]: the checker's safety margin (default) or 0 (no penetration)."""
         q = np.asarray(q, dtype=float)
         if q.shape != (self._m.nq,) or not np.all(np.isfinite(q)):
             raise ValueError(f"q must be {self._m.nq} finite joint angles, got {q}")
         m, d = self._pick(margin)
+        if context is not self._context:
+            self._enter(context)
         if not self.in_limits(q):
             return False
         d.qpos[:] = q
@@ -159,15 +198,22 @@ class CollisionChecker:
         self.n_checks += 1
         return d.ncon == 0
 
-    def state_validator(self, n: int):
+    def state_validator(self, n: int, context: Context):
         """A minimal-overhead ``valid(state) -> bool`` for OMPL states (indexable, ``n``
-        values, inside the bounds), using the safety margin and the current context."""
+        values, inside the bounds), using the safety margin, in ``context``.
+
+        A planning query binds its context here once; each call still makes sure the model is
+        in it (one identity test while it is), as another query may have switched it since."""
+        self._enter(context)  # reject a bad context now, not inside OMPL
         m, d = self._m, self._d
         qpos = d.qpos
         kinematics, collision = mujoco.mj_kinematics, mujoco.mj_collision
         idx = range(n)
+        enter = self._enter
 
         def valid(state) -> bool:
+            if self._context is not context:
+                enter(context)
             for i in idx:
                 qpos[i] = state[i]
             kinematics(m, d)
@@ -176,9 +222,11 @@ class CollisionChecker:
 
         return valid
 
-    def contacts(self, q, margin: float | None = None) -> list[tuple[str, str, float]]:
-        """The pairs nearer than ``margin`` at ``q``: ``(geom name, geom name, signed distance [m])``."""
+    def contacts(self, q, context: Context, margin: float | None = None) -> list[tuple[str, str, float]]:
+        """The pairs active in ``context`` nearer than ``margin`` at ``q``: ``(geom name, geom
+        name, signed distance [m])``."""
         mod, d = self._pick(margin)
+        self._enter(context)
         d.qpos[:] = np.asarray(q, dtype=float)
         mujoco.mj_kinematics(mod, d)
         mujoco.mj_collision(mod, d)
@@ -186,9 +234,12 @@ class CollisionChecker:
         c = d.contact
         return [(name(c.geom[i][0]), name(c.geom[i][1]), float(c.dist[i])) for i in range(d.ncon)]
 
-    def clearance(self, q) -> float:
+    def clearance(self, q, context: Context) -> float:
         """Smallest signed distance [m] between the moving arm (links F…B, jaws, held object)
-        and the scene at ``q (n,)``, capped at ``clearance_max``; negative = penetration."""
+        and the scene of ``context`` at ``q (n,)``, capped at ``clearance_max``; negative =
+        penetration."""
+        if context is not self._context:
+            self._enter(context)
         d = self._dc
         d.qpos[:] = q
         mujoco.mj_kinematics(self._mc, d)
@@ -204,10 +255,11 @@ class CollisionChecker:
             raise ValueError(f"Q must be a finite (k, {self._m.nq}) array, got shape {Q.shape}")
         return Q
 
-    def is_valid_batch(self, Q, margin: float | None = None) -> np.ndarray:
-        """``(k,)`` bool: :meth:`is_valid` of every row of ``Q (k, n)``."""
+    def is_valid_batch(self, Q, context: Context, margin: float | None = None) -> np.ndarray:
+        """``(k,)`` bool: :meth:`is_valid` of every row of ``Q (k, n)`` in ``context``."""
         Q = self._check_batch(Q)
         mod, d = self._pick(margin)
+        self._enter(context)
         inside = np.all((Q >= self.lower) & (Q <= self.upper), axis=1)
         out = np.zeros(len(Q), dtype=bool)
         qpos = d.qpos
@@ -219,9 +271,10 @@ class CollisionChecker:
         self.n_checks += int(inside.sum())
         return out
 
-    def clearance_batch(self, Q) -> np.ndarray:
-        """``(k,)`` :meth:`clearance` of every row of ``Q (k, n)`` [m]."""
+    def clearance_batch(self, Q, context: Context) -> np.ndarray:
+        """``(k,)`` :meth:`clearance` of every row of ``Q (k, n)`` in ``context`` [m]."""
         Q = self._check_batch(Q)
+        self._enter(context)
         out = np.empty(len(Q))
         mod, d = self._mc, self._dc
         for i, q in enumerate(Q):
@@ -231,11 +284,12 @@ class CollisionChecker:
             out[i] = self.clearance_max if d.ncon == 0 else min(self.clearance_max, np.min(d.contact.dist[: d.ncon]))
         return out
 
-    def min_clearance(self, Q, lower_bounds=None) -> float:
+    def min_clearance(self, Q, context: Context, lower_bounds=None) -> float:
         """Smallest :meth:`clearance` over the rows of ``Q (k, n)`` [m] (k ≥ 1).
 
         Args:
           Q: configurations [rad].
+          context: the context of the clearance.
           lower_bounds: optional ``(k,)`` values [m], each non-negative one at most the
             geometric clearance of its row (e.g. :meth:`SphereChecker.clearance_lower_bounds`):
             MuJoCo then measures the rows in increasing bound order, and stops at the first
@@ -247,7 +301,7 @@ class CollisionChecker:
         if len(Q) == 0:
             raise ValueError("Q must have at least one row")
         if lower_bounds is None:
-            return float(np.min(self.clearance_batch(Q)))
+            return float(np.min(self.clearance_batch(Q, context)))
         lower_bounds = np.asarray(lower_bounds, dtype=float)
         if lower_bounds.shape != (len(Q),):
             raise ValueError(f"lower_bounds must have shape ({len(Q)},), got {lower_bounds.shape}")
@@ -255,10 +309,10 @@ class CollisionChecker:
         for i in np.argsort(lower_bounds, kind="stable"):
             if lower_bounds[i] >= max(best + BOUND_SLACK, 0.0):
                 break  # a negative bound may exceed a penetration depth: never skip on it
-            best = min(best, self.clearance(Q[i]))
+            best = min(best, self.clearance(Q[i], context))
         return float(best)
 
-    def path_is_valid(self, path, resolution: float = 0.01, margin: float | None = None) -> bool:
-        """Whether the piecewise-linear joint path ``(k, n)`` is valid at every point of a
-        ``resolution`` [rad] interpolation."""
-        return bool(np.all(self.is_valid_batch(densify(path, resolution), margin)))
+    def path_is_valid(self, path, context: Context, resolution: float = 0.01, margin: float | None = None) -> bool:
+        """Whether the piecewise-linear joint path ``(k, n)`` is valid in ``context`` at every
+        point of a ``resolution`` [rad] interpolation."""
+        return bool(np.all(self.is_valid_batch(densify(path, resolution), context, margin)))

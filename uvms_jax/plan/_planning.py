@@ -28,6 +28,7 @@ from ompl import util as ou
 from uvms_jax.motion import synchronised_move
 from uvms_jax.plan._collision import CollisionChecker, densify
 from uvms_jax.plan._planners import check_parameters, make_planner
+from uvms_jax.plan._scene import Context
 from uvms_jax.plan._spheres import SphereChecker
 
 __all__ = ["PLANNERS", "PlanResult", "Trajectory", "plan_motion", "seed_ompl", "time_parameterize"]
@@ -134,21 +135,24 @@ def time_parameterize(path, max_velocity, max_acceleration) -> Trajectory:
 
 
 class _SegmentValidator(ob.MotionValidator):
-    """OMPL motion validator checking a whole segment in one :class:`SphereChecker` call."""
+    """OMPL motion validator checking a whole segment in one :class:`SphereChecker` call, in
+    the context of its planning query (bound once)."""
 
-    def __init__(self, si, fast: SphereChecker, resolution: float, n: int):
+    def __init__(self, si, fast: SphereChecker, context: Context, resolution: float, n: int):
         super().__init__(si)
-        self._fast, self._resolution, self._n = fast, resolution, n
+        self._motion_is_valid = fast.motion_is_valid
+        self._context, self._resolution, self._n = context, resolution, n
 
     def checkMotion(self, s1, s2) -> bool:  # noqa: N802 — OMPL's name
         n = self._n
-        return self._fast.motion_is_valid(s1[0:n], s2[0:n], self._resolution)
+        return self._motion_is_valid(s1[0:n], s2[0:n], self._context, self._resolution)
 
 
 def plan_motion(
     checker: CollisionChecker,
     q_start,
     q_goal,
+    context: Context,
     planner: str = "RRTConnect",
     budget_s: float = 5.0,
     resolution: float = 0.02,
@@ -157,11 +161,14 @@ def plan_motion(
     fast: SphereChecker | None = None,
     params: Mapping[str, Any] | None = None,
 ) -> PlanResult:
-    """Plan a collision-free joint path from ``q_start`` to ``q_goal`` in the checker's context.
+    """Plan a collision-free joint path from ``q_start`` to ``q_goal`` in ``context``.
 
     Args:
-      checker: collision checker, already in the right :class:`~uvms_jax.plan.Context`.
-      q_start, q_goal: ``(n,)`` joint angles [rad]; both must be valid.
+      checker: collision checker of the scene.
+      q_start, q_goal: ``(n,)`` joint angles [rad]; both must be valid in ``context``.
+      context: the :class:`~uvms_jax.plan.Context` of the whole query (held object, ignored
+        obstacles): bound once into OMPL's state and motion validators and the re-check, so
+        every check of the query is in it whatever other queries did to the checker.
       planner: any OMPL geometric planner (:func:`ompl_planners`), e.g. the thesis's
         ``RRTConnect``, ``BKPIECE1`` or ``PRM``.
       budget_s: total planning time allowed for this query, all attempts together [s].
@@ -180,11 +187,14 @@ def plan_motion(
         start or goal (the contacts are named).
     """
     ou.setLogLevel(ou.LogLevel.LOG_WARN)
+    if not isinstance(context, Context):  # e.g. a planner name where the context goes
+        raise TypeError(f"context must be a plan.Context, got {context!r}")
     check_parameters(planner, params or {})
     q_start, q_goal = np.asarray(q_start, dtype=float), np.asarray(q_goal, dtype=float)
     for label, q in (("start", q_start), ("goal", q_goal)):
-        if not checker.is_valid(q):
-            raise ValueError(f"{label} {np.round(q, 4).tolist()} is invalid: {checker.contacts(q) or 'outside the limits'}")
+        if not checker.is_valid(q, context):
+            raise ValueError(f"{label} {np.round(q, 4).tolist()} is invalid: "
+                             f"{checker.contacts(q, context) or 'outside the limits'}")
     n = len(q_start)
     space = ob.RealVectorStateSpace(n)
     bounds = ob.RealVectorBounds(n)
@@ -196,13 +206,14 @@ def plan_motion(
     si = ss.getSpaceInformation()
     # States: MuJoCo (one call per state is what it is fastest at). Motions: OMPL's state-by-
     # state checks, or one SphereChecker call per motion.
-    ss.setStateValidityChecker(checker.state_validator(n))
+    ss.setStateValidityChecker(checker.state_validator(n, context))
     si.setStateValidityCheckingResolution(resolution / space.getMaximumExtent())
     validator = None
     if fast is not None:
         if fast.reference is not checker:
             raise ValueError("fast must be a SphereChecker built on the given checker")
-        validator = _SegmentValidator(si, fast, recheck_resolution, n)
+        fast._pairs(context)  # the context's pair tables (built once, ~2 ms): now, not in the timed solve
+        validator = _SegmentValidator(si, fast, context, recheck_resolution, n)
         si.setMotionValidator(validator)
     ss.setPlanner(make_planner(planner, si, params))
     start, goal = space.allocState(), space.allocState()
@@ -228,7 +239,7 @@ def plan_motion(
         if not exact:
             break
         path[0], path[-1] = q_start, q_goal
-        ok = checker.path_is_valid(path, recheck_resolution, margin=0.0)
+        ok = checker.path_is_valid(path, context, recheck_resolution, margin=0.0)
         result = PlanResult(ok, path if ok else np.zeros((0, n)), spent, attempts, ok)
         if ok:
             break
@@ -237,15 +248,16 @@ def plan_motion(
     return dataclasses.replace(result, planning_time_s=spent, attempts=attempts)
 
 
-def check_trajectory(checker: CollisionChecker, traj: Trajectory, resolution: float = 0.01,
+def check_trajectory(checker: CollisionChecker, traj: Trajectory, context: Context, resolution: float = 0.01,
                      collision_free: bool | None = None) -> dict[str, bool | float]:
     """Re-check a trajectory: every point of a ``resolution`` [rad] interpolation is
     collision-free (margin 0) and inside the joint limits, and no joint exceeds its velocity
     limit.
 
     Args:
-      checker: the reference checker, in the trajectory's context.
+      checker: the reference checker.
       traj: the trajectory.
+      context: the trajectory's :class:`~uvms_jax.plan.Context`.
       resolution: joint step of the interpolation [rad].
       collision_free: the result of that same check when the caller already has it (e.g.
         :func:`plan_motion`'s re-check of the same waypoints at the same resolution); None
@@ -259,7 +271,7 @@ def check_trajectory(checker: CollisionChecker, traj: Trajectory, resolution: fl
     dense = densify(traj.q, resolution)
     inside = bool(np.all((dense >= checker.lower) & (dense <= checker.upper)))
     if collision_free is None:
-        collision_free = bool(np.all(checker.is_valid_batch(dense, margin=0.0)))
+        collision_free = bool(np.all(checker.is_valid_batch(dense, context, margin=0.0)))
     ratio = 0.0
     for i in range(len(traj.t) - 1):
         mv = synchronised_move(traj.q[i], traj.q[i + 1], traj.max_velocity, traj.max_acceleration,

@@ -16,7 +16,7 @@ Everything is read from the scene's MuJoCo model, so both checkers see the same 
   bounding box, kept where they reach the mesh's convex hull;
 * scene: planes are half-spaces and meshes their convex hulls (face equations); capsules and
   spheres of fixed bodies (the base link) become spheres as above;
-* pairs: exactly the geom pairs MuJoCo tests in the current :class:`Context` (the reference
+* pairs: exactly the geom pairs MuJoCo tests in the query's :class:`Context` (the reference
   checker's ``contype``/``conaffinity`` bits, welded bodies, the parent–child filter,
   ``<exclude>``), less those beyond the arm's reach; each is first tested with the bounding
   spheres of both geoms. Two capsules of the arm are tested exactly (segment distance), a
@@ -33,6 +33,10 @@ path made of accepted motions passes the MuJoCo re-check there.
 The same spheres bound the clearance from below (:meth:`SphereChecker.clearance_lower_bounds`),
 so that the smallest clearance along a path needs MuJoCo at a few samples only
 (:meth:`SphereChecker.min_clearance`, the same value as MuJoCo at every sample).
+
+Like the reference checker's, every query takes its :class:`Context` as an argument: the pairs
+of a context are built once (~2 ms) and cached by context, so a query's answer depends on its
+arguments only, never on the contexts of earlier queries.
 """
 
 from __future__ import annotations
@@ -76,7 +80,7 @@ class SphereChecker:
 
     Args:
       reference: the MuJoCo checker of the scene (its margin is used); its model's collision
-        bits define the pairs of a context. :meth:`set_context` switches both.
+        bits define the pairs of a context, and it confirms the rejections.
       spacing: sphere spacing along the capsules [m].
       cell: largest cell edge of the sphere grid over meshes [m].
 
@@ -84,7 +88,8 @@ class SphereChecker:
       n_motions, n_states: motions checked and samples visited by the compiled kernel.
       n_confirmed: rejections that went to MuJoCo.
 
-    Not thread-safe (the context is the reference checker's).
+    Every query takes its :class:`Context` as an argument. Not thread-safe (nor is the
+    reference checker).
     """
 
     def __init__(self, reference: CollisionChecker, spacing: float = 0.03, cell: float = 0.03):
@@ -168,9 +173,12 @@ class SphereChecker:
         self._faces = np.array(faces).reshape(-1, 4)
         self._cache: dict[Context, tuple] = {}
         self._clearance_cache: dict[Context, tuple] = {}
+        # The last context asked for and its pairs: a query in the same Context instance as the
+        # one before skips hashing it (the pairs are a function of the context's value).
+        self._last: tuple[Context | None, tuple] = (None, ())
         self.n_motions = self.n_states = self.n_confirmed = 0
         # Compile (or load Numba's on-disk cache) now, not inside a planner's time budget.
-        self.spheres_free(np.zeros((1, m.nq)))
+        self.spheres_free(np.zeros((1, m.nq)), Context())
         self.n_motions = self.n_states = self.n_confirmed = 0
 
     # -- pairs of a context ----------------------------------------------------------------
@@ -194,9 +202,18 @@ class SphereChecker:
 
     def _pairs(self, context: Context) -> tuple:
         """Kernel arrays of the pairs MuJoCo tests in ``context`` (its filters, in its order)."""
-        if context in self._cache:
-            return self._cache[context]
-        self.reference.set_context(context)
+        last = self._last
+        if last[0] is context:
+            return last[1]
+        pairs = self._cache.get(context) if isinstance(context, Context) else None
+        if pairs is None:
+            pairs = self._build_pairs(context)
+        self._last = (context, pairs)
+        return pairs
+
+    def _build_pairs(self, context: Context) -> tuple:
+        # The reference's model in this context gives MuJoCo's filters (and rejects a bad context).
+        self.reference._enter(context)
         collides = _pair_filter(self.reference._m)
 
         polys, starts, ends, ball_c, ball_r, boxes, poly_dist = self._polytopes
@@ -258,47 +275,45 @@ class SphereChecker:
                 dist[k] = float(np.max(eq[:, :3] @ self._origin + eq[:, 3]))
         return polys, starts, ends, ball_c, ball_r, boxes, dist
 
-    def set_context(self, context: Context) -> None:
-        """Switch this checker and the reference checker to ``context``."""
-        self._pairs(context)
-        self.reference.set_context(context)
-
-    @property
-    def context(self) -> Context:
-        return self.reference.context
-
     # -- queries -------------------------------------------------------------------------
-    def _first(self, q0: np.ndarray, q1: np.ndarray, steps: int, order: np.ndarray, start: int = 0) -> int:
-        active, *pairs = self._pairs(self.context)
+    def _first(self, q0: np.ndarray, q1: np.ndarray, steps: int, order: np.ndarray, pairs: tuple,
+               start: int = 0) -> int:
+        """Index into ``order`` of the first sample from ``start`` that the spheres reject, -1
+        if none; ``pairs``: :meth:`_pairs` of the query's context."""
+        active, *pairs = pairs
         t = _first_collision(q0, q1, steps, order, start, active, *self._chain, *self._spheres, *pairs, self.margin)
         self.n_states += (len(order) if t < 0 else t + 1) - start
         return int(t)
 
-    def spheres_free(self, Q) -> np.ndarray:
+    def spheres_free(self, Q, context: Context) -> np.ndarray:
         """``(k,)`` bool: the compiled sphere test alone (no limits, no MuJoCo) at every row
-        of ``Q (k, n)`` [rad]; True guarantees no MuJoCo pair nearer than the margin."""
+        of ``Q (k, n)`` [rad] in ``context``; True guarantees no MuJoCo pair nearer than the
+        margin."""
         Q = np.atleast_2d(np.asarray(Q, dtype=float))
         one = coarse_to_fine(1)
-        return np.array([self._first(q, q, 1, one) < 0 for q in Q], dtype=bool)
+        pairs = self._pairs(context)
+        return np.array([self._first(q, q, 1, one, pairs) < 0 for q in Q], dtype=bool)
 
-    def motion_is_valid(self, q0, q1, resolution: float) -> bool:
+    def motion_is_valid(self, q0, q1, context: Context, resolution: float) -> bool:
         """Whether the straight segment ``q0 → q1`` (each ``(n,)`` [rad]; ``q0`` assumed valid, as
-        OMPL does) is valid at the samples of :func:`densify` at ``resolution`` [rad].
+        OMPL does) is valid in ``context`` at the samples of :func:`densify` at ``resolution``
+        [rad].
 
         The compiled test visits the samples coarse to fine; MuJoCo checks each sample it
         rejects: a collision there ends the check, a false alarm of the spheres resumes it."""
         self.n_motions += 1
+        pairs = self._pairs(context)  # first: a bad context raises whatever the motion
         q0, q1 = np.asarray(q0, dtype=float), np.asarray(q1, dtype=float)
         if not np.all((q1 >= self.lower) & (q1 <= self.upper)):
             return False  # the limits are a box: both ends inside, so is the segment
         steps = max(1, int(np.ceil(np.max(np.abs(q1 - q0)) / resolution - 1e-12)))
         order = coarse_to_fine(steps)
-        t = self._first(q0, q1, steps, order)
+        t = self._first(q0, q1, steps, order, pairs)
         while t >= 0:
             self.n_confirmed += 1
-            if not self.reference.is_valid(q0 + (order[t] / steps) * (q1 - q0)):
+            if not self.reference.is_valid(q0 + (order[t] / steps) * (q1 - q0), context):
                 return False
-            t = self._first(q0, q1, steps, order, t + 1)
+            t = self._first(q0, q1, steps, order, pairs, t + 1)
         return True
 
     # -- clearance -----------------------------------------------------------------------
@@ -308,7 +323,7 @@ class SphereChecker:
         polytopes farther than ``clearance_max`` from anything the arm reaches."""
         if context in self._clearance_cache:
             return self._clearance_cache[context]
-        self.reference.set_context(context)
+        self.reference._enter(context)
         collides = _pair_filter(self.reference._mc)
         cp_geom, cp_poly, cs_geom, cs_c, cs_r = self._scene_pairs(collides, self._reach() + self.reference.clearance_max)
         ints = lambda x: np.array(x, dtype=np.int64)  # noqa: E731
@@ -317,9 +332,9 @@ class SphereChecker:
         self._clearance_cache[context] = pairs
         return pairs
 
-    def clearance_lower_bounds(self, Q) -> np.ndarray:
+    def clearance_lower_bounds(self, Q, context: Context) -> np.ndarray:
         """``(k,)`` lower bounds [m] of the reference checker's :meth:`~CollisionChecker.clearance`
-        at the rows of ``Q (k, n)`` [rad], in the current context, in one compiled call.
+        at the rows of ``Q (k, n)`` [rad], in ``context``, in one compiled call.
 
         Each is the smallest distance of an arm sphere to a scene polytope (its largest face
         distance, a box's exact distance) or a fixed sphere, capped at ``clearance_max``: the
@@ -327,13 +342,13 @@ class SphereChecker:
         own tolerance)."""
         Q = self.reference._check_batch(Q)
         _, sph_local, sph_r, g_start, g_end, g_body, g_centre, g_radius, _, _ = self._spheres
-        _, faces, starts, ends, _, _, boxes, *_ = self._pairs(self.context)
+        _, faces, starts, ends, _, _, boxes, *_ = self._pairs(context)
         return _clearance_bounds(Q, self.reference.clearance_max, *self._chain, sph_local, sph_r, g_start, g_end,
                                  g_body, g_centre, g_radius, faces, starts, ends, boxes,
-                                 *self._clearance_pairs(self.context))
+                                 *self._clearance_pairs(context))
 
-    def min_clearance(self, Q) -> float:
+    def min_clearance(self, Q, context: Context) -> float:
         """The reference checker's :meth:`~CollisionChecker.min_clearance` of ``Q (k, n)``
-        [rad] (the same value), with MuJoCo run only where :meth:`clearance_lower_bounds`
-        leaves the minimum open."""
-        return self.reference.min_clearance(Q, self.clearance_lower_bounds(Q))
+        [rad] in ``context`` (the same value), with MuJoCo run only where
+        :meth:`clearance_lower_bounds` leaves the minimum open."""
+        return self.reference.min_clearance(Q, context, self.clearance_lower_bounds(Q, context))

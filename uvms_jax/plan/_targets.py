@@ -128,13 +128,11 @@ def node_contexts(scene: Scene, node: int) -> dict[str, Context]:
 
 
 def _valid(checker: CollisionChecker, ctx: Context, q: np.ndarray) -> bool:
-    checker.set_context(ctx)
-    return checker.is_valid(q)
+    return checker.is_valid(q, ctx)
 
 
 def _segment_valid(checker: CollisionChecker, ctx: Context, a, b, resolution: float) -> bool:
-    checker.set_context(ctx)
-    return checker.path_is_valid(np.stack([a, b]), resolution)
+    return checker.path_is_valid(np.stack([a, b]), ctx, resolution)
 
 
 def _node_name(scene: Scene, node: int) -> str:
@@ -145,8 +143,7 @@ def _first_contact(checker: CollisionChecker, ctx: Mapping[str, Context], pre, a
     """The first contact of a rejected target pair, in words (at the pre or the grasp
     configuration, or on the segment between them)."""
     for key, q in (("arrive", pre), ("leave", pre), ("down", at), ("up", at)):
-        checker.set_context(ctx[key])
-        found = checker.contacts(q)
+        found = checker.contacts(q, ctx[key])
         if found:
             a, b, dist = found[0]
             return f"{a} against {b} ({1e3 * -dist:.0f} mm deep) at the {'pre' if q is pre else 'grasp'} pose"
@@ -199,7 +196,8 @@ def pick_place_targets(
 
     Args:
       key: PRNG key for the IK seeds.
-      scene, checker: the scene and its collision checker (left in the default context).
+      scene, checker: the scene and its collision checker (each check names its context,
+        :func:`node_contexts`).
       n_seeds, iterations: numerical IK seeds per pose and DLS iterations.
       n_yaw_continuous: yaws tried for a rotationally symmetric object (cylinder).
       max_branch_jump: largest joint change [rad] allowed between ``q_pre`` and ``q_at``.
@@ -261,5 +259,4 @@ def pick_place_targets(
                              f"base at {np.round(scene.T_world_base[:3, 3], 3).tolist()} m")
         _, k, a, p, w = best
         out[node] = NodeTarget(node, p, a, pre[k], at[k], float(yaws[k]), w, n_ok)
-    checker.set_context(Context())
     return out

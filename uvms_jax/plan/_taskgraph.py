@@ -20,7 +20,7 @@ from uvms_jax import planfile, sched
 from uvms_jax import progress as progress_lines
 from uvms_jax.plan._collision import CollisionChecker
 from uvms_jax.plan._planning import seed_ompl
-from uvms_jax.plan._scene import Context, Scene
+from uvms_jax.plan._scene import Scene
 from uvms_jax.plan._settings import PlanSettings
 from uvms_jax.plan._spheres import SphereChecker
 from uvms_jax.plan._targets import NodeTarget, pick_place_targets
@@ -59,7 +59,7 @@ class TaskGraphPlan:
 
     Attributes:
       scene: the scene planned in.
-      checker: its collision checker (left in the default context).
+      checker: its collision checker (its queries take their context as an argument).
       targets: node → :class:`NodeTarget` of every object and base.
       by_planner: planner → its :class:`EdgeResult` of every edge, in :func:`task_edges` order.
       metrics: planner → ``(5, N, N)`` raw metrics in ``uvms_jax.sched.METRICS`` order, NaN
@@ -146,7 +146,6 @@ def plan_task_graph(key: jax.Array, scene: Scene, settings: PlanSettings = PlanS
         costs[planner] = sched.cost_matrix(sched.normalise_metrics(metrics[planner]), weights)
         summary[planner] = _summarise(results)
         log.info("%s: %s", planner, summary[planner])
-    checker.set_context(Context())
     return TaskGraphPlan(scene, checker, targets, by_planner, metrics, costs, summary, ik_seconds)
 
 
@@ -176,5 +175,4 @@ def plan_for_schedule(task_plan: TaskGraphPlan, planner: str, sequence: Sequence
                            jaws_open_mm=jp.jaws_open_mm, jaws_closed_mm=jp.jaws_closed_mm,
                            max_velocity=settings.joint_velocity(task_plan.scene.robot), max_acceleration=settings.max_acceleration,
                            checker=task_plan.checker)
-    task_plan.checker.set_context(Context())
     return plan

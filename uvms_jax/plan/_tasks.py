@@ -146,13 +146,12 @@ def plan_edge(
     ``params``: the planner's parameters (see :func:`~uvms_jax.plan.plan_motion`).
     """
     q0, q1, ctx = edge_endpoints(scene, targets, src, dst)
-    (fast or checker).set_context(ctx)
-    res = plan_motion(checker, q0, q1, planner, budget_s, resolution, recheck_resolution, simplify_s, fast=fast,
+    res = plan_motion(checker, q0, q1, ctx, planner, budget_s, resolution, recheck_resolution, simplify_s, fast=fast,
                       params=params)
     if not res.success:
         return EdgeResult(planner, src, dst, res, None, None, {})
     traj = time_parameterize(res.path, max_velocity, max_acceleration)
-    check = check_trajectory(checker, traj, recheck_resolution, collision_free=res.revalidated)
+    check = check_trajectory(checker, traj, ctx, recheck_resolution, collision_free=res.revalidated)
     force = None
     if ctx.held is not None:
         force = scene.T_base_world[:3, :3] @ scene.payload_force_world(ctx.held)
@@ -161,7 +160,7 @@ def plan_edge(
     gravity = scene.T_base_world[:3, :3] @ np.array([0.0, 0.0, -scene.spec.gravity])
     jm, ee, tau = trajectory_metrics(scene.robot, dense, force, gravity_base=gravity,
                                      water_density=scene.spec.water_density)
-    clearance = (fast or checker).min_clearance(densify(res.path, clearance_resolution))
+    clearance = (fast or checker).min_clearance(densify(res.path, clearance_resolution), ctx)
     metrics = EdgeMetrics(planning_time=res.planning_time_s, joint_movement=jm, ee_distance=ee, security=clearance,
                           max_torque=tau)
     return EdgeResult(planner, src, dst, res, traj, metrics, check)
@@ -237,8 +236,7 @@ def plan_from_edges(
         if checker is not None:
             ctx = node_contexts(scene, dst)
             for key, tr in (("down", down), ("up", up)):
-                checker.set_context(ctx[key])
-                if not checker.path_is_valid(tr.q, resolution):
+                if not checker.path_is_valid(tr.q, ctx[key], resolution):
                     raise ValueError(f"node {dst}: the {key} motion collides")
         if dst in scene.objects:
             segments += [_gripper(f"open at {names[dst]}", jaws_open_mm),
