@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 from omegaconf import OmegaConf
 
-from uvms_jax import evo
+from uvms_jax import evo, papers
 
 GA_YAML = Path(__file__).resolve().parents[2] / "configs" / "ga" / "paper.yaml"
 FIELDS = ("x", "y", "z", "psi")
-ILL_PLACED = (-0.491, -0.464, 0.213, 0.83)
+ILL_PLACED = papers.D11_ILL_PLACED_POSE
 
 
 @pytest.mark.slow

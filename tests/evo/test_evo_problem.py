@@ -4,15 +4,15 @@ import jax
 import numpy as np
 import pytest
 
-from uvms_jax import evo, kin
+from uvms_jax import evo, kin, papers
 
 # Float64 throughout (conftest); the reference shares only elbow_ik and the Jacobian with
 # the code under test, so differences are rounding in the pose algebra.
 FIT_ATOL = 1e-9
 
 BEST_NEAR = (-0.4755, -0.002, 0.1476, 0.905)  # near the optimum found by grid search
-PAPER_BEST = (-0.32, -0.36, 0.24, 0.79)  # Table 3, run 1
-ILL_PLACED = (-0.491, -0.464, 0.213, 0.83)  # paper, Fig. 10
+PAPER_BEST = tuple(papers.D11_TABLE3[0, :4])  # Table 3, run 1
+ILL_PLACED = papers.D11_ILL_PLACED_POSE  # paper, Fig. 10
 FEASIBLE = [BEST_NEAR, PAPER_BEST, ILL_PLACED, (-0.45, 0.0, 0.2, 0.0), (0.0, -0.45, 0.2, 1.2), (0.45, 0.05, 0.25, 3.0)]
 INFEASIBLE = [
     (0.1, 0.1, 0.2, 0.0),  # over the task area

@@ -3,10 +3,10 @@
 import numpy as np
 import pytest
 
-from uvms_jax import evo
+from uvms_jax import evo, papers
 
 BEST_NEAR = (-0.4755, -0.002, 0.1476, 0.905)
-ILL_PLACED = (-0.491, -0.464, 0.213, 0.83)
+ILL_PLACED = papers.D11_ILL_PLACED_POSE
 
 
 @pytest.fixture(scope="module")

@@ -1,56 +1,69 @@
-"""Helpers of experiments/papers.py: the transcribed tables and the docking geometry."""
+"""uvms_jax.papers: the transcribed tables, the configs that repeat them, the docking geometry,
+the thesis helpers, and the entry point experiments/papers.py with its templates."""
 
 from __future__ import annotations
 
-import importlib.util
 import math
+import string
+import subprocess
 import sys
 from pathlib import Path
 
 import numpy as np
-import pytest
+import yaml
 
-from uvms_jax import kin
+from uvms_jax import evo, kin, papers
+from uvms_jax.papers import docking, thesis
+from uvms_jax.settings import from_mapping
 
 ROOT = Path(__file__).resolve().parents[2]
+TEMPLATES = ROOT / "experiments" / "papers_templates"
 
 
-@pytest.fixture(scope="module")
-def papers():
-    spec = importlib.util.spec_from_file_location("papers", ROOT / "experiments" / "papers.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules["papers"] = module  # dataclasses look their module up while the class is built
-    spec.loader.exec_module(module)
-    return module
-
-
-def test_thesis_tables_are_transcribed_consistently(papers):
+def test_thesis_tables_are_transcribed_consistently():
     """Σ K·N = C in every thesis table but 5.8 (the thesis's own inconsistency, theory §7);
     a mistyped K, N or C shows up here."""
-    bad = {t for t, rows in papers.PAPER_T22.items() for alg, path, K, N, C, ms in rows
+    bad = {t for t, rows in papers.T22_TABLES.items() for alg, path, K, N, C, ms in rows
            if abs(float(np.dot(K, N)) - C) > 0.01}
     assert bad == {"5.8"}
-    for rows in papers.PAPER_T22.values():
+    for rows in papers.T22_TABLES.values():
         for alg, path, K, N, C, ms in rows:
             nodes = [int(v) for v in path.split("-")]
             assert nodes[0] == 0 and nodes[-1] == 9 and sorted(set(nodes) - {0, 9}) == list(range(1, 9))
             assert math.isclose(sum(K), 1.0, abs_tol=1e-9)
+    assert set(papers.T22_SCENARIO_TABLES) == {p.stem for p in (ROOT / "configs" / "sched" / "weights").glob("*.yaml")}
 
 
-def test_heading_and_distance(papers):
+def test_configs_repeat_the_paper_data():
+    """The YAML configs must stay literal: they hold the docking paper's values as written in
+    uvms_jax.papers, and the scene config equals the settings' defaults (which read them)."""
+    scene = yaml.safe_load((ROOT / "configs" / "docking" / "scene" / "paper.yaml").read_text())
+    assert tuple(scene["block_size"]) == papers.D11_BLOCK_SIZE
+    assert scene["task_size"] == papers.D11_TASK_SIZE
+    assert tuple(scene["p_init"]) == papers.D11_P_INIT and tuple(scene["p_bp"]) == papers.D11_P_BP
+    assert tuple(scene["arm_lengths"]) == papers.D11_ARM_LENGTHS
+    assert from_mapping(evo.SceneSettings, scene) == evo.SceneSettings()
+    docking_yaml = yaml.safe_load((ROOT / "configs" / "docking.yaml").read_text())
+    assert tuple(docking_yaml["ill_placed_pose"]) == papers.D11_ILL_PLACED_POSE
+    assert evo.DockingSettings().ill_placed_pose == papers.D11_ILL_PLACED_POSE
+
+
+def test_heading_and_distance():
     # A pose at (−1, 0) facing +x looks straight at the centre; one at (0, −1) facing +x is 90° off.
     poses = np.array([[-1.0, 0.0, 0.0, 0.0], [0.0, -1.0, 0.0, 0.0], [-1.0, -1.0, 0.2, math.pi / 4]])
-    np.testing.assert_allclose(papers.heading_offset(poses), [0.0, 90.0, 0.0], atol=1e-9)
+    np.testing.assert_allclose(docking.heading_offset(poses), [0.0, 90.0, 0.0], atol=1e-9)
     # Docking point of the pose p_init itself with ψ = π/4: p_bp rotated and added (eq. 5).
-    p = np.array([[-2.0, -2.0, 2.0, math.pi / 4]])
-    d = np.array([-0.3 / math.sqrt(2), -0.3 / math.sqrt(2), -0.2])
-    np.testing.assert_allclose(papers.distance_d(p), [np.linalg.norm(d)], rtol=1e-12)
+    p = np.array([[*papers.D11_P_INIT, math.pi / 4]])
+    c = math.sqrt(0.5)
+    bx, by, bz = papers.D11_P_BP
+    d = np.array([c * (bx - by), c * (bx + by), bz])
+    np.testing.assert_allclose(docking.distance_d(p), [np.linalg.norm(d)], rtol=1e-12)
 
 
-def test_offset_chain_moves_the_tool_along_the_approach_axis(papers):
+def test_offset_chain_moves_the_tool_along_the_approach_axis():
     arm = kin.docking_arm()
     q = np.array([[0.3, -0.4, 1.1, 0.2, 0.7, -0.5]], np.float32)
-    T, T_off = np.asarray(kin.fk(arm, q))[0], np.asarray(kin.fk(papers.offset_chain(arm, 0.25), q))[0]
+    T, T_off = np.asarray(kin.fk(arm, q))[0], np.asarray(kin.fk(docking.offset_chain(arm, 0.25), q))[0]
     np.testing.assert_allclose(T_off[:3, 3], T[:3, 3] + 0.25 * T[:3, 0], atol=1e-6)
     np.testing.assert_allclose(T_off[:3, :3], T[:3, :3], atol=1e-6)
 
@@ -65,22 +78,22 @@ def _thesis_raw_metrics():
     return sched.random_metrics(jax.random.key(3), layout)
 
 
-def test_thesis_paths_scored_on_our_instance(papers):
+def test_thesis_paths_scored_on_our_instance():
     """Σ K·N of each thesis path equals the path's cost on the cost matrix built from the same
     metrics (the schedulers' own arithmetic, a separate code path)."""
     from uvms_jax import sched
 
     raw = _thesis_raw_metrics()
     for table in ("5.2", "5.7", "A.5"):
-        K = papers.PAPER_T22[table][0][2]
+        K = papers.T22_TABLES[table][0][2]
         problem, nm = sched.problem_from_metrics(raw, weights=K)
-        for alg, (sums, cost) in papers.thesis_path_sums(table, nm).items():
-            path = next(r[1] for r in papers.PAPER_T22[table] if r[0] == alg)
+        for alg, (sums, cost) in thesis.thesis_path_sums(table, nm).items():
+            path = next(r[1] for r in papers.T22_TABLES[table] if r[0] == alg)
             assert sums.shape == (5,) and np.all(sums >= 0)
             assert math.isclose(cost, sched.path_cost(problem, [int(v) for v in path.split("-")]), rel_tol=1e-12)
 
 
-def test_instances_from_an_edges_csv(papers, tmp_path):
+def test_instances_from_an_edges_csv(tmp_path):
     """Planners with rows in edges.csv give their metrics back; one without rows is reported."""
     from uvms_jax import sched
 
@@ -91,17 +104,29 @@ def test_instances_from_an_edges_csv(papers, tmp_path):
         rows += [f"{planner},{s},{d},True," + ",".join(repr(float(v)) for v in raw[:, s, d]) for s, d in zip(src, dst)]
     path = tmp_path / "edges.csv"
     path.write_text("\n".join(rows) + "\n")
-    instances, missing = papers.thesis_instances(path, budget_s=1.0)
+    instances, missing = thesis.thesis_instances(path, budget_s=1.0)
     assert set(instances) == {"RRTConnect", "PRM"} and set(missing) == {"BKPIECE1"}
     assert "BKPIECE1" in missing["BKPIECE1"]
     for inst in instances.values():
         np.testing.assert_allclose(inst.raw, raw)  # NaN where no move, in both
         assert inst.straight is None and inst.attempted is None
-    table = papers.instance_table(instances)
+    table = thesis.instance_table(instances)
     assert table.count("\n") == 3  # header, rule, two planners
 
 
-def test_returns_to_the_start(papers):
-    assert papers._returns("0-4-8-0-3-7-0-1-5-0-2-6-9") == 3
-    assert papers._returns("0-4-8-3-7-2-6-1-5-9") == 0
-    assert papers._and(["a"]) == "a" and papers._and(["a", "b", "c"]) == "a, b and c" and papers._and([]) == ""
+def test_returns_to_the_start():
+    assert thesis._returns("0-4-8-0-3-7-0-1-5-0-2-6-9") == 3
+    assert thesis._returns("0-4-8-3-7-2-6-1-5-9") == 0
+    assert thesis._and(["a"]) == "a" and thesis._and(["a", "b", "c"]) == "a, b and c" and thesis._and([]) == ""
+
+
+def test_templates_and_entry_point():
+    """The fixed parts have no placeholders, the sections' are plain names; --help runs."""
+    fields = {t.stem: {f[1].split(".")[0] for f in string.Formatter().parse(t.read_text(encoding="utf-8")) if f[1]}
+              for t in TEMPLATES.glob("*.md")}
+    assert set(fields) == {"intro", "howto", "docking", "dexterity", "thesis", "execution"}
+    assert fields["intro"] == fields["howto"] == fields["execution"] == set()
+    assert {"table3", "table4", "bound", "fig"} <= fields["docking"] and "weight_tables" in fields["thesis"]
+    out = subprocess.run([sys.executable, str(ROOT / "experiments" / "papers.py"), "--help"], capture_output=True,
+                         text=True, check=True, cwd=ROOT)
+    assert "--preset" in out.stdout and "tiny" in out.stdout

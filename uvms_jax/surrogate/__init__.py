@@ -72,7 +72,6 @@ from uvms_jax.surrogate._reach import fit_reach_map
 from uvms_jax.surrogate._reach import reach_dataset
 from uvms_jax.surrogate._reach import reach_features
 from uvms_jax.surrogate._reach import run_reach_map
-from uvms_jax.surrogate._run import PAPER
 from uvms_jax.surrogate._run import SurrogateRun
 from uvms_jax.surrogate._run import acceptance_figures
 from uvms_jax.surrogate._run import run_surrogates

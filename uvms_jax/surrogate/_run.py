@@ -22,6 +22,7 @@ import jax.numpy as jnp
 from jax import Array
 
 from uvms_jax import kin
+from uvms_jax.papers import D16_NETWORKS
 from uvms_jax.surrogate._dataset import Dataset, analytic_index_fn, make_dataset
 from uvms_jax.surrogate._design import Design, design_ffbn, design_rbfn
 from uvms_jax.surrogate._settings import SurrogateSettings, split_network_name
@@ -29,17 +30,6 @@ from uvms_jax.surrogate._timing import chunk_for, tile_batch, time_index_fn, xla
 
 log = logging.getLogger(__name__)
 
-# The dexterity paper's Table 4 (operations per evaluation) and Table 5 (seconds for 1000
-# inputs, Matlab on an i7-3930K), set beside ours in the report.
-PAPER = {
-    "ffbn_w": {"hidden_units": 8, "operation_count": 184, "seconds_1000": 0.0057},
-    "ffbn_kci": {"hidden_units": 25, "operation_count": 775, "seconds_1000": 0.0057},
-    "rbfn_w": {"hidden_units": 149, "operation_count": 4172, "seconds_1000": 0.0152},
-    # RBFN-KCI units: 142, from its operation count (28 per unit, as RBFN-w's 4172 over 149 units).
-    "rbfn_kci": {"hidden_units": 142, "spread": 8.9, "operation_count": 3976, "seconds_1000": 0.0152},
-    "analytic_w": {"operation_count": 21810, "seconds_1000": 0.7043},
-    "analytic_kci": {"operation_count": 21594, "seconds_1000": 0.7283},
-}
 ERROR_METRIC = "max over the test set of |(T - S) / T| (paper eq. 21); T analytic, S network"
 TIMING_NOTE = ("float32, jitted, compilation excluded, median of repeats, one process; analytic = the "
                "project's fastest analytic path, one fused kernel that never stores J (indices.manipulability_of "
@@ -149,7 +139,7 @@ def _network_info(name: str, d: Design) -> dict:
         "max_rel_test_error": d.steps[-1].test_error if d.met else min(s.test_error for s in d.steps),
         "met_goal": d.met, "design_seconds": d.seconds, "networks_tried": len(d.steps),
         "train_mse": float(d.history[-1]), "operation_count": net.operation_count,
-        "design_steps": [s._asdict() for s in d.steps], "paper": PAPER[name],
+        "design_steps": [s._asdict() for s in d.steps], "paper": D16_NETWORKS[name],
     }
 
 
@@ -157,7 +147,7 @@ def _time_analytic(chain: kin.Chain, index: str, q_test: Array, settings: Surrog
     """The report's analytic entry of ``index``: XLA flops per sample and timing per batch size."""
     t_set, fn = settings.timing, analytic_index_fn(chain, index, settings.index_form)
     info = {"xla_flops_per_sample": xla_flops_per_sample(fn, tile_batch(q_test, 1000)),
-            "paper": PAPER[f"analytic_{index}"], "timing": {}}
+            "paper": D16_NETWORKS[f"analytic_{index}"], "timing": {}}
     for n in t_set.batches:
         t = info["timing"][str(n)] = time_index_fn(fn, tile_batch(q_test, n), repeats=t_set.repeats,
                                                    chunk=chunk_for(n, t_set.chunk))
