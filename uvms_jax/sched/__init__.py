@@ -34,6 +34,7 @@ from uvms_jax.sched._grasp import LOCAL_SEARCHES
 from uvms_jax.sched._grasp import THESIS_ALPHAS
 from uvms_jax.sched._grasp import THESIS_NEIGHBOURHOOD
 from uvms_jax.sched._grasp import GraspBatch
+from uvms_jax.sched._grasp import GraspOptions
 from uvms_jax.sched._grasp import grasp
 from uvms_jax.sched._grasp import grasp_batch
 from uvms_jax.sched._grasp import thesis_local_search
@@ -86,6 +87,7 @@ __all__ = [
     "THESIS_NEIGHBOURHOOD",
     "THESIS_NODE_NAMES",
     "GraspBatch",
+    "GraspOptions",
     "GraspSettings",
     "PickPlaceProblem",
     "Reason",

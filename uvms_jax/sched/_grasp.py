@@ -17,8 +17,9 @@ Per-step uniforms come from a counter-based hash of one threefry seed per iterat
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 from functools import partial
-from typing import NamedTuple, Sequence
+from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -331,16 +332,50 @@ def _uniforms(seed: Array, n: int) -> Array:
     return (x >> 8).astype(jnp.float32) * jnp.float32(2.0**-24)
 
 
-def grasp_batch(
-    key: Array,
-    problem: PickPlaceProblem,
-    iterations: int = 1000,
-    *,
-    alphas: Sequence[float] = THESIS_ALPHAS,
-    neighbourhood: int = THESIS_NEIGHBOURHOOD,
-    rounds: int = DEFAULT_ROUNDS,
-    local_search: str = "deliveries",
-) -> GraspBatch:
+@dataclass(frozen=True)
+class GraspOptions:
+    """The settings of one GRASP call, checked once; hashable, so they are the one static
+    argument of the jitted cores (one compilation per node layout and options).
+
+    Attributes:
+      iterations: ``I``, independent iterations (thesis: 1000), ≥ 1.
+      alphas: α values, each in (0, 1]; each iteration draws one uniformly (thesis eq. 4.6).
+      neighbourhood: how many following deliveries (``"thesis"``: nodes) each one is swapped
+        with, ≥ 1 (thesis 4.7.2.2: 3).
+      rounds: improving swaps of the delivery search at most, ≥ 0 (unused by ``"thesis"``).
+      local_search: ``"deliveries"`` (ours) or ``"thesis"`` (Algorithm 4), see the module doc.
+
+    Raises:
+      ValueError: ``iterations < 1``, an α outside (0, 1], ``neighbourhood < 1``,
+        ``rounds < 0`` or an unknown ``local_search``.
+    """
+
+    iterations: int = 1000
+    alphas: tuple[float, ...] = THESIS_ALPHAS
+    neighbourhood: int = THESIS_NEIGHBOURHOOD
+    rounds: int = DEFAULT_ROUNDS
+    local_search: str = "deliveries"
+
+    def __post_init__(self):
+        it, alphas, nb, rounds = self.iterations, self.alphas, self.neighbourhood, self.rounds
+        if isinstance(it, bool) or not isinstance(it, (int, np.integer)) or it < 1:
+            raise ValueError(f"GRASP needs at least one iteration; got {it!r}")
+        if not alphas or any(not 0.0 < a <= 1.0 for a in alphas):
+            raise ValueError(f"GRASP α values must lie in (0, 1]; got {alphas}")
+        if isinstance(nb, bool) or not isinstance(nb, (int, np.integer)) or nb < 1:
+            raise ValueError(f"GRASP local-search neighbourhood must be an integer >= 1; got {nb!r}")
+        if isinstance(rounds, bool) or not isinstance(rounds, (int, np.integer)) or rounds < 0:
+            raise ValueError(f"GRASP local-search rounds must be an integer >= 0; got {rounds!r}")
+        if self.local_search not in LOCAL_SEARCHES:
+            raise ValueError(f"unknown GRASP local search {self.local_search!r}; choose from {LOCAL_SEARCHES}")
+        # plain Python values: numpy integers or a list of α would not hash as static arguments
+        object.__setattr__(self, "iterations", int(it))
+        object.__setattr__(self, "alphas", tuple(float(a) for a in alphas))
+        object.__setattr__(self, "neighbourhood", int(nb))
+        object.__setattr__(self, "rounds", int(rounds))
+
+
+def grasp_batch(key: Array, problem: PickPlaceProblem, iterations: int = 1000, **options) -> GraspBatch:
     """Runs ``iterations`` independent GRASP iterations in parallel (``vmap``), jitted.
 
     Args:
@@ -348,105 +383,76 @@ def grasp_batch(
         its per-step uniforms (``_uniforms``).
       problem: the instance.
       iterations: ``I``.
-      alphas: α values, thesis eq. 4.6 by default.
-      neighbourhood, rounds: local-search settings, see ``local_search`` (``rounds`` is
-        used by the delivery search only).
-      local_search: ``"deliveries"`` (ours) or ``"thesis"`` (Algorithm 4), see the module doc.
+      **options: keyword-only ``alphas``, ``neighbourhood``, ``rounds``, ``local_search``,
+        see ``GraspOptions`` (defaults: the thesis's α and neighbourhood, ``DEFAULT_ROUNDS``,
+        the delivery search).
 
     Returns:
       ``GraspBatch`` of ``I`` schedules.
 
     Raises:
-      ValueError: bad settings (see ``grasp``).
+      ValueError: bad settings (see ``GraspOptions``).
     """
-    settings = _checked(iterations, alphas, neighbourhood, rounds, local_search)
-    return _grasp_batch(key, problem, *settings)
+    return _grasp_batch(key, problem, GraspOptions(iterations, **options))
 
 
-_STATIC = ("iterations", "alphas", "neighbourhood", "rounds", "search")
-
-
-@partial(jax.jit, static_argnames=_STATIC)
-def _grasp_batch(key, problem, iterations, alphas, neighbourhood, rounds, search):
-    built, paths, cost = _iterations(key, problem, iterations, alphas, neighbourhood, rounds, search)
+@partial(jax.jit, static_argnames="options")
+def _grasp_batch(key, problem, options):
+    built, paths, cost = _iterations(key, problem, options)
     paths = jnp.where(jnp.isfinite(cost)[:, None], paths, built.path)  # stuck: as constructed
     return GraspBatch(paths, cost, built.cost)
 
 
-def _iterations(key, problem, iterations, alphas, neighbourhood, rounds, search):
+def _iterations(key, problem, options: GraspOptions):
     """Construction and local search of every iteration: constructions, node paths, costs."""
-    L = problem.max_path_len
+    L, I, alphas = problem.max_path_len, options.iterations, options.alphas
     k_alpha, k_seed = jax.random.split(key)
-    alpha = jnp.asarray(alphas, jnp.float32)[jax.random.randint(k_alpha, (iterations,), 0, len(alphas))]
-    seeds = jax.random.bits(k_seed, (iterations,), jnp.uint32)
+    alpha = jnp.asarray(alphas, jnp.float32)[jax.random.randint(k_alpha, (I,), 0, len(alphas))]
+    seeds = jax.random.bits(k_seed, (I,), jnp.uint32)
     u = jax.vmap(_uniforms, in_axes=(0, None))(seeds, L - 1)
     built = jax.vmap(construct, in_axes=(None, 0, 0))(problem, alpha, u)
-    if search == "thesis":
-        ls = partial(thesis_local_search, neighbourhood=neighbourhood)
+    if options.local_search == "thesis":
+        ls = partial(thesis_local_search, neighbourhood=options.neighbourhood)
         paths, cost = jax.vmap(ls, in_axes=(None, 0, 0))(problem, built.path, built.cost)
         return built, paths, cost
-    ls = partial(local_search, neighbourhood=neighbourhood, rounds=rounds)
+    ls = partial(local_search, neighbourhood=options.neighbourhood, rounds=options.rounds)
     objs, bases, cost = jax.vmap(ls, in_axes=(None, 0, 0, 0))(problem, built.objs, built.bases, built.cost)
     return built, jax.vmap(to_path, in_axes=(None, 0, 0))(problem, objs, bases), cost
 
 
-@partial(jax.jit, static_argnames=_STATIC)
-def _grasp_best(key, problem, iterations, alphas, neighbourhood, rounds, search):
-    _, paths, cost = _iterations(key, problem, iterations, alphas, neighbourhood, rounds, search)
+@partial(jax.jit, static_argnames="options")
+def _grasp_best(key, problem, options):
+    _, paths, cost = _iterations(key, problem, options)
     i = jnp.argmin(cost)
     return paths[i], cost[i]
 
 
-def _checked(iterations, alphas, neighbourhood, rounds, search) -> tuple[int, tuple[float, ...], int, int, str]:
-    """The GRASP settings as the static arguments of the jitted cores, or ValueError."""
-    if isinstance(iterations, bool) or not isinstance(iterations, (int, np.integer)) or iterations < 1:
-        raise ValueError(f"GRASP needs at least one iteration; got {iterations!r}")
-    if not alphas or any(not 0.0 < a <= 1.0 for a in alphas):
-        raise ValueError(f"GRASP α values must lie in (0, 1]; got {alphas}")
-    if isinstance(neighbourhood, bool) or not isinstance(neighbourhood, (int, np.integer)) or neighbourhood < 1:
-        raise ValueError(f"GRASP local-search neighbourhood must be an integer >= 1; got {neighbourhood!r}")
-    if isinstance(rounds, bool) or not isinstance(rounds, (int, np.integer)) or rounds < 0:
-        raise ValueError(f"GRASP local-search rounds must be an integer >= 0; got {rounds!r}")
-    if search not in LOCAL_SEARCHES:
-        raise ValueError(f"unknown GRASP local search {search!r}; choose from {LOCAL_SEARCHES}")
-    return int(iterations), tuple(float(a) for a in alphas), int(neighbourhood), int(rounds), search
-
-
-def grasp(
-    key: Array,
-    problem: PickPlaceProblem,
-    iterations: int = 1000,
-    *,
-    alphas: Sequence[float] = THESIS_ALPHAS,
-    neighbourhood: int = THESIS_NEIGHBOURHOOD,
-    rounds: int = DEFAULT_ROUNDS,
-    local_search: str = "deliveries",
-) -> Schedule:
+def grasp(key: Array, problem: PickPlaceProblem, iterations: int = 1000, **options) -> Schedule:
     """Best schedule of ``iterations`` GRASP iterations (thesis Algorithm 2).
 
     All iterations run in parallel in one jitted call (as in ``grasp_batch``), compiled once
-    per (node layout, iterations, settings) and reused. The returned cost is recomputed in
+    per (node layout, ``GraspOptions``) and reused. The returned cost is recomputed in
     float64 from the path.
 
     Args:
       key: PRNG key.
       problem: the instance.
       iterations: number of GRASP iterations (thesis: 1000).
-      alphas, neighbourhood, rounds, local_search: see ``grasp_batch``.
+      **options: keyword-only ``alphas``, ``neighbourhood``, ``rounds``, ``local_search``,
+        see ``grasp_batch``.
 
     Returns:
       ``Schedule`` (cost ``inf`` if every iteration got stuck).
 
     Raises:
-      ValueError: ``iterations < 1``, an α outside (0, 1], ``neighbourhood < 1``,
-        ``rounds < 0`` or an unknown ``local_search``.
+      ValueError: bad settings (see ``GraspOptions``).
     """
-    settings = _checked(iterations, alphas, neighbourhood, rounds, local_search)
+    settings = GraspOptions(iterations, **options)
     t0 = time.perf_counter()
-    path, cost = _grasp_best(key, problem, *settings)
+    path, cost = _grasp_best(key, problem, settings)
     path = np.asarray(path)
     wall = time.perf_counter() - t0
-    info = {"iterations": settings[0], "local_search": settings[4]}
+    info = {"iterations": settings.iterations, "local_search": settings.local_search}
     if not np.isfinite(float(cost)):
         return Schedule((), float("inf"), wall, "grasp", info)
     nodes = unpad(path, problem.n_nodes)

@@ -27,7 +27,7 @@ from uvms_jax.surrogate._adam import fit_adam
 from uvms_jax.surrogate._dataset import Dataset
 from uvms_jax.surrogate._inputs import JointInputs
 from uvms_jax.surrogate._lm import LMHyperParams, LMState, fit_lm
-from uvms_jax.surrogate._scaler import Scaler, fit_scaler
+from uvms_jax.surrogate._scaler import fit_scaler
 
 # Operation counts in the paper's convention (Table 4, Appendix A): additions and
 # multiplications cost 1 each, exp costs one multiplication, tanh = (e^γ − e^−γ)/(e^γ + e^−γ)
@@ -59,19 +59,10 @@ class FFBN(JointInputs):
     Attributes:
       params: flax parameters ``{"hidden": {kernel (d, H), bias (H,)}, "output": {kernel (H, 1), bias (1,)}}``
         acting on normalised inputs/outputs.
-      x_norm: input scaler, ``(d,)`` offsets and scales [joint units].
-      y_norm: output scaler, scalar offset and scale [index units].
-      index: "w" or "kci" (static).
-      inputs: joint indices of the inputs in the full configuration (static).
-      n_joints: length of the full configuration ``q`` (static).
+      x_norm, y_norm, index, inputs, n_joints: see :class:`JointInputs`.
     """
 
     params: Any
-    x_norm: Scaler
-    y_norm: Scaler
-    index: str = struct.field(pytree_node=False)
-    inputs: tuple[int, ...] = struct.field(pytree_node=False)
-    n_joints: int = struct.field(pytree_node=False, default=12)
 
     @property
     def hidden(self) -> int:

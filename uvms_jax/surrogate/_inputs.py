@@ -3,14 +3,33 @@
 from __future__ import annotations
 
 import jax.numpy as jnp
+from flax import struct
 from jax import Array
 
+from uvms_jax.surrogate._scaler import Scaler
 
+
+@struct.dataclass(kw_only=True)
 class JointInputs:
-    """Mixin for surrogate networks with ``inputs`` (joint indices), ``n_joints`` and ``predict``."""
+    """Base of the surrogate networks: the fields every network has, and its evaluation on
+    whole configurations. A subclass adds its parameters and ``predict``.
 
-    inputs: tuple[int, ...]
-    n_joints: int
+    The fields are keyword-only, so that a subclass's parameters (no defaults) may follow
+    ``n_joints``'s default; every network is built and loaded (``_io.py``) by keyword.
+
+    Attributes:
+      x_norm: input scaler, ``(d,)`` offsets and scales [joint units].
+      y_norm: output scaler, scalar offset and scale [index units].
+      index: "w" or "kci" (static).
+      inputs: joint indices of the inputs in the full configuration (static).
+      n_joints: length of the full configuration ``q`` (static).
+    """
+
+    x_norm: Scaler
+    y_norm: Scaler
+    index: str = struct.field(pytree_node=False)
+    inputs: tuple[int, ...] = struct.field(pytree_node=False)
+    n_joints: int = struct.field(pytree_node=False, default=12)
 
     @property
     def n_inputs(self) -> int:

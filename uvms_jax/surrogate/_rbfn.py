@@ -25,7 +25,7 @@ from jax import Array
 
 from uvms_jax.surrogate._dataset import Dataset
 from uvms_jax.surrogate._inputs import JointInputs
-from uvms_jax.surrogate._scaler import Scaler, fit_scaler
+from uvms_jax.surrogate._scaler import fit_scaler
 
 SPREAD_CONSTANT = math.sqrt(math.log(2.0))  # 0.8326: φ(spread) = 0.5
 # Operations per RBF unit in the dexterity paper's count (12 additions + 16 multiplications; see
@@ -45,19 +45,13 @@ class RBFN(JointInputs):
       weights: ``(M,)`` output weights (normalised output units).
       bias: ``()`` output bias.
       spread: ``()`` spread in normalised input units; ``b = 0.8326 / spread``.
-      x_norm, y_norm: input and output scalers.
-      index, inputs, n_joints: as for :class:`FFBN` (static).
+      x_norm, y_norm, index, inputs, n_joints: see :class:`JointInputs`.
     """
 
     centres: Array
     weights: Array
     bias: Array
     spread: Array
-    x_norm: Scaler
-    y_norm: Scaler
-    index: str = struct.field(pytree_node=False)
-    inputs: tuple[int, ...] = struct.field(pytree_node=False)
-    n_joints: int = struct.field(pytree_node=False, default=12)
 
     @property
     def n_centres(self) -> int:
