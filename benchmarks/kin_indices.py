@@ -90,28 +90,11 @@ def gram_kci_from_rows(rows, sweeps: int = 8):
     return _safe_sqrt(lmin * _safe_inverse(lmax))
 
 
-def near_singular(chain, rows: list, n: int, seed: int = 0) -> np.ndarray:
-    """``(2 n, dof)`` float64 poses: n walked onto the singular set by Newton steps on the
-    smallest singular value of J (σ_min is like a distance to it), n within 1e-3 rad of those."""
-    rng = np.random.default_rng(seed)
-    lo, hi = np.maximum(np.asarray(chain.lower), -3.0), np.minimum(np.asarray(chain.upper), 3.0)
-    sigma_min = lambda q: jnp.linalg.svd(kin.jacobian(chain, q)[jnp.asarray(rows)], compute_uv=False)[-1]  # noqa: E731
-    sigma, grad = jax.jit(jax.vmap(sigma_min)), jax.jit(jax.vmap(jax.grad(sigma_min)))
-    q = jnp.asarray(lo + rng.random((n, chain.n_joints)) * (hi - lo))
-    for _ in range(12):
-        g = grad(q)
-        q = q - (sigma(q) / jnp.maximum(jnp.sum(g * g, -1), 1e-30))[:, None] * g
-    on = np.clip(np.asarray(q), np.asarray(chain.lower), np.asarray(chain.upper))
-    step = rng.normal(size=on.shape)
-    near = on + step / np.linalg.norm(step, axis=1, keepdims=True) * rng.random((n, 1)) * 1e-3
-    return np.concatenate([on, np.clip(near, np.asarray(chain.lower), np.asarray(chain.upper))])
-
-
 def accuracy(chain, rows: tuple, fns: dict, n: int) -> dict:
     """Max float32 error of each form against float64 singular values (numpy's SVD), over
     ``2 n`` near-singular poses and ``n`` uniform ones: w's relative to the set's largest w."""
     lo, hi = np.maximum(np.asarray(chain.lower), -1.0), np.minimum(np.asarray(chain.upper), 1.0)
-    q = np.concatenate([near_singular(chain, list(rows), n), lo + np.random.default_rng(1).random((n, chain.n_joints)) * (hi - lo)])
+    q = np.concatenate([*indices.near_singular_poses(chain, n, rows), lo + np.random.default_rng(1).random((n, chain.n_joints)) * (hi - lo)])
     sigma = np.linalg.svd(np.asarray(kin.jacobian(chain, q))[:, list(rows)], compute_uv=False)
     reference = {"w": sigma.prod(-1), "kci": sigma[:, -1] / sigma[:, 0]}
     q32 = jnp.asarray(q, jnp.float32)

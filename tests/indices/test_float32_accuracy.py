@@ -1,15 +1,14 @@
 """w and KCI in float32 near singular poses, against float64 singular values (numpy's SVD).
 
-The configurations are found, not assumed: Newton steps on the smallest singular value of J
-(float64, its gradient through JAX's SVD) walk random poses onto the singular set; half the set
-sits on it, half within 1e-3 rad of it, and a third part is uniform over the joint ranges.
+The configurations are found, not assumed: ``indices.near_singular_poses`` walks random poses
+onto the singular set by Newton steps on the smallest singular value of J (float64, through
+JAX's SVD); a third of the set sits on it, a third within 1e-3 rad of it, a third is uniform.
 The same set defeats the Gram form (``sqrt(det J Jᵀ)`` and the eigenvalues of ``J Jᵀ`` in
 float32), so the bounds below test the factorisation, not an easy sample.
 """
 
 import importlib.metadata
 
-import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
@@ -38,29 +37,13 @@ ARMS = {
 }
 
 
-def near_singular(chain, rows: list, n: int, seed: int) -> np.ndarray:
-    """``(3 n, dof)`` float64 poses: n on (or, where a joint limit stops the search, toward)
-    the singular set, n within 1e-3 rad of those, n uniform."""
-    rng = np.random.default_rng(seed)
-    lo, hi = np.maximum(np.asarray(chain.lower), -3.0), np.minimum(np.asarray(chain.upper), 3.0)
-    uniform = lambda: lo + rng.random((n, chain.n_joints)) * (hi - lo)  # noqa: E731
-    sigma_min = lambda q: jnp.linalg.svd(kin.jacobian(chain, q)[jnp.asarray(rows)], compute_uv=False)[-1]  # noqa: E731
-    sigma, grad = jax.jit(jax.vmap(sigma_min)), jax.jit(jax.vmap(jax.grad(sigma_min)))
-    q = jnp.asarray(uniform())
-    for _ in range(12):  # σ_min is like a distance to the singular set: Newton lands on it
-        g = grad(q)
-        q = q - (sigma(q) / jnp.maximum(jnp.sum(g * g, -1), 1e-30))[:, None] * g
-    on = np.clip(np.asarray(q), np.asarray(chain.lower), np.asarray(chain.upper))
-    step = rng.normal(size=on.shape)
-    near = on + step / np.linalg.norm(step, axis=1, keepdims=True) * rng.random((n, 1)) * 1e-3
-    return np.concatenate([on, np.clip(near, np.asarray(chain.lower), np.asarray(chain.upper)), uniform()])
-
-
 @pytest.mark.parametrize("arm", list(ARMS))
 def test_float32_indices_match_float64_singular_values_near_singularities(arm):
     factory, task = ARMS[arm]
     chain, rows = factory(), list(indices.task_rows(task))
-    q = near_singular(chain, rows, 300, seed=len(arm))
+    lo, hi = np.maximum(np.asarray(chain.lower), -3.0), np.minimum(np.asarray(chain.upper), 3.0)
+    uniform = lo + np.random.default_rng(len(arm)).random((300, chain.n_joints)) * (hi - lo)
+    q = np.concatenate([*indices.near_singular_poses(chain, 300, task, seed=len(arm)), uniform])
     sigma = np.linalg.svd(np.asarray(kin.jacobian(chain, q))[:, rows], compute_uv=False)
     w64, kci64 = sigma.prod(-1), sigma[:, -1] / sigma[:, 0]
     w_max = w64.max()

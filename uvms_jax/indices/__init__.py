@@ -18,3 +18,4 @@ from uvms_jax.indices._indices import normalized_jacobian
 from uvms_jax.indices._indices import payload_wrench
 from uvms_jax.indices._indices import singular_values
 from uvms_jax.indices._indices import task_rows
+from uvms_jax.indices._singular import near_singular_poses
