@@ -10,7 +10,7 @@ from jax import Array
 
 from uvms_jax.kin._chain import Chain, with_dtype
 from uvms_jax.kin._fk import fk_of, pose_and_jacobian_of
-from uvms_jax.kin._lie import exp_twist, matmul, matvec, pose_error
+from uvms_jax.kin._lie import exp_twist, matmul, matvec, pose_error, rigid_inverse
 from uvms_jax.kin import _paden_kahan as pk
 
 POSITION_TOL = {jnp.dtype("float32"): 1e-4, jnp.dtype("float64"): 1e-8}  # [m] accepted FK(IK(T)) residual
@@ -62,11 +62,6 @@ def reaches(T_target: Array, T: Array) -> Array:
     return (dp < POSITION_TOL[T.dtype]) & (dR < jnp.sqrt(2.0) * ROTATION_TOL[T.dtype])
 
 
-def _inverse(R: Array, p: Array) -> tuple[Array, Array]:
-    Rt = jnp.swapaxes(R, -1, -2)
-    return Rt, -matvec(Rt, p)
-
-
 def elbow_branches(chain: Chain, T: Array) -> IKSolutions:
     """Eight closed-form branches for one target ``T (4, 4)`` (Murray §3.3.2), unverified.
 
@@ -83,7 +78,7 @@ def elbow_branches(chain: Chain, T: Array) -> IKSolutions:
 
     theta3, ok3 = pk.distance(w[2], elbow, wrist0, shoulder, jnp.linalg.norm(p - shoulder))
     branches_q, branches_ok = [], []
-    Rm, pm = _inverse(chain.T_base_tool0[:3, :3], chain.T_base_tool0[:3, 3])
+    Rm, pm = rigid_inverse(chain.T_base_tool0[:3, :3], chain.T_base_tool0[:3, 3])
     for e in range(2):
         R3, p3 = exp_twist(chain.twists[2], theta3[e])
         wrist_e = matvec(R3, wrist0) + p3
@@ -93,7 +88,7 @@ def elbow_branches(chain: Chain, T: Array) -> IKSolutions:
             R2, p2 = exp_twist(chain.twists[1], theta2[s])
             R12, p12 = matmul(R1, R2), matvec(R1, p2) + p1
             R123, p123 = matmul(R12, R3), matvec(R12, p3) + p12
-            Ri, pi = _inverse(R123, p123)
+            Ri, pi = rigid_inverse(R123, p123)
             # g_a = (e1 e2 e3)^-1 T M^-1 = e4 e5 e6.
             Ra = matmul(matmul(Ri, T[:3, :3]), Rm)
             pa = matvec(Ri, matvec(T[:3, :3], pm) + T[:3, 3]) + pi
@@ -104,7 +99,7 @@ def elbow_branches(chain: Chain, T: Array) -> IKSolutions:
                 R4, p4 = exp_twist(chain.twists[3], theta4[r])
                 R5, p5 = exp_twist(chain.twists[4], theta5[r])
                 R45, p45 = matmul(R4, R5), matvec(R4, p5) + p4
-                Rb, pb = _inverse(R45, p45)
+                Rb, pb = rigid_inverse(R45, p45)
                 target = matvec(Rb, matvec(Ra, off_axis6) + pa) + pb
                 theta6 = pk.rotation_to(w[5], wrist0, off_axis6, target)
                 branches_q.append(jnp.stack([theta1[s], theta2[s], theta3[e], theta4[r], theta5[r], theta6]))

@@ -113,10 +113,15 @@ def homogeneous(R: Array, p: Array) -> Array:
     return jnp.concatenate([top, bottom], axis=-2)
 
 
+def rigid_inverse(R: Array, p: Array) -> tuple[Array, Array]:
+    """``(Rᵀ, −Rᵀ p)``: the inverse of the rigid motion ``(R (..., 3, 3), p (..., 3))``."""
+    Rt = jnp.swapaxes(R, -1, -2)
+    return Rt, -matvec(Rt, p)
+
+
 def pose_inverse(T: Array) -> Array:
     """``T⁻¹ = [Rᵀ, −Rᵀ p; 0, 1]`` of homogeneous poses ``(..., 4, 4)``."""
-    Rt = jnp.swapaxes(T[..., :3, :3], -1, -2)
-    return homogeneous(Rt, -matvec(Rt, T[..., :3, 3]))
+    return homogeneous(*rigid_inverse(T[..., :3, :3], T[..., :3, 3]))
 
 
 def rpy_matrix(rpy) -> Array:
