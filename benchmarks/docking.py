@@ -32,8 +32,6 @@ from omegaconf import OmegaConf
 from uvms_jax import evo
 from uvms_jax.settings import from_mapping
 
-# Full float32 matrix products on GPUs too (TF32 would break the IK residual check).
-jax.config.update("jax_default_matmul_precision", "highest")
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -82,12 +82,7 @@ def _graph(scene, checker, fast, targets, edges, planner, settings) -> dict:
     t0 = time.perf_counter()
     with _timed_steps(acc):
         for src, dst in edges:
-            r = P.plan_edge(scene, checker, targets, src, dst, planner, budget_s=settings.budget_s,
-                            resolution=settings.resolution, recheck_resolution=settings.recheck_resolution,
-                            clearance_resolution=settings.clearance_resolution, simplify_s=settings.simplify_s,
-                            max_velocity=settings.joint_velocity(scene.robot),
-                            max_acceleration=settings.max_acceleration, fast=fast,
-                            params=settings.planner_params.get(planner))
+            r = P.plan_edge(scene, checker, targets, src, dst, planner, settings, fast=fast)
             times[f"{src}->{dst}"] = round(r.plan.planning_time_s * 1e3, 3)
             ok += r.success
             reval += r.revalidated
@@ -121,15 +116,14 @@ def main() -> None:
     fast.spheres_free(np.asarray(scene.spec.start_q)[None], P.Context())  # Numba: compile or load its cache
     numba_s = time.perf_counter() - t0
     t0 = time.perf_counter()
-    targets = P.pick_place_targets(jax.random.PRNGKey(args.seed), scene, checker, n_seeds=settings.ik.n_seeds)
+    targets = P.pick_place_targets(jax.random.PRNGKey(args.seed), scene, checker, settings.ik)
     ik_s = time.perf_counter() - t0
     edges = P.task_edges(scene)
     t0 = time.perf_counter()
     for planner in args.planners:  # warm-up: XLA compiles of the metrics, first OMPL calls
         for f in (None, fast):
             for src, dst in edges[:: max(1, len(edges) // 6)]:
-                P.plan_edge(scene, checker, targets, src, dst, planner, fast=f,
-                            params=settings.planner_params.get(planner))
+                P.plan_edge(scene, checker, targets, src, dst, planner, settings, fast=f)
     warmup_s = time.perf_counter() - t0
 
     Q = np.random.default_rng(args.seed).uniform(checker.lower, checker.upper, (args.checks, len(checker.lower)))

@@ -34,8 +34,6 @@ from uvms_jax import evo, plan
 from uvms_jax.settings import from_mapping
 
 log = logging.getLogger(__name__)
-# Full float32 matrix products on GPUs too (TF32 would break the IK residual check).
-jax.config.update("jax_default_matmul_precision", "highest")
 
 
 @hydra.main(version_base="1.3", config_path="../configs", config_name="docking")

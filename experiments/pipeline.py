@@ -102,7 +102,6 @@ def main(cfg: DictConfig) -> dict:
     # Decided once, before any JAX work: IK (planning) and the surrogates' training run in
     # float64; the docking GA and all timings ask for float32 explicitly.
     jax.config.update("jax_enable_x64", True)
-    jax.config.update("jax_default_matmul_precision", "highest")
     with _cli.config_errors():
         settings = settings_of(cfg)
         if "schedule" in settings.stages:

@@ -3,10 +3,7 @@
 import runpy
 from pathlib import Path
 
-import numpy as np
 import pytest
-
-from uvms_jax import kin
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 

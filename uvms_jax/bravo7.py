@@ -3,15 +3,14 @@
 Kinematics from the public Blueprint Lab URDF (docs/theory.md §1.3), device ids of the BPL
 protocol (docs/theory.md §6), and the manufacturer's kinematic and dynamic data (Blueprint Lab,
 "Reach Bravo Kinematics and Dynamics", 2020): its standard-DH table and each link's mass,
-centre of mass, inertia and buoyancy, given in its own link frames and mapped here into the
-URDF link frames (:func:`urdf_inertials`; docs/hardware.md says how, a test proves it).
+centre of mass, inertia and buoyancy, given in its own link frames (:func:`uvms_jax.kin.bravo7_inertials` maps them into the URDF
+link frames; docs/hardware.md says how, a test proves it).
 The stages use the arm as a :class:`uvms_jax.robot.Robot` loaded from its shipped description
 (``uvms_jax/robot/descriptions/bravo7.urdf`` and its card), which was written from these
 tables; tests check the two against each other. ``kin.bravo7()`` (the papers' reproductions)
 builds its chain from the joint table here.
 
-Plain Python on purpose: importing this module imports neither JAX nor NumPy, so the
-hardware path stays light.
+Tables only, in plain Python: every computation on them lives in ``uvms_jax.kin``.
 
 Units: metres and radians; the jaws A move in metres here (the wire speaks millimetres:
 ``uvms_jax.hw`` converts).
@@ -19,7 +18,6 @@ Units: metres and radians; the jaws A move in metres here (the wire speaks milli
 
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import dataclass
 
@@ -39,9 +37,6 @@ __all__ = [
     "TOOL_XYZ",
     "URDF_PI",
     "Joint",
-    "dh_inertial_frames",
-    "urdf_frames",
-    "urdf_inertials",
 ]
 
 NAME = "bravo7"
@@ -174,7 +169,7 @@ def _published(mass, com_mm, inertia_kg_mm2, volume_l, cob_mm) -> Inertial:
                     volume_l * 1e-3, tuple(c * 1e-3 for c in cob_mm))
 
 
-# Links 0 (base) … 7 (jaws, closed), each in the manufacturer's link frame (dh_inertial_frames).
+# Links 0 (base) … 7 (jaws, closed), each in the manufacturer's link frame (kin.bravo7_inertials).
 DH_INERTIALS: tuple[Inertial, ...] = (
     _published(1.25, (-18, -4, -1), (2108, 2573, 3483, 182, -15, -21), 0.72, (-18, -3, -3)),
     _published(1.55, (17, -7, 57), (11442, 12980, 3202, -484, 3405, -1265), 0.60, (27, -11, 92)),
@@ -188,98 +183,3 @@ DH_INERTIALS: tuple[Inertial, ...] = (
 # The URDF body each manufacturer's link is fixed to: the base, the links turned by G…B, and
 # the jaws (given in the tool frame, the jaws closed).
 INERTIAL_BODIES: tuple[str, ...] = ("base", "G", "F", "E", "D", "C", "B", "tool")
-
-
-# 4×4 homogeneous transforms as nested lists: enough linear algebra for fixed frame maps,
-# without NumPy (this module stays importable without it).
-def _mul(A, B):
-    return [[sum(A[i][k] * B[k][j] for k in range(4)) for j in range(4)] for i in range(4)]
-
-
-def _inv(T):
-    R = [[T[j][i] for j in range(3)] for i in range(3)]
-    p = [-sum(R[i][k] * T[k][3] for k in range(3)) for i in range(3)]
-    return [R[0] + [p[0]], R[1] + [p[1]], R[2] + [p[2]], [0.0, 0.0, 0.0, 1.0]]
-
-
-def _transform(R=((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)), p=(0.0, 0.0, 0.0)):
-    return [list(R[0]) + [p[0]], list(R[1]) + [p[1]], list(R[2]) + [p[2]], [0.0, 0.0, 0.0, 1.0]]
-
-
-def _axis_angle(axis, angle):
-    x, y, z = axis
-    c, s = math.cos(angle), math.sin(angle)
-    v = 1.0 - c
-    return ((c + x * x * v, x * y * v - z * s, x * z * v + y * s),
-            (y * x * v + z * s, c + y * y * v, y * z * v - x * s),
-            (z * x * v - y * s, z * y * v + x * s, c + z * z * v))
-
-
-def _origin(xyz, rpy):
-    """URDF joint origin: translation, then R = Rz(yaw) Ry(pitch) Rx(roll)."""
-    r, p, y = rpy
-    Rz, Ry, Rx = (_transform(_axis_angle(a, t)) for a, t in (((0, 0, 1), y), ((0, 1, 0), p), ((1, 0, 0), r)))
-    T = _mul(_mul(Rz, Ry), Rx)
-    for i in range(3):
-        T[i][3] = xyz[i]
-    return T
-
-
-def urdf_frames(q) -> list:
-    """URDF FK: 4×4 frames (nested lists) of the base, the links G…B and the tool, in the base
-    frame [m], for joint angles ``q`` (6,) G…B [rad]."""
-    T = _transform()
-    out = [T]
-    for joint, angle in zip(ARM_JOINTS, q):
-        T = _mul(_mul(T, _origin(joint.xyz, joint.rpy)), _transform(_axis_angle(joint.axis, angle)))
-        out.append(T)
-    out.append(_mul(T, _origin(TOOL_XYZ, TOOL_RPY)))
-    return out
-
-
-def dh_inertial_frames(q) -> list:
-    """The manufacturer's link frames 0…7, in the URDF base frame, for URDF angles ``q`` (6,).
-
-    Link 0's frame is the DH base frame; link k ≥ 1's is the DH frame k-1 turned by its row's
-    θ (origin on that joint's axis, turning with link k), before the row's d, a and α. This is
-    the frame in which the table's centres of mass sit on their links (a test checks it).
-    """
-    T = _transform(p=DH_BASE_XYZ)
-    out = [T]
-    for i, row in enumerate(DH_LINKS):
-        theta = row.theta_offset + (DH_JOINT_SIGNS[i] * q[i] if i < len(DH_JOINT_SIGNS) else 0.0)
-        turned = _mul(T, _transform(_axis_angle((0, 0, 1), theta)))
-        out.append(turned)
-        step = _mul(_transform(p=(0.0, 0.0, row.d)), _transform(p=(row.a, 0.0, 0.0)))
-        T = _mul(_mul(turned, step), _transform(_axis_angle((1, 0, 0), row.alpha)))
-    return out
-
-
-@functools.cache  # constants: computed once (the planner's torque metric asks for them per move)
-def urdf_inertials() -> tuple[Inertial, ...]:
-    """:data:`DH_INERTIALS` mapped into the URDF frames of :data:`INERTIAL_BODIES` (SI units).
-
-    Each manufacturer's link frame is fixed to its URDF body; the fixed transform is taken in
-    the mid-range pose. Its rotation is the same in every pose (quarter turns, and for link 2 the elbow
-    offset angle θa); its offset holds to the few millimetres by which the two descriptions of
-    the arm differ (tests/hw prove both). Inertia tensors are rotated, centres moved.
-    """
-    q_mid = tuple(0.5 * (j.lower + j.upper) for j in ARM_JOINTS)  # halves the pose-dependent spread
-    urdf, dh = urdf_frames(q_mid), dh_inertial_frames(q_mid)
-    out = []
-    for k, (inertial, body) in enumerate(zip(DH_INERTIALS, INERTIAL_BODIES)):
-        X = _mul(_inv(urdf[0 if body == "base" else -1 if body == "tool" else "GFEDCB".index(body) + 1]), dh[k])
-        R = [row[:3] for row in X[:3]]
-        p = [X[i][3] for i in range(3)]
-
-        def point(v):
-            return tuple(p[i] + sum(R[i][j] * v[j] for j in range(3)) for i in range(3))
-
-        xx, yy, zz, xy, xz, yz = inertial.inertia
-        inertia = ((xx, xy, xz), (xy, yy, yz), (xz, yz, zz))
-        rot = [[sum(R[i][a] * inertia[a][b] * R[j][b] for a in range(3) for b in range(3)) for j in range(3)]
-               for i in range(3)]
-        out.append(Inertial(inertial.mass, point(inertial.com),
-                            (rot[0][0], rot[1][1], rot[2][2], rot[0][1], rot[0][2], rot[1][2]),
-                            inertial.volume, point(inertial.cob)))
-    return tuple(out)

@@ -2,7 +2,7 @@
 
 Oracles: the DH forward kinematics written here from the standard DH formula, and the URDF
 forward kinematics of the test helpers (numpy, from the URDF table); neither is the code
-under test (``uvms_jax.bravo7`` does its own plain-Python FK).
+under test (:func:`uvms_jax.kin.bravo7_inertials`, which maps the table with the library's FK).
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ import sys
 import numpy as np
 import pytest
 
-from uvms_jax import bravo7
+from uvms_jax import bravo7, kin
 
 from _hw_helpers import urdf_link_frames
 
@@ -78,7 +78,7 @@ def test_mapped_inertials_are_the_table_seen_from_the_urdf_frames(rng):
     """In any pose, the table's centres seen from the URDF bodies are the mapped ones to within
     7 mm (the two descriptions' length differences add up along the chain), and the inertia
     tensors are the table's, rotated (the rotation is the same in every pose)."""
-    mapped = bravo7.urdf_inertials()
+    mapped = kin.bravo7_inertials()
     for q in random_q(rng, 20):
         U, (_, L) = body_frames(q), dh_fk(q)
         for k, (src, dst) in enumerate(zip(bravo7.DH_INERTIALS, mapped)):
@@ -104,7 +104,7 @@ def test_centres_of_mass_sit_on_their_links(rng):
     for q in random_q(rng, 10):
         U = body_frames(q)
         ends = [U[k + 1][:3, 3] for k in range(7)] + [(U[7] @ [0, 0, 0.1, 1])[:3]]
-        for k, inertial in enumerate(bravo7.urdf_inertials()):
+        for k, inertial in enumerate(kin.bravo7_inertials()):
             p = U[k][:3, :3] @ inertial.com + U[k][:3, 3]
             assert distance(p, U[k][:3, 3], ends[k]) < 0.03, (k, bravo7.INERTIAL_BODIES[k])
 
@@ -120,10 +120,5 @@ def test_table_is_physical():
 
 
 def test_bravo7_stays_plain_python():
-    code = "import sys, uvms_jax.bravo7 as b; b.urdf_inertials(); print('numpy' in sys.modules or 'jax' in sys.modules)"
+    code = "import sys, uvms_jax.bravo7; print('numpy' in sys.modules or 'jax' in sys.modules)"
     assert subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip() == "False"
-
-
-def test_urdf_frames_match_the_independent_fk(rng):
-    for q in random_q(rng, 5):
-        np.testing.assert_allclose(np.array(bravo7.urdf_frames(q)[1:]), np.array(urdf_link_frames(q)), atol=1e-12)

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from uvms_jax import bravo7
+from uvms_jax import bravo7, kin
 from uvms_jax.hw import Mode, PacketID, SimArm, SimConfig
 
 from _hw_helpers import BRAVO, DeviceID, SimRun, urdf_link_frames, ypr_matrix
@@ -24,7 +24,7 @@ def static_torques(q, water_density, base_rpy=(0.0, 0.0, 0.0)):
     up = ypr_matrix(yaw, pitch, roll).T @ np.array([0.0, 0.0, 1.0])  # world z in the base frame
     U = [np.eye(4)] + urdf_link_frames(q)  # base, G…B, tool
     forces = []
-    for body_frame, inertial in zip(U, bravo7.urdf_inertials()):
+    for body_frame, inertial in zip(U, kin.bravo7_inertials()):
         R, p = body_frame[:3, :3], body_frame[:3, 3]
         forces.append((p + R @ inertial.com, -inertial.mass * G * up))
         forces.append((p + R @ inertial.cob, water_density * inertial.volume * G * up))

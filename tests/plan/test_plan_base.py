@@ -11,7 +11,8 @@ import yaml
 from scipy.spatial.transform import Rotation
 
 from uvms_jax import kin
-from uvms_jax.plan import CollisionChecker, Context, build_scene, pick_place_targets, plan_motion, seed_ompl
+from uvms_jax.plan import (CollisionChecker, Context, IkSettings, build_scene, pick_place_targets, plan_motion,
+                            seed_ompl)
 from uvms_jax.robot import load_arm  # noqa: E402
 
 BRAVO7 = load_arm("bravo7")
@@ -99,7 +100,7 @@ def test_paths_in_the_moved_scene_are_collision_free(scenes):
 def test_ik_targets_follow_the_base(scenes):
     _, moved, T_new = scenes
     checker = CollisionChecker(moved)
-    targets = pick_place_targets(jax.random.PRNGKey(0), moved, checker, n_seeds=48)
+    targets = pick_place_targets(jax.random.PRNGKey(0), moved, checker, IkSettings(n_seeds=48))
     chain = kin.bravo7()
     for tg in targets.values():
         T_reached = T_new @ np.asarray(kin.fk(chain, tg.q_at))

@@ -44,7 +44,7 @@ def setup():
     seed_ompl(3)
     scene = build_scene(BRAVO7, yaml.safe_load(SCENARIO.read_text()))
     checker = CollisionChecker(scene)
-    targets = pick_place_targets(jax.random.PRNGKey(0), scene, checker, n_seeds=N_SEEDS)
+    targets = pick_place_targets(jax.random.PRNGKey(0), scene, checker, IkSettings(n_seeds=N_SEEDS))
     return scene, checker, targets
 
 
@@ -74,7 +74,7 @@ def test_all_targets_reachable_and_valid(setup):
 def test_edges_planned_and_revalidated(setup, planner):
     scene, checker, targets = setup
     for src, dst in [(0, 1), (1, 5), (5, 4), (4, 8), (8, 9)]:
-        e = plan_edge(scene, checker, targets, src, dst, planner, budget_s=5.0)
+        e = plan_edge(scene, checker, targets, src, dst, planner, PlanSettings(budget_s=5.0))
         assert e.success and e.revalidated, (planner, src, dst, e.check)
         m = e.metrics
         assert m.planning_time <= 5.0 and m.joint_movement > 0 and m.ee_distance > 0

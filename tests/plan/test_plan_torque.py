@@ -76,13 +76,30 @@ def test_matches_mujoco(sim, gravities, poses, base, water):
         assert np.abs(t).max() > 0.1  # every pose carries a real load
 
 
+def _pose(R, p=(0.0, 0.0, 0.0)):
+    T = np.eye(4)
+    T[:3, :3], T[:3, 3] = R, p
+    return T
+
+
+def _urdf_frames(q):
+    """Frames of the base, links G…B and the tool ``(8, 4, 4)`` for ``q (6,)``, by the URDF rule
+    (origin, then a turn about the joint axis) read straight off the joint table."""
+    out = [np.eye(4)]
+    for joint, angle in zip(bravo7.ARM_JOINTS, q):
+        turn = Rotation.from_rotvec(angle * np.asarray(joint.axis)).as_matrix()
+        out.append(out[-1] @ _pose(Rotation.from_euler("xyz", joint.rpy).as_matrix(), joint.xyz) @ _pose(turn))
+    out.append(out[-1] @ _pose(Rotation.from_euler("xyz", bravo7.TOOL_RPY).as_matrix(), bravo7.TOOL_XYZ))
+    return out
+
+
 def _potential(q, g, water, force_tool):
-    """U(q) = −Σ f·p [J] of the constant point loads, from the URDF frames in plain Python
-    (:func:`uvms_jax.bravo7.urdf_frames`: base, links G…B, tool)."""
-    frames = [np.array(T) for T in bravo7.urdf_frames(q)]
+    """U(q) = −Σ f·p [J] of the constant point loads, from the URDF joint table's own frames
+    (:func:`_urdf_frames`, not the library's kinematics)."""
+    frames = _urdf_frames(q)
     body = {"base": 0, "tool": 7} | {name: i + 1 for i, name in enumerate("GFEDCB")}
     U = 0.0
-    for name, inertial in zip(bravo7.INERTIAL_BODIES, bravo7.urdf_inertials()):
+    for name, inertial in zip(bravo7.INERTIAL_BODIES, kin.bravo7_inertials()):
         T = frames[body[name]]
         U -= inertial.mass * g @ (T[:3, :3] @ inertial.com + T[:3, 3])
         U += water * inertial.volume * g @ (T[:3, :3] @ inertial.cob + T[:3, 3])

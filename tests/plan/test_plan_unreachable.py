@@ -10,15 +10,15 @@ import pytest
 import yaml
 
 from uvms_jax import robot
-from uvms_jax.plan import CollisionChecker, build_scene, pick_place_targets
+from uvms_jax.plan import CollisionChecker, IkSettings, build_scene, pick_place_targets
 
 SCENARIO = yaml.safe_load((Path(__file__).parents[2] / "configs" / "scenario" / "thesis_cage.yaml").read_text())
-IK = {"n_seeds": 16, "iterations": 60}
+IK = IkSettings(n_seeds=16, iterations=60)
 
 
 def _targets(arm: robot.Robot, start_q=None):
     scene = build_scene(arm, {**SCENARIO, "start_q": start_q})
-    return scene, lambda: pick_place_targets(jax.random.key(0), scene, CollisionChecker(scene), **IK)
+    return scene, lambda: pick_place_targets(jax.random.key(0), scene, CollisionChecker(scene), IK)
 
 
 def test_out_of_reach_says_by_how_much():

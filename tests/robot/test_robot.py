@@ -52,7 +52,7 @@ def test_bravo7_description_matches_the_manufacturers_tables():
     # Mass properties: the manufacturer's, mapped into the link frames (the jaws on link B).
     body_of = {"base": robot.BASE, **{j.name: i for i, j in enumerate(bravo7.ARM_JOINTS)}, "tool": 5}
     tool_in_b = np.asarray(bravo7.TOOL_XYZ)
-    expected = bravo7.urdf_inertials()
+    expected = kin.bravo7_inertials()
     assert len(r.inertials) == len(expected)
     for got, name, want in zip(r.inertials, bravo7.INERTIAL_BODIES, expected):
         shift = tool_in_b if name == "tool" else 0.0

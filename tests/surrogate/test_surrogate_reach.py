@@ -11,8 +11,6 @@ from scipy.spatial.transform import Rotation
 
 from uvms_jax import evo, surrogate
 
-jax.config.update("jax_default_matmul_precision", "highest")
-
 BATCH = 32  # vehicle poses per analytic call everywhere below: one shape, one compile of the IK
 
 

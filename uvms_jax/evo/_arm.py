@@ -192,8 +192,8 @@ def arm_tool_poses(problem: ArmDockingProblem, pose: Array) -> tuple[Array, Arra
       ``T_world_vehicle (..., 4, 4)``, ``T_world_base (..., 4, 4)`` and ``T_base_tool (..., k, 4, 4)``.
     """
     T_world_vehicle = base_transform(pose)
-    T_world_base = T_world_vehicle @ problem.T_vehicle_base
-    return T_world_vehicle, T_world_base, kin.pose_inverse(T_world_base)[..., None, :, :] @ problem.T_world_tool
+    T_world_base = kin.matmul(T_world_vehicle, problem.T_vehicle_base)
+    return T_world_vehicle, T_world_base, kin.matmul(kin.pose_inverse(T_world_base)[..., None, :, :], problem.T_world_tool)
 
 
 def arm_solutions(problem: ArmDockingProblem, pose: Array) -> tuple[Array, Array, Array]:
@@ -212,7 +212,7 @@ def arm_solutions(problem: ArmDockingProblem, pose: Array) -> tuple[Array, Array
     within = jnp.all((q >= p.chain.lower) & (q <= p.chain.upper), axis=-1)
     points = link_points(T_world_base[..., None, None, :, :], K.T_base_joint, K.T_base_tool)  # (..., k, S, n + 2, 3)
     n_caps = points.shape[-2] - 1
-    T_vb = T_world_vehicle[..., None, :, :] @ p.T_vehicle_box  # (..., mv, 4, 4)
+    T_vb = kin.matmul(T_world_vehicle[..., None, :, :], p.T_vehicle_box)  # (..., mv, 4, 4)
     T_vb = T_vb[..., None, None, None, :, :, :]  # (..., 1, 1, 1, mv, 4, 4): against every target, seed, capsule
     # The first capsule (base → first joint) is fixed on the vehicle: it is not tested against it.
     skip_vehicle = jnp.zeros((n_caps, p.vehicle_half.shape[0]), bool).at[0].set(True)
@@ -229,7 +229,7 @@ arm_solutions_jit = jax.jit(arm_solutions)
 
 def vehicle_clear(problem: ArmDockingProblem, pose: Array) -> Array:
     """``(...)`` True where no vehicle box overlaps a scene box."""
-    T_vb = base_transform(pose)[..., None, None, :, :] @ problem.T_vehicle_box[:, None]  # (..., mv, 1, 4, 4)
+    T_vb = kin.matmul(base_transform(pose)[..., None, None, :, :], problem.T_vehicle_box[:, None])  # (..., mv, 1, 4, 4)
     hit = boxes_overlap(T_vb, problem.vehicle_half[:, None], problem.T_world_box, problem.scene_half)
     return ~jnp.any(hit, axis=(-1, -2))
 
@@ -248,7 +248,7 @@ def arm_terms(problem: ArmDockingProblem, pose: Array, w: Array) -> DockingEval:
     one value per tool pose (e.g. a learned map's, :mod:`uvms_jax.surrogate`)."""
     p = problem
     M_a = jnp.min(target_w(p, w), axis=-1)  # eq. 1
-    p_d = jnp.einsum("...ij,j->...i", base_transform(pose)[..., :3, :3], p.p_dock) + pose[..., :3]
+    p_d = kin.matvec(base_transform(pose)[..., :3, :3], p.p_dock) + pose[..., :3]
     D = jnp.linalg.norm(p_d - p.p_i, axis=-1)  # eq. 3
     inside = jnp.all((pose >= p.low) & (pose <= p.high), axis=-1)
     feasible = inside & vehicle_clear(p, pose)  # eq. 14: Wd

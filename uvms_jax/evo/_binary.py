@@ -8,6 +8,7 @@ symmetric block) differ only in the field's first bit — one mutation apart ins
 
 from __future__ import annotations
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 from flax import struct
@@ -67,7 +68,8 @@ class BinaryCodec:
             bits = jnp.concatenate(
                 [jnp.cumsum(bits[..., s : s + n].astype(jnp.int32), axis=-1) % 2 for s, n in self._fields()], axis=-1
             )
-        levels = bits.astype(self.low.dtype) @ jnp.asarray(self._weights(), dtype=self.low.dtype)
+        levels = jnp.matmul(bits.astype(self.low.dtype), jnp.asarray(self._weights(), dtype=self.low.dtype),
+                            precision=jax.lax.Precision.HIGHEST)  # exact integers on GPUs too
         return self.low + levels * self.resolution
 
     def encode(self, x) -> Bits:

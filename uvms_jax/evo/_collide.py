@@ -18,6 +18,9 @@ from jax import Array
 # to 0.618^40 ≈ 4e-9 of the segment length (below float32 resolution for links < 1 m).
 GOLDEN_STEPS = 40
 _INV_PHI = 0.6180339887498949
+# Full float32 products on GPUs too: TF32 (their default) moves a rotated point by ~1e-3 of its
+# distance, enough to flip a contact decision near a surface.
+_EXACT = jax.lax.Precision.HIGHEST
 
 
 def point_box_distance(p: Array, half: Array) -> Array:
@@ -33,7 +36,7 @@ def segment_box_distance(a: Array, b: Array, T_world_box: Array, half: Array) ->
     finds its minimum (no branch per Voronoi region of the box).
     """
     R, c = T_world_box[..., :3, :3], T_world_box[..., :3, 3]
-    to_box = lambda p: jnp.einsum("...ji,...j->...i", R, p - c)  # Rᵀ (p − c)
+    to_box = lambda p: jnp.einsum("...ji,...j->...i", R, p - c, precision=_EXACT)  # Rᵀ (p − c)
     a_b, b_b = to_box(a), to_box(b)
     d = lambda t: point_box_distance(a_b + t[..., None] * (b_b - a_b), half)
     shape = jnp.broadcast_shapes(a_b.shape, b_b.shape, half.shape)[:-1]
@@ -61,9 +64,9 @@ def boxes_overlap(T_a: Array, half_a: Array, T_b: Array, half_b: Array, tol: flo
     t = T_b[..., :3, 3] - T_a[..., :3, 3]
     cross = jnp.cross(A[..., :, :, None], B[..., :, None, :], axis=-3)  # (..., 3, 3, 3): axis a_i × b_j
     axes = jnp.concatenate([A, B, cross.reshape(cross.shape[:-2] + (9,))], axis=-1)  # (..., 3, 15)
-    proj_a = jnp.sum(half_a[..., :, None] * jnp.abs(jnp.einsum("...ki,...kl->...il", A, axes)), axis=-2)
-    proj_b = jnp.sum(half_b[..., :, None] * jnp.abs(jnp.einsum("...ki,...kl->...il", B, axes)), axis=-2)
-    gap = jnp.abs(jnp.einsum("...k,...kl->...l", t, axes)) - proj_a - proj_b
+    proj_a = jnp.sum(half_a[..., :, None] * jnp.abs(jnp.einsum("...ki,...kl->...il", A, axes, precision=_EXACT)), axis=-2)
+    proj_b = jnp.sum(half_b[..., :, None] * jnp.abs(jnp.einsum("...ki,...kl->...il", B, axes, precision=_EXACT)), axis=-2)
+    gap = jnp.abs(jnp.einsum("...k,...kl->...l", t, axes, precision=_EXACT)) - proj_a - proj_b
     norm = jnp.linalg.norm(axes, axis=-2)
     return ~jnp.any(gap > tol * jnp.maximum(norm, 1e-12), axis=-1)
 
@@ -73,7 +76,7 @@ def link_points(T_world_base: Array, T_base_joint: Array, T_base_tool: Array) ->
     tool = T_base_tool[..., None, :3, 3]
     p_base = jnp.concatenate([jnp.zeros_like(tool), T_base_joint[..., :3, 3], tool], axis=-2)  # (..., n + 2, 3)
     R, p = T_world_base[..., None, :3, :3], T_world_base[..., None, :3, 3]
-    return jnp.einsum("...ij,...j->...i", R, p_base) + p
+    return jnp.einsum("...ij,...j->...i", R, p_base, precision=_EXACT) + p
 
 
 def capsules_hit_boxes(points: Array, radius: float, T_world_box: Array, half: Array, skip: Array) -> Array:

@@ -17,7 +17,7 @@ import numpy as np
 from flax import struct
 from jax import Array
 
-from uvms_jax import indices
+from uvms_jax import indices, kin
 from uvms_jax.kin import Chain, with_dtype
 
 Pose = Array  # (..., 4) [x, y, z, ψ] of the arm base in G [m, rad]
@@ -26,18 +26,9 @@ Fitness = Array  # (...)
 YAW_MODES = ("heading", "fixed")
 
 
-def yaw_matrix(psi: Array) -> Array:
-    """Rotation ``R_z(ψ) (..., 3, 3)`` about z of G (paper eq. 6–7)."""
-    c, s = jnp.cos(psi), jnp.sin(psi)
-    zero, one = jnp.zeros_like(psi), jnp.ones_like(psi)
-    return jnp.stack(
-        [jnp.stack([c, -s, zero], -1), jnp.stack([s, c, zero], -1), jnp.stack([zero, zero, one], -1)], -2
-    )
-
-
 def base_transform(pose: Pose) -> Array:
     """``T_G_B (..., 4, 4)`` of candidate poses ``[x, y, z, ψ]`` (paper eq. 7)."""
-    R = yaw_matrix(pose[..., 3])
+    R = kin.axis_rotation(2, pose[..., 3])  # R_z(ψ) about z of G (paper eq. 6–7)
     top = jnp.concatenate([R, pose[..., :3, None]], axis=-1)
     bottom = jnp.broadcast_to(jnp.array([0.0, 0.0, 0.0, 1.0], dtype=pose.dtype), pose.shape[:-1] + (1, 4))
     return jnp.concatenate([top, bottom], axis=-2)
@@ -45,7 +36,7 @@ def base_transform(pose: Pose) -> Array:
 
 def docking_point(pose: Pose, p_bp: Array) -> Array:
     """Docking (suction-cup) point ``p_d = T_G_B(pose) · p_bp`` (paper eq. 5), ``(..., 3)`` [m]."""
-    R = yaw_matrix(pose[..., 3])
+    R = kin.axis_rotation(2, pose[..., 3])  # R_z(ψ) about z of G (paper eq. 6–7)
     return jnp.sum(R * p_bp[..., None, :], axis=-1) + pose[..., :3]
 
 

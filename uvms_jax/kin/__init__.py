@@ -45,9 +45,13 @@ from uvms_jax.kin._ik import wrap_into_limits
 from uvms_jax.kin._import import CONTINUOUS_LIMITS
 from uvms_jax.kin._import import from_mjcf
 from uvms_jax.kin._import import from_urdf
+from uvms_jax.kin._lie import axis_rotation
+from uvms_jax.kin._lie import matmul
+from uvms_jax.kin._lie import matvec
 from uvms_jax.kin._lie import pose_inverse
 from uvms_jax.kin._models import BRAVO7_JOINTS
 from uvms_jax.kin._models import bravo7
+from uvms_jax.kin._models import bravo7_inertials
 from uvms_jax.kin._models import docking_arm
 from uvms_jax.kin._models import uvms12
 from uvms_jax.kin._vehicle import VEHICLE_DOFS

@@ -124,18 +124,22 @@ def pose_inverse(T: Array) -> Array:
     return homogeneous(*rigid_inverse(T[..., :3, :3], T[..., :3, 3]))
 
 
+def axis_rotation(axis: int, angle) -> Array:
+    """Rotation ``(..., 3, 3)`` by ``angle (...)`` [rad] about the frame's x, y or z axis
+    (``axis`` 0, 1 or 2)."""
+    angle = jnp.asarray(angle)
+    c, s = jnp.cos(angle), jnp.sin(angle)
+    one, zero = jnp.ones_like(c), jnp.zeros_like(c)
+    i, j = (axis + 1) % 3, (axis + 2) % 3  # the turning plane, i → j positive (x → y about z)
+    rows = [[one if a == b else zero for b in range(3)] for a in range(3)]
+    rows[i][i], rows[i][j], rows[j][i], rows[j][j] = c, -s, s, c
+    return jnp.stack([jnp.stack(r, axis=-1) for r in rows], axis=-2)
+
+
 def rpy_matrix(rpy) -> Array:
     """URDF roll-pitch-yaw ``(..., 3)`` [rad] → ``R = Rz(yaw) Ry(pitch) Rx(roll)``."""
     rpy = jnp.asarray(rpy)
-    z = jnp.zeros(3, dtype=rpy.dtype)
-    one = jnp.ones((), dtype=rpy.dtype)
-
-    def axis_rot(axis: int, angle: Array) -> Array:
-        w = z.at[axis].set(one)
-        R, _ = exp_twist(jnp.concatenate([z, w]), angle)
-        return R
-
-    return matmul(matmul(axis_rot(2, rpy[..., 2]), axis_rot(1, rpy[..., 1])), axis_rot(0, rpy[..., 0]))
+    return matmul(matmul(axis_rotation(2, rpy[..., 2]), axis_rotation(1, rpy[..., 1])), axis_rotation(0, rpy[..., 0]))
 
 
 # Below this |vee|² = (2 sin θ)², rotation_log uses the series of θ / (2 sin θ); the remainder

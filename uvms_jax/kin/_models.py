@@ -2,9 +2,15 @@
 
 from __future__ import annotations
 
+import functools
+
+import jax
+import jax.numpy as jnp
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from uvms_jax import bravo7 as _b7
+from uvms_jax import frames
 from uvms_jax.kin._chain import (
     REVOLUTE,
     Chain,
@@ -12,7 +18,9 @@ from uvms_jax.kin._chain import (
     chain_from_urdf_joints,
     make_chain,
     revolute_twist,
+    with_dtype,
 )
+from uvms_jax.kin._fk import kinematics
 from uvms_jax.kin._vehicle import uvms
 from uvms_jax.papers import D11_ARM_LENGTHS
 
@@ -103,3 +111,49 @@ BRAVO7_JAWS = _urdf_joint(_b7.JAWS)
 def bravo7() -> Chain:
     """Reach Bravo 7 arm, joints G, F, E, D, C, B (URDF angle convention); tool = jaws base frame."""
     return chain_from_urdf_joints(BRAVO7_JOINTS, _b7.TOOL_XYZ, _b7.TOOL_RPY, name=_b7.NAME)
+
+
+def _dh_link_frames(q: np.ndarray) -> np.ndarray:
+    """``(8, 4, 4)`` the manufacturer's link frames 0…7 in the URDF base frame, for URDF angles
+    ``q (6,)`` [rad]: link 0's is the DH base frame, link k ≥ 1's the DH frame k-1 turned by its
+    row's θ (origin on that joint's axis, turning with link k), before the row's d, a and α."""
+    T = frames.pose(p=_b7.DH_BASE_XYZ)
+    out = [T]
+    for i, row in enumerate(_b7.DH_LINKS):
+        theta = row.theta_offset + (_b7.DH_JOINT_SIGNS[i] * q[i] if i < len(_b7.DH_JOINT_SIGNS) else 0.0)
+        turned = T @ frames.pose(frames.rot_z(theta))
+        out.append(turned)
+        T = turned @ frames.pose(Rotation.from_rotvec([row.alpha, 0.0, 0.0]).as_matrix(), (row.a, 0.0, row.d))
+    return np.stack(out)
+
+
+@functools.cache  # constants, computed once
+def bravo7_inertials() -> tuple[_b7.Inertial, ...]:
+    """The manufacturer's mass properties (:data:`uvms_jax.bravo7.DH_INERTIALS`) mapped into the
+    URDF frames of :data:`uvms_jax.bravo7.INERTIAL_BODIES` (SI units): the source of the
+    ``<inertial>`` elements of the shipped Bravo 7 description.
+
+    Each manufacturer's link frame is fixed to its URDF body; the fixed transform is taken in
+    the mid-range pose, which halves the pose-dependent spread. Its rotation is the same in every
+    pose (quarter turns, and for link 2 the elbow offset angle θa); its offset holds to the few
+    millimetres by which the two descriptions of the arm differ (tests/hw prove both). Inertia
+    tensors are rotated, centres moved. Computed in float64 whatever the process default.
+    """
+    q_mid = np.array([0.5 * (j.lower + j.upper) for j in _b7.ARM_JOINTS])
+    with jax.enable_x64(True):
+        k = kinematics(with_dtype(bravo7(), jnp.float64), jnp.asarray(q_mid))
+        urdf = np.concatenate([np.eye(4)[None], np.asarray(k.T_base_joint), np.asarray(k.T_base_tool)[None]])
+    body_index = {"base": 0, **{j.name: i + 1 for i, j in enumerate(_b7.ARM_JOINTS)}, "tool": len(urdf) - 1}
+    out = []
+    for inertial, body, T_dh in zip(_b7.DH_INERTIALS, _b7.INERTIAL_BODIES, _dh_link_frames(q_mid)):
+        X = np.linalg.inv(urdf[body_index[body]]) @ T_dh
+        R, p = X[:3, :3], X[:3, 3]
+        xx, yy, zz, xy, xz, yz = inertial.inertia
+        I = R @ np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]]) @ R.T
+        point = lambda v: tuple(float(c) for c in R @ v + p)
+        out.append(_b7.Inertial(inertial.mass, point(inertial.com), tuple(float(I[i, j]) for i, j in _UPPER),
+                                inertial.volume, point(inertial.cob)))
+    return tuple(out)
+
+
+_UPPER = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))  # (xx, yy, zz, xy, xz, yz) of a tensor

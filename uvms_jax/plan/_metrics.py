@@ -15,6 +15,8 @@ from uvms_jax import robot as robots
 
 __all__ = ["EdgeMetrics", "static_torques", "trajectory_metrics"]
 
+_EXACT = jax.lax.Precision.HIGHEST  # full float32 products on GPUs too (their default is TF32)
+
 #: The five metrics of one edge (thesis definitions 1–5), fields named and ordered as
 #: ``uvms_jax.sched.METRICS``: ``planning_time`` (planner wall time [s]), ``joint_movement``
 #: (Σ over consecutive points and joints of |Δq| [rad]), ``ee_distance`` (Σ over consecutive
@@ -67,11 +69,12 @@ def _load_torques(chain: kin.Chain, q, body, local, force):
     tool points ``(k, 3)`` [m] (one compiled call for both metrics that need kinematics)."""
     k = kin.kinematics(chain, q)
     frames = jnp.concatenate([k.T_base_joint, k.T_base_tool[..., None, :, :]], axis=-3)[..., body, :, :]
-    p = jnp.einsum("...pij,pj->...pi", frames[..., :3, :3], local) + frames[..., :3, 3]  # (k, P, 3)
+    p = jnp.einsum("...pij,pj->...pi", frames[..., :3, :3], local, precision=_EXACT) + frames[..., :3, 3]  # (k, P, 3)
     v, w = k.twists[..., None, :3], k.twists[..., None, 3:]  # (k, n, 1, 3)
     velocity = v + jnp.cross(w, p[..., None, :, :])  # (k, n, P, 3): point p under a unit rate of joint i
     turned = body[None, :] >= jnp.arange(chain.n_joints)[:, None]  # (n, P): joint i turns the links ≥ i
-    tau = jnp.einsum("...ipc,pc,ip->...i", velocity, force.astype(velocity.dtype), turned.astype(velocity.dtype))
+    tau = jnp.einsum("...ipc,pc,ip->...i", velocity, force.astype(velocity.dtype), turned.astype(velocity.dtype),
+                     precision=_EXACT)
     return tau, k.T_base_tool[..., :3, 3]
 
 

@@ -28,6 +28,7 @@ import numpy as np
 from uvms_jax import evo, frames, indices, kin
 from uvms_jax.plan._collision import CollisionChecker
 from uvms_jax.plan._scene import Context, Scene
+from uvms_jax.plan._settings import IkSettings
 
 __all__ = ["NodeTarget", "STEPS", "docking_task", "node_contexts", "pick_place_targets", "tool_poses"]
 
@@ -185,12 +186,8 @@ def pick_place_targets(
     key: jax.Array,
     scene: Scene,
     checker: CollisionChecker,
-    n_seeds: int = 32,
-    iterations: int = 150,
-    n_yaw_continuous: int = 8,
-    max_branch_jump: float = 1.0,
+    ik: IkSettings = IkSettings(),
     resolution: float = 0.01,
-    select: str = "manipulability",
 ) -> dict[int, NodeTarget]:
     """Solve the targets of every object and base node by batched numerical IK.
 
@@ -198,12 +195,9 @@ def pick_place_targets(
       key: PRNG key for the IK seeds.
       scene, checker: the scene and its collision checker (each check names its context,
         :func:`node_contexts`).
-      n_seeds, iterations: numerical IK seeds per pose and DLS iterations.
-      n_yaw_continuous: yaws tried for a rotationally symmetric object (cylinder).
-      max_branch_jump: largest joint change [rad] allowed between ``q_pre`` and ``q_at``.
-      resolution: joint step [rad] of the segment check between them.
-      select: the kept pair: the largest manipulability, or ``"nearest_start"`` (its pre
-        configuration nearest ``scene.start_q``, max-norm) — see ``plan.IkSettings``.
+      ik: seeds and iterations of the numerical IK, yaws of a symmetric object, the largest
+        joint change between ``q_pre`` and ``q_at``, and which valid pair is kept.
+      resolution: joint step [rad] of the segment check between ``q_pre`` and ``q_at``.
 
     Returns:
       node → :class:`NodeTarget`.
@@ -213,10 +207,10 @@ def pick_place_targets(
     """
     chain = scene.robot.chain
     nodes = sorted(scene.objects) + sorted(scene.bases)
-    per_node = [tool_poses(scene, n, n_yaw_continuous) for n in nodes]
+    per_node = [tool_poses(scene, n, ik.n_yaw_continuous) for n in nodes]
     T_world = np.concatenate([np.stack([at, pre], axis=1) for _, at, pre in per_node])  # (K, 2, 4, 4)
     T_base = scene.T_base_world @ T_world
-    sol = kin.numeric_ik(key, chain, jnp.asarray(T_base), n_seeds=n_seeds, iterations=iterations, all_seeds=True)
+    sol = kin.numeric_ik(key, chain, jnp.asarray(T_base), n_seeds=ik.n_seeds, iterations=ik.iterations, all_seeds=True)
     q_all = _nearest_turn(np.asarray(sol.q), scene.start_q, scene.robot)  # (K, 2, S, n)
     ok_all = np.asarray(sol.valid)
     w_all = np.asarray(indices.manipulability(kin.jacobian(chain, jnp.nan_to_num(jnp.asarray(q_all)))))
@@ -236,12 +230,12 @@ def pick_place_targets(
             for s in np.flatnonzero(ok_at):
                 jump = np.max(np.abs(q_pre[pre_idx] - q_at[s]), axis=1)
                 j = pre_idx[int(np.argmin(jump))]
-                if jump.min() > max_branch_jump or (s, j) in tried:
+                if jump.min() > ik.max_branch_jump or (s, j) in tried:
                     continue
                 tried.add((s, j))
                 n_paired += 1
                 w = float(min(w_all[row + k, 0, s], w_all[row + k, 1, j]))
-                score = -float(np.max(np.abs(q_pre[j] - scene.start_q))) if select == "nearest_start" else w
+                score = -float(np.max(np.abs(q_pre[j] - scene.start_q))) if ik.select == "nearest_start" else w
                 a, p = q_at[s], q_pre[j]
                 if not (_valid(checker, ctx["arrive"], p) and _valid(checker, ctx["leave"], p)
                         and _valid(checker, ctx["down"], a) and _valid(checker, ctx["up"], a)
@@ -254,7 +248,7 @@ def pick_place_targets(
                     best = (score, k, a.copy(), p.copy(), w)
         row += len(yaws)
         if best is None:
-            why = _unreachable(scene, at, n_solved, n_paired, collision, len(yaws) * n_seeds, max_branch_jump)
+            why = _unreachable(scene, at, n_solved, n_paired, collision, len(yaws) * ik.n_seeds, ik.max_branch_jump)
             raise ValueError(f"node {node} ({_node_name(scene, node)}): {why}; arm {scene.robot.name!r} with its "
                              f"base at {np.round(scene.T_world_base[:3, 3], 3).tolist()} m")
         _, k, a, p, w = best

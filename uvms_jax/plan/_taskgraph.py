@@ -119,10 +119,7 @@ def plan_task_graph(key: jax.Array, scene: Scene, settings: PlanSettings = PlanS
     seed_ompl(settings.seed)
     checker = CollisionChecker(scene, margin=settings.margin, clearance_max=settings.clearance_max)
     t0 = time.perf_counter()
-    ik = settings.ik
-    targets = pick_place_targets(key, scene, checker, n_seeds=ik.n_seeds, iterations=ik.iterations,
-                                 n_yaw_continuous=ik.n_yaw_continuous, max_branch_jump=ik.max_branch_jump,
-                                 resolution=settings.recheck_resolution, select=ik.select)
+    targets = pick_place_targets(key, scene, checker, settings.ik, resolution=settings.recheck_resolution)
     ik_seconds = time.perf_counter() - t0
     log.info("IK targets for %d nodes in %.1f s (compilation included)", len(targets), ik_seconds)
     fast = SphereChecker(checker) if settings.checker == "spheres" else None
@@ -133,11 +130,7 @@ def plan_task_graph(key: jax.Array, scene: Scene, settings: PlanSettings = PlanS
         results = []
         bar = progress_lines.bar(edges, desc=f"plan {planner}", unit="edge") if progress else edges
         for src, dst in bar:
-            r = plan_edge(scene, checker, targets, src, dst, planner, budget_s=settings.budget_s,
-                          resolution=settings.resolution, recheck_resolution=settings.recheck_resolution,
-                          clearance_resolution=settings.clearance_resolution, simplify_s=settings.simplify_s,
-                          max_velocity=settings.joint_velocity(scene.robot), max_acceleration=settings.max_acceleration,
-                          fast=fast, params=settings.planner_params.get(planner))
+            r = plan_edge(scene, checker, targets, src, dst, planner, settings, fast=fast)
             results.append(r)
             log.debug("%s %d->%d success=%s revalidated=%s %.3f s", planner, src, dst, r.success, r.revalidated,
                       r.plan.planning_time_s)

@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Mapping, Sequence
-from typing import Any
 
 import numpy as np
 
@@ -27,6 +26,7 @@ from uvms_jax.plan._collision import CollisionChecker, densify
 from uvms_jax.plan._metrics import EdgeMetrics, trajectory_metrics
 from uvms_jax.plan._planning import PlanResult, Trajectory, check_trajectory, plan_motion, time_parameterize
 from uvms_jax.plan._scene import Context, Scene
+from uvms_jax.plan._settings import PlanSettings
 from uvms_jax.plan._spheres import SphereChecker
 from uvms_jax.plan._targets import NodeTarget, node_contexts
 
@@ -125,32 +125,26 @@ def plan_edge(
     src: int,
     dst: int,
     planner: str,
-    *,
-    budget_s: float = 5.0,
-    resolution: float = 0.02,
-    recheck_resolution: float = 0.01,
-    clearance_resolution: float = 0.05,
-    simplify_s: float = 0.2,
-    max_velocity=0.5,
-    max_acceleration=1.0,
+    settings: PlanSettings = PlanSettings(),
     fast: SphereChecker | None = None,
-    params: Mapping[str, Any] | None = None,
 ) -> EdgeResult:
     """Plan one edge, time-parameterise it, re-check it and measure its metrics.
 
-    Metrics are measured on the path interpolated at ``recheck_resolution`` (clearance at
-    ``clearance_resolution``), torques from the arm's own weight and buoyancy plus the held
+    ``settings`` give the budget, the resolutions, the time parameterisation's limits and
+    the planner's parameters. Metrics are measured on the path interpolated at
+    ``settings.recheck_resolution`` (clearance at ``clearance_resolution``), torques from the arm's own weight and buoyancy plus the held
     object's load (edges out of an object), gravity rotated into the arm's base frame. With ``fast`` (a
     :class:`SphereChecker` on ``checker``) the planner checks motions with it; every result is
     re-checked with MuJoCo.
-    ``params``: the planner's parameters (see :func:`~uvms_jax.plan.plan_motion`).
     """
+    s = settings
     q0, q1, ctx = edge_endpoints(scene, targets, src, dst)
-    res = plan_motion(checker, q0, q1, ctx, planner, budget_s, resolution, recheck_resolution, simplify_s, fast=fast,
-                      params=params)
+    recheck_resolution = s.recheck_resolution
+    res = plan_motion(checker, q0, q1, ctx, planner, s.budget_s, s.resolution, recheck_resolution, s.simplify_s,
+                      fast=fast, params=s.planner_params.get(planner))
     if not res.success:
         return EdgeResult(planner, src, dst, res, None, None, {})
-    traj = time_parameterize(res.path, max_velocity, max_acceleration)
+    traj = time_parameterize(res.path, s.joint_velocity(scene.robot), s.max_acceleration)
     check = check_trajectory(checker, traj, ctx, recheck_resolution, collision_free=res.revalidated)
     force = None
     if ctx.held is not None:
@@ -160,7 +154,7 @@ def plan_edge(
     gravity = scene.T_base_world[:3, :3] @ np.array([0.0, 0.0, -scene.spec.gravity])
     jm, ee, tau = trajectory_metrics(scene.robot, dense, force, gravity_base=gravity,
                                      water_density=scene.spec.water_density)
-    clearance = (fast or checker).min_clearance(densify(res.path, clearance_resolution), ctx)
+    clearance = (fast or checker).min_clearance(densify(res.path, s.clearance_resolution), ctx)
     metrics = EdgeMetrics(planning_time=res.planning_time_s, joint_movement=jm, ee_distance=ee, security=clearance,
                           max_torque=tau)
     return EdgeResult(planner, src, dst, res, traj, metrics, check)

@@ -156,16 +156,8 @@ def mb_offset(chain: kin.Chain) -> np.ndarray:
 
 def _rotation_xyz(angles: Array) -> Array:
     """``Rx(a0) Ry(a1) Rz(a2)`` for ``angles: (..., 3)`` [rad] → ``(..., 3, 3)`` (joints 4–6)."""
-    c, s = jnp.cos(angles), jnp.sin(angles)
-    one, zero = jnp.ones_like(c[..., 0]), jnp.zeros_like(c[..., 0])
-
-    def mat(rows):
-        return jnp.stack([jnp.stack(r, axis=-1) for r in rows], axis=-2)
-
-    Rx = mat([[one, zero, zero], [zero, c[..., 0], -s[..., 0]], [zero, s[..., 0], c[..., 0]]])
-    Ry = mat([[c[..., 1], zero, s[..., 1]], [zero, one, zero], [-s[..., 1], zero, c[..., 1]]])
-    Rz = mat([[c[..., 2], -s[..., 2], zero], [s[..., 2], c[..., 2], zero], [zero, zero, one]])
-    return Rx @ Ry @ Rz
+    Rx, Ry, Rz = (kin.axis_rotation(k, angles[..., k]) for k in range(3))
+    return kin.matmul(kin.matmul(Rx, Ry), Rz)
 
 
 def _check_uvms(chain: kin.Chain) -> None:
@@ -195,7 +187,7 @@ def _sample(key: Array, chain: kin.Chain, mb0: Array, sampling: Sampling, n: int
     alpha = sampling.heading + jax.random.uniform(k_a, (n,), dtype, -sampling.phi / 2, sampling.phi / 2)
     p_mb = jnp.asarray(sampling.task_point, dtype) + jnp.stack([r * jnp.cos(alpha), r * jnp.sin(alpha), jnp.zeros_like(r)], -1)
     # Joints 1–6 map a vehicle-frame point p to (x, y, z) + Rx Ry Rz p, so the CoG is:
-    p_cog = p_mb - jnp.einsum("nij,j->ni", _rotation_xyz(angles[:, :3]), mb0.astype(dtype))
+    p_cog = p_mb - jnp.einsum("nij,j->ni", _rotation_xyz(angles[:, :3]), mb0.astype(dtype), precision=jax.lax.Precision.HIGHEST)
     return jnp.concatenate([p_cog, angles], axis=-1)
 
 

@@ -30,12 +30,13 @@ def split_network_name(name: str) -> tuple[str, str]:
 
 
 class _PerIndex:
-    """One value per index (w, KCI), read as ``values["w"]``; subclasses say which values are valid."""
+    """One value per index (w, KCI), read as ``values["w"]``; each field's :func:`setting` says
+    which values are valid, checked on construction too."""
 
     def __post_init__(self):
-        for index in INDEX_NAMES:
-            if not self._valid(self[index]):
-                raise ValueError(f"{index}: expected {self._expected}, got {self[index]}")
+        problems = [m for f in dataclasses.fields(self) for m in f.metadata["check"].problems(getattr(self, f.name), f.name)]
+        if problems:
+            raise ValueError("; ".join(problems))
 
     def __getitem__(self, index: str):
         if index not in INDEX_NAMES:
@@ -47,26 +48,16 @@ class _PerIndex:
 class IndexInts(_PerIndex):
     """One positive integer per index (w, KCI), e.g. training-set sizes or unit limits."""
 
-    w: int
-    kci: int
-    _expected = "a positive integer"
-
-    @staticmethod
-    def _valid(v) -> bool:
-        return v >= 1
+    w: int = setting(ge=1)
+    kci: int = setting(ge=1)
 
 
 @dataclasses.dataclass(frozen=True)
 class IndexFloats(_PerIndex):
-    """One positive number per index (w, KCI), e.g. target mse [index units²]."""
+    """One positive finite number per index (w, KCI), e.g. target mse [index units²]."""
 
-    w: float
-    kci: float
-    _expected = "a positive finite number"
-
-    @staticmethod
-    def _valid(v) -> bool:
-        return math.isfinite(v) and v > 0
+    w: float = setting(gt=0.0, lt=math.inf)
+    kci: float = setting(gt=0.0, lt=math.inf)
 
 
 @dataclasses.dataclass(frozen=True)
