@@ -35,6 +35,12 @@ def _rate(v: float) -> str:
     return f"{mantissa}e{int(exponent)}"
 
 
+def _sci(v: float) -> str:
+    """``2.4e-6`` style: two significant digits, no '+' or leading zero in the exponent."""
+    mantissa, exponent = f"{v:.1e}".split("e")
+    return f"{mantissa}e{int(exponent)}"
+
+
 def _batch(n: int) -> str:
     mantissa, exponent = f"{n:.0e}".split("e")
     return f"{mantissa}e{int(exponent)}"
@@ -130,6 +136,14 @@ def demo() -> str:
         ["baseline", f"the thesis's cage-top mount: M_a {fixed['M_a']:.4f} (docked: {docked['M_a']:.4f}), completed in "
                      f"{fixed['executed_s']} s (docked: {docked['executed_s']} s)", f"{t['baseline']:.1f}"],
     ]
+    if "hover" in d:
+        def run(label, m):
+            return (f"{label}: {m['gates_reached']}/{m['gates']} gates, drift ≤ {1e3 * m['max_drift_m']:.0f} mm, tool "
+                    f"≤ {1e3 * m['max_tool_error_m']:.0f} mm, tilt ≤ {m['max_tilt_deg']:.1f}°, thrust ≤ "
+                    f"{m['peak_thrust_N']:.0f} N, {m['status']}")
+        runs = d["hover"]["runs"]
+        rows.insert(-1, ["hover", "the same motion hovering at the docked pose on thrusters; "
+                         + "; ".join(run(label, m) for label, m in runs.items()), f"{t['hover']:.1f}"])
     return (f"Pipeline {d['total_seconds']:.1f} s (compilation cache warm):\n\n"
             + _table(["stage", "result", "wall [s]"], rows)
             + f"\n\nSo the docked arm is more dexterous over the targets (M_a {docked['M_a'] / fixed['M_a'] - 1:+.0%}), and the "
@@ -137,7 +151,99 @@ def demo() -> str:
             f"arm's tool travels {fixed['ee_distance_m']:.1f} m against {docked['ee_distance_m']:.1f} m docked.\n")
 
 
-BLOCKS = {f.__name__: f for f in (kin_indices_cpu, kin_indices_accuracy, kin_indices_gpu, demo)}
+def docking_search() -> str:
+    ref_file = "docking_reference_demo_h200.json"
+    ref, d = _load(ref_file)["reference"], _load("docking_search_demo_cpu.json")
+    s = d["search"]
+    runs = s["runs"]
+    g = ref["grid"]
+    rows = [[str(r["seed"]), f"{r['best']:.4f}", f"{r['ratio']:.4f}", f"{r['ga_best']:.3f}", f"{r['coarse_grid_best']:.3f}",
+             f"{r['grid_zoom_best']:.4f}", str(r["evaluations"]), f"{r['wall_s']:.0f}"] for r in runs]
+    first, last = runs[0]["seed"], runs[-1]["seed"]
+    return (f"Dense reference on an **{_load(ref_file)['device_kind']}** (`python benchmarks/docking_search.py "
+            f"--reference`):\na {' × '.join(map(str, g['counts']))} grid ({ref['grid_candidates']:,} poses, "
+            f"{ref['grid_seconds']:.1f} s) reaching {ref['grid_fitness']:.4f}, then {g['refine_stages']} zoom stages of "
+            f"{g['refine_counts'][0]}^4 ({ref['zoom_seconds']:.1f} s): **{ref['fitness']:.4f}**.\n\n"
+            f"The demo's docking stage on the **2-core CPU** ({d['machine']}, jax {d['jax']}), seeds {first}–{last}\n"
+            f"(`python benchmarks/docking_search.py --seeds {first} {len(runs)} --reference-file "
+            f"benchmarks/results/{ref_file}`): **{s['reached_0.99']} of {len(runs)}** reach ≥ 0.99 of the reference "
+            f"(ratio {s['ratio_min']:.4f} at worst, median {s['ratio_median']:.4f}), each with "
+            f"{min(r['evaluations'] for r in runs):,}–{max(r['evaluations'] for r in runs):,} evaluations in "
+            f"{s['wall_s_median']:.0f} s (median, compilation cache warm).\n\n"
+            + _table(["seed", "best", "best / reference", "GA runs' best", "lattice's best", "after zoom",
+                      "evaluations", "wall [s]"], rows)
+            + "".join(f"\n\nSeed {r['seed']} misses: its lattice's best scores {r['coarse_grid_best']:.3f} and its GA runs' "
+                      f"{r['ga_best']:.3f} (eq. 15 is −b·D where a target is out of reach): no start lies in the optimum's "
+                      f"basin, and the zoom stages climb only to {r['best']:.3f}."
+                      for r in runs if r["ratio"] < 0.99) + "\n")
+
+
+def kin_summary() -> str:
+    """The kinematics line of README.md's results, from the indices benchmark's files."""
+    cpu = next(r for r in _load("kin_indices_uvms12_cpu.json")["results"] if r["batch"] == 100000)
+    gpu = _load("kin_indices_uvms12_h200.json")  # measured on an H200 (the file records no device kind)
+    last = gpu["results"][-1]
+    best_peer = max(r.get("peer_w_per_s", 0.0) for r in gpu["results"])
+    b7 = _load("kin_indices_bravo7_cpu.json")["accuracy"]
+    return (f"- **Kinematics and indices** ([theory §1–2](docs/theory.md#1-kinematics)): w of the 12-DOF UVMS\n"
+            f"  at batch 1e5 {_rate(cpu['uvms_jax_w_per_s'])}/s on the CPU ({cpu['w_speedup']:.0f}× pytorch-kinematics); "
+            f"{_rate(last['uvms_jax_w_per_s'])}/s at {_batch(last['batch'])} on an\n  H200 "
+            f"(one Pallas kernel; {last['uvms_jax_w_per_s'] / last['uvms_jax_xla_w_per_s']:.1f}× the XLA fusion, "
+            f"{last['uvms_jax_w_per_s'] / best_peer:.0f}× the peer's best). w and KCI factor J itself, so\n"
+            f"  near the Bravo 7's singular poses float32 w stays within {_sci(b7['uvms_jax_w_max_abs_err'])} of the largest "
+            f"w of float64\n  singular values, where factoring `J Jᵀ` was off by {_sci(b7['gram_w_max_abs_err'])}. FK and "
+            "Jacobian of imported arms\n  match pytorch-kinematics within 1e-6 (float64) on the Bravo 7, seven real arms'\n"
+            "  URDFs (example-robot-data) and the Reach Alpha 5 (tests/kin).\n")
+
+
+def papers() -> str:
+    """The papers' summary of README.md, from the record of ``make papers`` (docs/reproduction.json)."""
+    from uvms_jax.papers import D16_NETWORKS, T22_TABLES
+
+    rec = json.loads((ROOT / "docs" / "reproduction.json").read_text(encoding="utf-8"))["sections"]
+    dk, dx, th = rec["docking"], rec["surrogate"], rec["thesis"]
+    nets = dx["networks"]["geometric"]
+    big = max(nets["ffbn_w"]["speedup"], key=int)
+
+    def net(name):
+        n = nets[name]
+        return f"{n['units']} units, {100 * n['max_rel_test_error']:.2f} %" + ("" if n["met_goal"] else " (goal not met)")
+
+    t55 = {r[0]: r for r in T22_TABLES["5.5"]}
+    eq = th["eq41"]
+    return (
+        f"- **Docking** ([theory §3](docs/theory.md#3-docking-optimisation), paper Tables 3–4, Figs 9–10): "
+        f"{dk['ga_near_quarter']} of our {dk['ga_runs']} GA\n"
+        f"  poses lie in the quarter nearest the start, as the paper's do; the paper's poses face the task centre "
+        f"within\n  {dk['heading_min']:.0f}–{dk['heading_max']:.0f}° of the bearing, ours do not "
+        f"({dk['ga_heading_min']:.0f}–{dk['ga_heading_max']:.0f}°: with the tool yaw tied to the heading, M_a hardly "
+        f"depends on ψ\n  and the distance term sets it; with ψ fixed towards the centre our fitness is "
+        f"{dk['facing_loss']:.1f} % lower). Zero-w share of the\n  task area: our optimum {dk['zero_ours']:.1f} %, the "
+        f"ill-placed pose {dk['zero_ill']:.1f} % (paper's Figs 9–10: \"a quite small area\", a large one). The paper's\n"
+        f"  M_a (0.134–0.181) is out of reach of the arm as stated: it exceeds the largest w of any 6 × 6 Jacobian of\n"
+        f"  that arm ({dk['bound']:.4f}), and under our frames every Table 3 pose has M_a = 0 (the far corner lies "
+        f"beyond l1 + l2);\n  our GA runs' M_a is {dk['ga_m_min']:.4f}–{dk['ga_m_max']:.4f}. The readings tried "
+        "and Table 4 by FK are in docs/reproduction.md.\n"
+        f"- **Surrogates** ([theory §4](docs/theory.md#4-surrogates), paper Tables 4–5): FFBN-w {net('ffbn_w')}; "
+        f"FFBN-KCI\n  {net('ffbn_kci')}; RBFN-w {net('rbfn_w')} (paper: {D16_NETWORKS['ffbn_w']['hidden_units']}, "
+        f"{D16_NETWORKS['ffbn_kci']['hidden_units']}, {D16_NETWORKS['rbfn_w']['hidden_units']} units; all < 2 %); "
+        f"against the project's fastest\n  analytic path (the fused `indices.manipulability_of` / `kci_of` kernel, "
+        f"same run) the FFBN is {nets['ffbn_w']['speedup'][big]:.0f}× faster\n  for w and "
+        f"{nets['ffbn_kci']['speedup'][big]:.0f}× for KCI at {_batch(int(big))} inputs on the CPU, RBFN-w "
+        f"{nets['rbfn_w']['speedup'][big]:.1f}× and RBFN-KCI {nets['rbfn_kci']['speedup'][big]:.1f}× (the paper's "
+        "124–128× were\n  against Matlab LU/SVD on the symbolic Jacobian). With the paper's own Jacobian (spatial "
+        f"form, eq. 6) FFBN-KCI\n  {dx['ffbn_kci']} (paper: {D16_NETWORKS['ffbn_kci']['hidden_units']}).\n"
+        f"- **Scheduling** ([theory §5](docs/theory.md#5-pick-and-place-scheduling), thesis Table 5.5, eq. 4.1): greedy "
+        f"gives the\n  thesis's schedule {eq['greedy']['path']} / {eq['greedy']['cost']:.4f} in "
+        f"{eq['greedy']['ms']:.3g} ms (thesis {t55['Dijkstra'][5]:g} ms on its own instance); GRASP\n  (1000 "
+        f"iterations, {eq['grasp/deliveries']['ms']:.3g} ms; thesis {t55['GRASP'][5]:g} ms), A* ({eq['astar']['ms']:.3g} ms; "
+        f"thesis {t55['A*'][5]:g} ms) and the exact DP find the\n  optimum {eq['exact']['cost']:.4f}. With the thesis's "
+        f"own local search (`sched.grasp.local_search=thesis`) GRASP(1000)\n  finds it in "
+        f"{eq['grasp/thesis']['optimal_of_20']} of 20 runs.\n")
+
+
+BLOCKS = {f.__name__: f for f in (kin_indices_cpu, kin_indices_accuracy, kin_indices_gpu, demo, docking_search,
+                                                  kin_summary, papers)}
 
 
 def render(text: str) -> str:

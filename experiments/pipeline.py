@@ -42,7 +42,8 @@ from uvms_jax.settings import SettingsError, check_keys, from_mapping  # noqa: E
 EXAMPLE_PLAN = Path(__file__).resolve().parents[1] / "examples" / "thesis_plan.json"
 # The keys of configs/pipeline.yaml (anything else, e.g. a `+foo=1` override, is an error), and
 # of its sections that are not settings dataclasses themselves.
-KEYS = ("seed", "stages", "reach", "ga", "docking", "docking_fitness", "scenario", "baseline", "plan", "sched", "hw")
+KEYS = ("seed", "stages", "reach", "ga", "docking", "docking_fitness", "scenario", "baseline", "plan", "sched", "hw",
+        "hover")
 SECTION_KEYS = {"docking": ("overrides",), "sched": ("planner", "overrides", "weights")}
 
 
@@ -89,7 +90,8 @@ def settings_of(cfg: DictConfig) -> PipelineSettings:
         settings = from_mapping(PipelineSettings, {
             "seed": c["seed"], "stages": stages, "reach": c["reach"], "docking": docking,
             "docking_fitness": c["docking_fitness"], "scenario": c["scenario"], "baseline": c.get("baseline"),
-            "plan": c["plan"], "sched": schedule, "sched_planner": c["sched"]["planner"], "hw": hw_stage})
+            "plan": c["plan"], "sched": schedule, "sched_planner": c["sched"]["planner"], "hw": hw_stage,
+            "hover": c["hover"]})
     except SettingsError as e:
         errors.append(str(e))
     if errors:

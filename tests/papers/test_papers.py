@@ -104,8 +104,8 @@ def test_instances_from_an_edges_csv(tmp_path):
         rows += [f"{planner},{s},{d},True," + ",".join(repr(float(v)) for v in raw[:, s, d]) for s, d in zip(src, dst)]
     path = tmp_path / "edges.csv"
     path.write_text("\n".join(rows) + "\n")
-    instances, missing = thesis.thesis_instances(path, budget_s=1.0)
-    assert set(instances) == {"RRTConnect", "PRM"} and set(missing) == {"BKPIECE1"}
+    instances, missing, planned = thesis.thesis_instances(path, budget_s=1.0)
+    assert set(instances) == {"RRTConnect", "PRM"} and set(missing) == {"BKPIECE1"} and planned is None
     assert "BKPIECE1" in missing["BKPIECE1"]
     for inst in instances.values():
         np.testing.assert_allclose(inst.raw, raw)  # NaN where no move, in both
@@ -130,3 +130,18 @@ def test_templates_and_entry_point():
     out = subprocess.run([sys.executable, str(ROOT / "experiments" / "papers.py"), "--help"], capture_output=True,
                          text=True, check=True, cwd=ROOT)
     assert "--preset" in out.stdout and "tiny" in out.stdout
+
+
+def test_reproduction_is_the_record_of_its_run():
+    """docs/reproduction.md is exactly its templates filled from docs/reproduction.json, the
+    fields `make papers` computed and recorded: every number the document quotes has that file
+    (and the command in its footer) behind it, and an edit by hand fails here."""
+    import importlib.util
+    import json
+
+    spec = importlib.util.spec_from_file_location("papers_entry", ROOT / "experiments" / "papers.py")
+    entry = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(entry)
+    record = json.loads((ROOT / "docs" / "reproduction.json").read_text(encoding="utf-8"))
+    assert list(record["sections"]) == list(entry.SECTIONS)
+    assert entry.document(record) == (ROOT / "docs" / "reproduction.md").read_text(encoding="utf-8")

@@ -47,7 +47,7 @@ def test_configs_compose(pipeline, experiment):
         for overrides in ([], [f"experiment={experiment}"]):
             cfg = compose(config_name="pipeline", overrides=overrides)
             settings = pipeline.settings_of(cfg)
-            assert settings.stages == ("surrogate", "docking", "plan", "schedule", "hw", "baseline")
+            assert settings.stages == ("surrogate", "docking", "plan", "schedule", "hw", "hover", "baseline")
             assert settings.scenario["cage"] is None and settings.baseline["cage"] is not None  # open water; the cage
             assert settings.plan.seed == cfg.seed and settings.sched.weights.name == "equal"
             assert settings.docking.ga.population_size == cfg.ga.population_size

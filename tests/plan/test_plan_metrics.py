@@ -116,7 +116,7 @@ def test_task_graph_thesis_structure(scene):
 def _edge(src, dst, values, success=True):
     path = np.zeros((2, 6))
     metrics = EdgeMetrics(*values) if success else None
-    return EdgeResult("RRTConnect", src, dst, PlanResult(success, path, values[0], 1, success), None, metrics, {})
+    return EdgeResult("RRTConnect", src, dst, PlanResult(success, path, values[0], 1), None, metrics, {})
 
 
 def test_metric_tensor_feeds_sched(scene):

@@ -182,6 +182,6 @@ def test_straight_path_through_obstacle_rejected(raw, scene):
     dense = densify(np.stack([qa, qb]), 0.01)
     assert not ch.is_valid_batch(dense, C0).all() and ch.is_valid_batch(dense, C0)[[0, -1]].all()
     res = plan_motion(ch, qa, qb, C0, "RRTConnect", budget_s=5.0)
-    assert res.success and res.revalidated and len(res.path) > 2
+    assert res.success and len(res.path) > 2
     np.testing.assert_allclose(res.path[[0, -1]], np.stack([qa, qb]))
     assert ch.path_is_valid(res.path, C0, 0.01, margin=0.0)

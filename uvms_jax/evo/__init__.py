@@ -26,6 +26,7 @@ from uvms_jax.evo._binary import BinaryCodec
 from uvms_jax.evo._binary import make_codec
 from uvms_jax.evo._cmaes import CMAESResult
 from uvms_jax.evo._cmaes import run_cmaes
+from uvms_jax.evo._docking import BestPose
 from uvms_jax.evo._docking import CMAESRuns
 from uvms_jax.evo._docking import DockingRun
 from uvms_jax.evo._docking import GridOptimum
@@ -44,9 +45,12 @@ from uvms_jax.evo._ga import ga_batch_compiled
 from uvms_jax.evo._ga import run_ga
 from uvms_jax.evo._ga import run_ga_batch
 from uvms_jax.evo._grid import GridResult
+from uvms_jax.evo._grid import ZoomResult
+from uvms_jax.evo._grid import distinct_best
 from uvms_jax.evo._grid import grid_axes
 from uvms_jax.evo._grid import grid_search
 from uvms_jax.evo._grid import refine_grid_search
+from uvms_jax.evo._grid import zoom_from
 from uvms_jax.evo._problem import DockingEval
 from uvms_jax.evo._problem import DockingProblem
 from uvms_jax.evo._problem import base_transform

@@ -20,7 +20,7 @@ from uvms_jax.settings import parameters
 from uvms_jax.evo._binary import BinaryCodec, make_codec
 from uvms_jax.evo._cmaes import run_cmaes
 from uvms_jax.evo._ga import BinaryGA, GAParams, ga_batch_compiled, run_ga
-from uvms_jax.evo._grid import grid_search, refine_grid_search
+from uvms_jax.evo._grid import distinct_best, grid_search, refine_grid_search, zoom_from
 from uvms_jax.evo._arm import ArmDockingProblem, ArmReport, arm_report, evaluate_arm
 from uvms_jax.evo._problem import DockingProblem, docking_point, evaluate, make_docking_problem
 from uvms_jax.evo._scenes import ArmTask, arm_docking_problem
@@ -112,6 +112,24 @@ class PoseMap:
 
 
 @dataclasses.dataclass(frozen=True)
+class BestPose:
+    """A run's best pose, of its GA runs and its grid search together.
+
+    Attributes:
+      pose: ``(4,)`` ``[x, y, z, ψ]`` [m, rad]; fitness (eq. 15) and M_a (eq. 1) there.
+      source: who found it, ``"analytic GA"`` or ``"grid search"`` (ties go to the GA).
+      ik: an arm scene's best IK solution per demanded tool pose at ``pose``
+        (:class:`~uvms_jax.evo.ArmReport`); None for the paper scene.
+    """
+
+    pose: np.ndarray
+    fitness: float
+    M_a: float
+    source: str
+    ik: ArmReport | None
+
+
+@dataclasses.dataclass(frozen=True)
 class DockingRun:
     """Everything a docking run found (arrays are NumPy; R = ``settings.n_runs``).
 
@@ -132,8 +150,7 @@ class DockingRun:
         (paper scene; None for an arm scene).
       pose_checks: per GA run, where its pose lies (see :func:`pose_checks`; paper scene,
         empty for an arm scene).
-      best_ik: for an arm scene, the best IK solution per demanded tool pose at the best GA
-        pose (:class:`~uvms_jax.evo.ArmReport` of that pose); None for the paper scene.
+      best: the run's best pose, of the GA runs and the grid search (:class:`BestPose`).
       load_average, device: machine state at the end of the run.
     """
 
@@ -155,7 +172,7 @@ class DockingRun:
     wmax_best: PoseMap | None
     wmax_ill_placed: PoseMap | None
     pose_checks: tuple[dict, ...]
-    best_ik: ArmReport | None
+    best: BestPose
     load_average: tuple[float, float, float]
     device: str
 
@@ -213,6 +230,29 @@ def _pose_map(problem: DockingProblem, pose, n_per_side: int) -> PoseMap:
     return PoseMap(np.asarray(pose), wmax_map(problem, pose, n_per_side), float(evaluate(problem, pose).M_a))
 
 
+def _polish(problem: Problem, grid, ga, g, periodic) -> tuple:
+    """Zoom stages from the grid's best point (``g.refine_starts == 1``: the reference's
+    polish) or from the ``g.refine_starts`` best distinct points of the grid and the GA runs
+    ``ga``. Returns the best point (``x``, ``fitness``), the best fitness after each stage,
+    the poses evaluated and the wall time [s]."""
+    t0 = time.perf_counter()
+    per_box = int(np.prod(g.refine_counts))
+    if g.refine_starts == 1:
+        stages = refine_grid_search(problem, grid, g.refine_counts, g.refine_stages, g.refine_shrink, g.chunk_size)
+        best = stages[-1] if stages else grid
+        return best, tuple(float(st.fitness) for st in stages), len(stages) * per_box, time.perf_counter() - t0
+    x = np.concatenate([np.asarray(grid.top_x), np.asarray(ga.best_x)])
+    f = np.concatenate([np.asarray(grid.top_fitness), np.asarray(ga.best_fitness)])
+    cell = np.asarray(problem.pose_high - problem.pose_low) / np.asarray(g.counts)
+    starts = distinct_best(x, f, g.refine_starts, cell)
+    zoom = zoom_from(problem, x[starts], f[starts], problem.pose_low, problem.pose_high, g.refine_counts,
+                     g.refine_stages, g.refine_shrink, periodic, width=cell / g.refine_shrink, chunk_size=g.chunk_size)
+    k = int(np.argmax(zoom.fitness))
+    best = grid._replace(x=jnp.asarray(zoom.x[k]), fitness=jnp.asarray(zoom.fitness[k]))
+    return (best, tuple(float(v) for v in zoom.fitness_history.max(axis=-1)), g.refine_stages * per_box * len(starts),
+            time.perf_counter() - t0)
+
+
 def run_docking(settings: DockingSettings, task: ArmTask | None = None, robot=None) -> DockingRun:
     """The docking experiment: GA batch (compiled ahead, then timed), optional single-run
     timing, dense grid + zoom refinement, optional CMA-ES, w_max maps, pose checks.
@@ -253,13 +293,12 @@ def run_docking(settings: DockingSettings, task: ArmTask | None = None, robot=No
     g = s.grid
     low, high = problem.pose_low, problem.pose_high
     per = grid_periodicity(problem)
-    grid_search(problem, low, high, (2, 2, 2, 2), per, g.chunk_size)  # compile
-    grid, t_grid = _timed(grid_search, problem, low, high, g.counts, per, g.chunk_size)
+    keep = 1 if g.refine_starts == 1 else 8 * g.refine_starts  # enough to find K distinct ones
+    shift = np.asarray(jax.random.uniform(jax.random.key(s.seed + 2), (len(g.counts),))) if g.shift else None
+    grid_search(problem, low, high, (2, 2, 2, 2), per, g.chunk_size, keep, shift)  # compile
+    grid, t_grid = _timed(grid_search, problem, low, high, g.counts, per, g.chunk_size, keep, shift)
     bar.update()
-    stages, t_refine = _timed(
-        refine_grid_search, problem, grid, g.refine_counts, g.refine_stages, g.refine_shrink, g.chunk_size
-    )
-    ref = stages[-1] if stages else grid
+    ref, stage_fitness, n_refine, t_refine = _polish(problem, grid, res, g, per)
     bar.update()
     # Objective terms of the GA bests and the two grid optima in one call (one compilation).
     scored = jnp.concatenate([res.best_x, grid.x[None], ref.x[None]])
@@ -267,7 +306,7 @@ def run_docking(settings: DockingSettings, task: ArmTask | None = None, robot=No
     terms = report.terms if report is not None else evaluate(problem, scored)
     R = s.n_runs
     grid_opt = _grid_optimum(grid.x, grid.fitness, terms, R, grid.n_candidates, t_grid)
-    refined = _grid_optimum(ref.x, ref.fitness, terms, R + 1, sum(st.n_candidates for st in stages), t_refine)
+    refined = _grid_optimum(ref.x, ref.fitness, terms, R + 1, n_refine, t_refine)
     log.info("grid: %d candidates in %.1f s, optimum %.4f; refined (%d more) %.4f",
              grid.n_candidates, t_grid, grid_opt.fitness, refined.candidates, refined.fitness)
 
@@ -286,7 +325,8 @@ def run_docking(settings: DockingSettings, task: ArmTask | None = None, robot=No
 
     poses, fitness = np.asarray(res.best_x), np.asarray(res.best_fitness)
     generations = np.asarray(res.generations)
-    best_pose = poses[int(np.argmax(fitness))]
+    best_ga = int(np.argmax(fitness))
+    best_row = R + 1 if refined.fitness > float(fitness[best_ga]) else best_ga  # a row of `scored`
     paper = isinstance(problem, DockingProblem)
     tol = float(np.max(np.asarray(codec.resolution)[:2]))  # x = 0 / y = 0 is not on the lattice
     return DockingRun(
@@ -303,12 +343,14 @@ def run_docking(settings: DockingSettings, task: ArmTask | None = None, robot=No
         ga_compile_seconds=t_compile,
         grid=grid_opt,
         refined_grid=refined,
-        refine_stage_fitness=tuple(float(st.fitness) for st in stages),
+        refine_stage_fitness=stage_fitness,
         cmaes=cmaes,
-        wmax_best=_pose_map(problem, best_pose, s.wmax.n_per_side) if paper else None,
+        wmax_best=_pose_map(problem, poses[best_ga], s.wmax.n_per_side) if paper else None,
         wmax_ill_placed=_pose_map(problem, list(s.ill_placed_pose), s.wmax.n_per_side) if paper else None,
         pose_checks=tuple(pose_checks(problem, x, s.scene.p_init, tol) for x in poses) if paper else (),
-        best_ik=None if paper else jax.tree_util.tree_map(lambda a: a[int(np.argmax(fitness))], report),
+        best=BestPose(np.asarray(scored[best_row]), float(refined.fitness if best_row == R + 1 else fitness[best_ga]),
+                      float(terms.M_a[best_row]), "grid search" if best_row == R + 1 else "analytic GA",
+                      None if paper else jax.tree_util.tree_map(lambda a: a[best_row], report)),
         load_average=os.getloadavg(),
         device=str(jax.devices()[0]),
     )

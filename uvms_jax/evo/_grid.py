@@ -24,6 +24,8 @@ class GridResult(NamedTuple):
       fitness: ``()`` its fitness.
       n_candidates: number of grid points evaluated.
       low, high: ``(m,)`` the box searched.
+      top_x, top_fitness: ``(keep, m)`` and ``(keep,)`` the ``keep`` best points, best first
+        (``keep = 1``: ``x`` and ``fitness`` alone).
     """
 
     x: Array
@@ -31,6 +33,8 @@ class GridResult(NamedTuple):
     n_candidates: int
     low: Array
     high: Array
+    top_x: Array | None = None
+    top_fitness: Array | None = None
 
 
 def grid_axes(low, high, counts, periodic) -> list[np.ndarray]:
@@ -50,8 +54,8 @@ def _grid_point(flat: Array, low: Array, step: Array, counts: Array) -> Array:
     return low + idx.astype(low.dtype) * step
 
 
-@partial(jax.jit, static_argnames=("chunk_size",))
-def _search(problem: Any, low: Array, step: Array, counts: Array, chunk_size: int):
+@partial(jax.jit, static_argnames=("chunk_size", "keep"))
+def _search(problem: Any, low: Array, step: Array, counts: Array, chunk_size: int, keep: int):
     n = jnp.prod(counts)
     n_chunks = (n + chunk_size - 1) // chunk_size
 
@@ -62,11 +66,15 @@ def _search(problem: Any, low: Array, step: Array, counts: Array, chunk_size: in
         x = _grid_point(jnp.where(inside, flat, 0), low, step, counts)
         f = jnp.where(inside, problem.fitness(x), -jnp.inf)
         f = jnp.where(jnp.isnan(f), -jnp.inf, f)
-        i = jnp.argmax(f)
-        better = f[i] > best_f  # strict: ties keep the lowest flat index
-        return jnp.where(better, x[i], best_x), jnp.where(better, f[i], best_f)
+        if keep == 1:
+            i = jnp.argmax(f)
+            better = f[i] > best_f[0]  # strict: ties keep the lowest flat index
+            return jnp.where(better, x[i], best_x), jnp.where(better, f[i], best_f)
+        # top_k puts the lower index first among equals: the earlier chunks win ties.
+        top_f, i = jax.lax.top_k(jnp.concatenate([best_f, f]), keep)
+        return jnp.concatenate([best_x, x])[i], top_f
 
-    init = (low, jnp.asarray(-jnp.inf, dtype=low.dtype))
+    init = (jnp.broadcast_to(low, (keep,) + low.shape), jnp.full((keep,), -jnp.inf, dtype=low.dtype))
     return jax.lax.fori_loop(0, n_chunks, body, init)
 
 
@@ -77,6 +85,8 @@ def grid_search(
     counts: tuple[int, ...],
     periodic: tuple[bool, ...] | None = None,
     chunk_size: int = 16384,
+    keep: int = 1,
+    shift=None,
 ) -> GridResult:
     """Exhaustive search of ``problem.fitness`` over a regular grid, in chunks.
 
@@ -88,6 +98,11 @@ def grid_search(
         twice); default: none.
       chunk_size: candidates per jitted evaluation (memory bound); the compiled search depends
         only on it (and the problem's shapes), not on ``counts`` or the box.
+      keep: how many of the best points to return (``top_x``), ≥ 1.
+      shift: None for the lattice through the box's corners; else ``(m,)`` fractions in
+        [0, 1): each variable's ``counts[i]`` points sit at ``low + (j + shift[i]) · (high −
+        low) / counts[i]``, one per cell of an even split of the box (a lattice moved by a
+        random shift samples the box afresh for every seed; 0.5: the cells' centres).
 
     Returns:
       :class:`GridResult`; ties go to the candidate with the lowest flat (row-major) index.
@@ -97,18 +112,112 @@ def grid_search(
     high = jnp.asarray(high, dtype=low.dtype)
     if low.shape != (len(counts),) or high.shape != low.shape:
         raise ValueError(f"low/high must have shape ({len(counts)},), got {low.shape} and {high.shape}")
-    if any(c < 1 for c in counts) or chunk_size < 1:
-        raise ValueError(f"counts and chunk_size must be positive, got {counts} and {chunk_size}")
+    if any(c < 1 for c in counts) or chunk_size < 1 or keep < 1:
+        raise ValueError(f"counts, chunk_size and keep must be positive, got {counts}, {chunk_size} and {keep}")
     n = int(np.prod(counts, dtype=np.int64))
     if n >= 2**31:
         raise ValueError(f"grid of {n} candidates exceeds int32 indexing; split the box")
     periodic = tuple(periodic) if periodic is not None else (False,) * len(counts)
-    divisions = [(c if per else c - 1) for c, per in zip(counts, periodic)]
-    step = jnp.asarray([1.0 / max(k, 1) for k in divisions], dtype=low.dtype) * (high - low)
-    # A single point per axis sits at the box centre.
-    low_eff = jnp.where(jnp.asarray(counts) == 1, (low + high) / 2, low)
-    x, f = _search(problem, low_eff, step, jnp.asarray(counts, dtype=jnp.int32), chunk_size)
-    return GridResult(x=x, fitness=f, n_candidates=n, low=low, high=high)
+    if shift is None:
+        divisions = [(c if per else c - 1) for c, per in zip(counts, periodic)]
+        step = jnp.asarray([1.0 / max(k, 1) for k in divisions], dtype=low.dtype) * (high - low)
+        # A single point per axis sits at the box centre.
+        start = jnp.where(jnp.asarray(counts) == 1, (low + high) / 2, low)
+    else:
+        shift = jnp.asarray(shift, dtype=low.dtype)
+        if shift.shape != low.shape or not bool(jnp.all((shift >= 0) & (shift < 1))):
+            raise ValueError(f"shift must be {len(counts)} fractions in [0, 1), got {shift}")
+        step = (high - low) / jnp.asarray(counts, dtype=low.dtype)
+        start = low + shift * step
+    top_x, top_f = _search(problem, start, step, jnp.asarray(counts, dtype=jnp.int32), chunk_size, int(keep))
+    return GridResult(x=top_x[0], fitness=top_f[0], n_candidates=n, low=low, high=high, top_x=top_x, top_fitness=top_f)
+
+
+
+@partial(jax.jit, static_argnames=("counts", "stages", "chunk_size"))
+def _zoom(problem: Any, starts: Array, fitness: Array, width: Array, low: Array, high: Array, periodic: Array,
+          shrink: Array, counts: tuple[int, ...], stages: int, chunk_size: int) -> tuple[Array, Array, Array]:
+    k, m = starts.shape
+    axes = [jnp.linspace(0.0, 1.0, c, dtype=low.dtype) if c > 1 else jnp.full((1,), 0.5, low.dtype) for c in counts]
+    unit = jnp.stack(jnp.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, m)  # (P, m) in [0, 1]
+    n = k * unit.shape[0]
+    n_chunks = -(-n // chunk_size)
+
+    def evaluate(x):  # (n, m) → (n,), chunk by chunk (memory bound), NaN → −inf
+        padded = jnp.concatenate([x, jnp.broadcast_to(x[:1], (n_chunks * chunk_size - n, m))])
+        f = jax.lax.map(problem.fitness, padded.reshape(n_chunks, chunk_size, m)).reshape(-1)[:n]
+        return jnp.where(jnp.isnan(f), -jnp.inf, f)
+
+    def stage(best, s):
+        x, f = best
+        half = width * shrink ** (s + 1) / 2
+        # The box around each best point: clipped to the search box, or wrapped along a
+        # periodic variable (ψ over a full turn).
+        lo = jnp.where(periodic, x - half, jnp.maximum(low, x - half))
+        hi = jnp.where(periodic, x + half, jnp.minimum(high, x + half))
+        cand = lo[:, None, :] + unit * (hi - lo)[:, None, :]  # (k, P, m)
+        cand = jnp.where(periodic, low + jnp.mod(cand - low, high - low), cand)
+        fc = evaluate(cand.reshape(n, m)).reshape(k, -1)
+        i = jnp.argmax(fc, axis=-1)  # the first maximum: ties keep the lowest index
+        f_box = jnp.take_along_axis(fc, i[:, None], axis=-1)[:, 0]
+        better = f_box > f
+        x = jnp.where(better[:, None], jnp.take_along_axis(cand, i[:, None, None], axis=1)[:, 0], x)
+        f = jnp.where(better, f_box, f)
+        return (x, f), (x, f)
+
+    _, history = jax.lax.scan(stage, (starts, fitness), jnp.arange(stages))
+    return history
+
+
+class ZoomResult(NamedTuple):
+    """Zoom stages from K starts (NumPy): ``x (K, m)`` and ``fitness (K,)`` the best points
+    (never worse than the starts), ``x_history (stages, K, m)`` and ``fitness_history
+    (stages, K)`` the best after each stage."""
+
+    x: np.ndarray
+    fitness: np.ndarray
+    x_history: np.ndarray
+    fitness_history: np.ndarray
+
+
+def zoom_from(problem: Any, starts, fitness, low, high, counts: tuple[int, ...], stages: int,
+              shrink: float = 0.5, periodic=None, width=None, chunk_size: int = 16384) -> ZoomResult:
+    """Zoom stages around several start points at once: the local polish of a search.
+
+    Stage s grids a box of ``width · shrink^(s+1)`` (``counts`` points per variable, edges
+    included) centred on each start's best point so far, clipped to the search box (wrapped
+    along a ``periodic`` variable), and keeps the box's best point when it improves. All K
+    boxes of a stage are one evaluation of ``K · prod(counts)`` points, in chunks; the whole
+    polish is one compiled call. With ``counts = 3`` per variable and ``shrink = 0.5`` a stage
+    tries the 3^m − 1 neighbours at half the previous step, diagonals included: a pattern
+    search that follows ridges such as the apex where two targets' w meet.
+
+    Args:
+      problem: pytree with ``fitness((n, m)) -> (n,)`` (to maximise).
+      starts: ``(K, m)`` start points; fitness: ``(K,)`` their fitness.
+      low, high: ``(m,)`` the search box.
+      counts: points per variable of each stage's box, each ≥ 1; stages: zoom stages, ≥ 0.
+      shrink: each stage's box as a fraction of the previous one, in (0, 1].
+      periodic: ``(m,)`` whether a variable wraps from ``high`` to ``low``; default none.
+      width: ``(m,)`` box size before the first shrink; default ``high − low``.
+      chunk_size: points per evaluation at most (memory bound).
+    """
+    counts = tuple(int(c) for c in counts)
+    starts = np.atleast_2d(np.asarray(starts))
+    if len(counts) != starts.shape[-1] or min(counts) < 1 or stages < 0 or not 0.0 < shrink <= 1.0 or chunk_size < 1:
+        raise ValueError(f"need {starts.shape[-1]} counts >= 1, stages >= 0, shrink in (0, 1] and chunk_size >= 1, "
+                         f"got {counts}, {stages}, {shrink}, {chunk_size}")
+    low = jnp.asarray(low)
+    high = jnp.asarray(high, low.dtype)
+    width = high - low if width is None else jnp.asarray(width, low.dtype)
+    periodic = jnp.zeros(low.shape, bool) if periodic is None else jnp.asarray(periodic, bool)
+    fitness = np.atleast_1d(np.asarray(fitness))
+    chunk_size = min(int(chunk_size), len(starts) * int(np.prod(counts)))
+    xs, fs = _zoom(problem, jnp.asarray(starts, low.dtype), jnp.asarray(fitness, low.dtype), width, low, high,
+                   periodic, jnp.asarray(shrink, low.dtype), counts, int(stages), chunk_size)
+    xs, fs = np.asarray(xs), np.asarray(fs)
+    x, f = (xs[-1], fs[-1]) if stages else (starts, fitness)
+    return ZoomResult(x, f, xs, fs)
 
 
 def refine_grid_search(
@@ -119,24 +228,27 @@ def refine_grid_search(
     shrink: float = 0.25,
     chunk_size: int = 16384,
 ) -> list[GridResult]:
-    """Zoom stages after a global grid search: each stage grids a box ``shrink`` times the
-    previous one's size centred on the best point so far (clipped to the original box).
+    """Zoom stages after a global grid search (:func:`zoom_from` from its best point, the box
+    never wrapping): a local polish of the reference optimum (the global stage decides the
+    basin); one :class:`GridResult` per stage, each at least as good as the previous."""
+    zoom = zoom_from(problem, np.asarray(result.x)[None], np.asarray(result.fitness)[None], result.low, result.high,
+                     counts, stages, shrink, chunk_size=chunk_size)
+    n = int(np.prod(counts))
+    return [GridResult(x=jnp.asarray(x[0]), fitness=jnp.asarray(f[0]), n_candidates=n, low=result.low, high=result.high)
+            for x, f in zip(zoom.x_history, zoom.fitness_history)]
 
-    A local polish of the reference optimum (the global stage decides the basin); returns one
-    :class:`GridResult` per stage, each at least as good as the previous.
-    """
-    out = []
-    lo0, hi0 = result.low, result.high
-    width = hi0 - lo0
-    best = result
-    for _ in range(stages):
-        width = width * shrink
-        lo = jnp.maximum(lo0, best.x - width / 2)
-        hi = jnp.minimum(hi0, best.x + width / 2)
-        # The zoom box never wraps: ψ is clipped to [−π, π] like the other variables.
-        stage = grid_search(problem, lo, hi, counts, None, chunk_size)
-        if float(stage.fitness) < float(best.fitness):
-            stage = stage._replace(x=best.x, fitness=best.fitness)
-        out.append(stage)
-        best = stage
-    return out
+
+def distinct_best(x, fitness, k: int, separation) -> np.ndarray:
+    """Indices of up to ``k`` best points, each farther than ``separation (m,)`` from every
+    point kept before it along some variable (best first): the starts of a multistart
+    polish, one per basin rather than k neighbours of one optimum. NaN fitness never counts."""
+    x, fitness = np.asarray(x), np.asarray(fitness)
+    keep: list[int] = []
+    for i in np.argsort(-np.nan_to_num(fitness, nan=-np.inf), kind="stable"):
+        if not np.isfinite(fitness[i]):
+            break
+        if all(np.any(np.abs(x[i] - x[j]) > separation) for j in keep):
+            keep.append(int(i))
+            if len(keep) == k:
+                break
+    return np.asarray(keep, dtype=np.int64)

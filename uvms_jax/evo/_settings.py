@@ -176,6 +176,14 @@ class GridSettings:
       chunk_size: candidates per jitted evaluation (bounds memory), ≥ 1.
       refine_stages: zoom grids around the best point, ≥ 0; refine_counts: their points per
         axis, each ≥ 1; refine_shrink: each zoom box as a fraction of the previous, in (0, 1].
+      refine_starts: 1 polishes the grid's best point, its first zoom box half the search box
+        (the reference); K > 1 polishes the K best distinct points of the grid and the GA runs
+        at once (:func:`~uvms_jax.evo.distinct_best`, one grid cell apart), each zoom box
+        starting one cell wide: a multistart search that keeps every basin the coarse grid
+        found.
+      shift: sample the grid on a lattice moved by a random fraction of a cell (from the
+        run's seed, :func:`~uvms_jax.evo.grid_search`'s ``shift``), so that each seed
+        looks at the box afresh; False: the lattice through the box's corners.
     """
 
     counts: tuple[int, ...] = setting((81, 81, 16, 12), ge=1)
@@ -183,6 +191,8 @@ class GridSettings:
     refine_stages: int = setting(12, ge=0)
     refine_counts: tuple[int, ...] = setting((11, 11, 11, 11), ge=1)
     refine_shrink: float = setting(0.5, gt=0, le=1)
+    refine_starts: int = setting(1, ge=1)
+    shift: bool = False
 
 
 @dataclasses.dataclass(frozen=True)

@@ -65,11 +65,12 @@ def _write_wmax(run: DockingRun, out: Path) -> None:
 
 
 def _write_arm_pose(run: DockingRun, out: Path) -> None:
-    """The best GA pose of an arm scene: joint solution and w per target, and a top view."""
-    pose = run.poses[int(np.argmax(run.fitness))]
-    ik = run.best_ik
+    """The run's best pose of an arm scene (GA or grid search): joint solution and w per
+    target, and a top view."""
+    best = run.best
+    pose, ik = best.pose, best.ik
     (out / "best_pose.json").write_text(json.dumps({
-        "pose": _pose(pose), "fitness": float(np.max(run.fitness)), "Ma": float(ik.terms.M_a),
+        "pose": _pose(pose), "source": best.source, "fitness": best.fitness, "Ma": float(ik.terms.M_a),
         "targets": [{"reached": bool(o), "w": float(wi), "q": None if not o else qi.round(5).tolist()}
                     for qi, o, wi in zip(ik.q, ik.valid, ik.w)],
     }, indent=2))

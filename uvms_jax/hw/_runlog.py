@@ -8,6 +8,8 @@ import math
 from collections.abc import Sequence
 from pathlib import Path
 
+import numpy as np
+
 from uvms_jax.files import atomic_path
 from uvms_jax.plotting import pyplot
 
@@ -45,6 +47,16 @@ class RunLog:
             w.writerow(self.header())
             w.writerows(self.rows)
         return path
+
+    def measured(self, joints: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
+        """Times ``(k,)`` [s] and measured states ``(k, len(joints))`` of the rows in which
+        every joint of ``joints`` (a subset of ``joint_names``, e.g. the arm's without the
+        jaws) was measured: a state that did not arrive is NaN in the log."""
+        n = len(self.joint_names)
+        cols = [4 + n + self.joint_names.index(j) for j in joints]
+        rows = np.asarray([[r[0], *(r[c] for c in cols)] for r in self.rows], dtype=float).reshape(-1, 1 + len(cols))
+        rows = rows[np.all(np.isfinite(rows), axis=1)]
+        return rows[:, 0], rows[:, 1:]
 
     def plot(self, path: str | Path, title: str = "arm run: commanded vs measured") -> Path:
         """One panel per joint, commanded (dashed) over measured (solid); PNG at ``path``."""

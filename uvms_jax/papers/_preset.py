@@ -40,7 +40,7 @@ PRESETS = {
                               "ffbn": {"max_hidden": {"w": 30, "kci": 30}},
                               "rbfn": {"spread_start": 2.0, "max_centres": {"w": 150, "kci": 150}},
                               "timing": {"batches": [1000, 100000], "repeats": 3}},
-                   grasp_sweep=(1, 10, 50, 100, 250, 500, 1000, 2000), sweep_repeats=10, plan_budget_s=1.0),
+                   grasp_sweep=(1, *range(50, 3001, 50)), sweep_repeats=10, plan_budget_s=1.0),
     # A smoke run of every code path (tests, quick checks): numbers of no meaning.
     "tiny": Preset("tiny", face_step=0.2, z_values=2, psi_values=3, map_n=11, bound_n=21,
                    surrogate={"data": {"n_train": {"w": 300, "kci": 300}, "n_test": 200},
@@ -49,7 +49,7 @@ PRESETS = {
                               "timing": {"batches": [1000], "repeats": 1}},
                    grasp_sweep=(1, 10), sweep_repeats=2, plan_budget_s=0.5),
     "paper": Preset("paper", face_step=0.025, z_values=7, psi_values=19, map_n=81, bound_n=181,
-                    surrogate={}, grasp_sweep=(1, 10, 50, 100, 250, 500, 1000, 2000, 3000), sweep_repeats=20,
+                    surrogate={}, grasp_sweep=(1, *range(50, 3001, 50)), sweep_repeats=20,
                     plan_budget_s=5.0),
 }
 

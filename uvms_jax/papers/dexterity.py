@@ -180,4 +180,10 @@ def dexterity_fields(p: Preset, img: Path) -> dict:
         kci_spatial_min=ranges["spatial"]["y_min"], kci_spatial_max=ranges["spatial"]["y_max"],
         kci_geometric_min=ranges["geometric"]["y_min"], kci_geometric_max=ranges["geometric"]["y_max"],
         ffbn_kci=ffbn_kci, fig_designs=fig_d, fig_training=fig_t, t4=_operations_table(runs),
-        t5=_timing_table(runs, [str(b) for b in s.timing.batches]))
+        t5=_timing_table(runs, [str(b) for b in s.timing.batches]),
+        # The same numbers as data, for the summaries quoted elsewhere (README.md).
+        networks={form: {name: {"units": r.networks[name]["hidden_units"], "met_goal": r.networks[name]["met_goal"],
+                                "max_rel_test_error": r.networks[name]["max_rel_test_error"],
+                                "speedup": {b: r.networks[name]["timing"][b]["speedup"]
+                                            for b in r.networks[name]["timing"]}}
+                         for name in NETWORKS} for form, r in runs.items()})

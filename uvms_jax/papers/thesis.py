@@ -69,25 +69,70 @@ class Instance:
 
 
 def thesis_instances(edges: Path | None, budget_s: float,
-                     configs: Path | None = None) -> tuple[dict[str, Instance], dict[str, str]]:
+                     configs: Path | None = None) -> tuple[dict[str, Instance], dict[str, str], object]:
     """Per planner of ``T22_PLANNER_TABLES``, its instance: from ``edges`` (an edges.csv of
     experiments/plan.py) or, when ``None``, from planning the thesis cage of ``configs`` (the
-    repository's configs/ folder) here with ``budget_s`` [s] per edge. Returns the instances
-    and, per planner left out, why."""
+    repository's configs/ folder) here with ``budget_s`` [s] per edge. Returns the instances,
+    per planner left out why, and the ``uvms_jax.plan.TaskGraphPlan`` planned here (None when
+    read from ``edges``)."""
     from uvms_jax import sched
 
     if edges is None:
         tp = plan_thesis_cage(configs, budget_s)
         return {pl: Instance(pl, tp.metrics[pl], f"the thesis cage planned here with {pl}, {budget_s:g} s per edge",
                              tp.summary[pl].edges, sum(len(r.plan.path) == 2 for r in tp.by_planner[pl]))
-                for pl in T22_PLANNER_TABLES}, {}
+                for pl in T22_PLANNER_TABLES}, {}, tp
     out, missing = {}, {}
     for pl in T22_PLANNER_TABLES:
         try:
             out[pl] = Instance(pl, sched.read_edges_csv(edges, pl), f"our {pl} edges (`{edges.name}`)")
         except ValueError as e:  # the edges hold no rows of this planner
             missing[pl] = str(e)
-    return out, missing
+    return out, missing, None
+
+
+def executed_tool_paths(task_plan, run, img: Path) -> tuple[str, dict]:
+    """[T22] Fig. 5.14: the optimum schedule of our RRTConnect instance (``run``, a
+    ``sched.ScheduleRun``) as a plan, executed on the simulated arm over the BPL protocol; the
+    planned tool path (the plan's waypoints every 0.01 rad) against the tool positions of the
+    measured joint states → PNG. Returns the figure and ``{"status", "gates", "max_mm",
+    "p95_mm"}``: the run's end, its gates, and the largest and 95th-percentile distance of an
+    executed tool position from the planned path [mm]."""
+    from uvms_jax import hw, kin
+    from uvms_jax import plan as P
+
+    scene = task_plan.scene
+    path = run.solved["exact"].path if "exact" in run.solved else run.best.path
+    the_plan = P.plan_for_schedule(task_plan, "RRTConnect", path)
+    sim = hw.SimConfig() if the_plan.base_rpy is None else dataclasses.replace(hw.SimConfig(), base_rpy=the_plan.base_rpy)
+    done = hw.run_plan(the_plan, scene.robot, link="loopback", sim=sim)
+    _, q_run = done.log.measured(scene.robot.joint_names)
+    q_plan = np.concatenate([P.densify(np.asarray(s.q), 0.01) for s in the_plan.segments if len(s.q)])
+
+    def world(q):  # tool positions in the world [m]
+        p = np.asarray(kin.fk(scene.robot.chain, np.asarray(q)))[:, :3, 3]
+        return p @ scene.T_world_base[:3, :3].T + scene.T_world_base[:3, 3]
+
+    planned, executed = world(q_plan), world(q_run)
+    gap = np.min(np.linalg.norm(executed[:, None] - planned[None], axis=-1), axis=1) * 1e3  # (k,) [mm]
+    plt = pyplot()
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.5), layout="constrained")
+    for ax, (i, j, label) in zip(axes, ((0, 1, "top view: x, y"), (0, 2, "side view: x, z"))):
+        ax.plot(planned[:, i], planned[:, j], "-", color="tab:blue", lw=1.2, label="planned")
+        ax.plot(executed[::5, i], executed[::5, j], ".", color="tab:orange", ms=2, label="executed (simulated arm)")
+        for n in scene.objects:
+            c = scene.T_world_object(n)[:3, 3]
+            ax.plot(c[i], c[j], "ks", ms=5, label="objects" if n == min(scene.objects) else None)
+        for n in scene.bases:
+            c = scene.T_world_base_top(n)[:3, 3]
+            ax.plot(c[i], c[j], "g^", ms=6, label="bases" if n == min(scene.bases) else None)
+        ax.set(xlabel="xyz"[i] + " [m]", ylabel="xyz"[j] + " [m]", title=label, aspect="equal")
+    axes[0].legend(fontsize=8, loc="best")
+    fig.suptitle(f"Fig. 5.14: schedule {'-'.join(map(str, path))} planned and executed (max deviation "
+                 f"{gap.max():.1f} mm)")
+    return save_figure(fig, img, "thesis_fig5_14.png"), {
+        "status": done.status, "gates": len(done.result.gates), "max_mm": float(gap.max()),
+        "p95_mm": float(np.percentile(gap, 95))}
 
 
 def _run(inst: Instance, w, local_search: str = "deliveries", solvers=("greedy", "grasp", "astar", "exact"),
@@ -279,8 +324,9 @@ def thesis_why(instances: dict[str, Instance], runs: dict, same_geometry: bool) 
         straight = (f" ({inst.straight} of {inst.attempted} moves)" if inst.straight is not None else "")
         bullets.append(
             "- *The planners.* Every move of our cage is free along the straight joint-space segment"
-            f"{straight}, which our planning returns whenever it is free, so the three planners give the "
-            "same paths: joint movement, EE distance, security and torque are the same in all three tables "
+            f"{straight}, and each planner's own path, simplified by OMPL's `simplifySolution` (no shortcut "
+            "of ours: `plan.straight_shortcut` is off here), ends as that segment, so the three planners give "
+            "the same paths: joint movement, EE distance, security and torque are the same in all three tables "
             "and only planning time differs. The thesis's tables show nearly the same: its A* path has "
             "N = 1.200–1.201, 2.597–2.598, 2.788–2.791 and 5.280–5.281 for those four metrics under all "
             "three planners.")
@@ -374,7 +420,7 @@ def thesis_fields(p: Preset, img: Path, edges: Path | None, configs: Path) -> di
     from uvms_jax import sched
 
     t0 = time.perf_counter()
-    instances, missing = thesis_instances(edges, p.plan_budget_s, configs)
+    instances, missing, task_plan = thesis_instances(edges, p.plan_budget_s, configs)
     t_plan = time.perf_counter() - t0
     equal = weights(configs, "equal")
     # Tables 5.2–5.4: one instance per planner.
@@ -391,6 +437,14 @@ def thesis_fields(p: Preset, img: Path, edges: Path | None, configs: Path) -> di
                           + thesis_table(table, {"ours": run, "ours, thesis LS": thesis_ls}, run.normalised)
                           + "\n\n" + planner_differences(table, run, thesis_ls))
     fig58 = plot_final_costs(per_planner, img, "motion planner")
+    if task_plan is not None and "RRTConnect" in per_planner:
+        fig514, executed = executed_tool_paths(task_plan, per_planner["RRTConnect"], img)
+        fig514_md = (f"![Fig. 5.14]({fig514})\n\nThe optimum of our RRTConnect instance, executed on the simulated "
+                     f"arm over the BPL protocol: {executed['status']}, {executed['gates']} gates reached. Every "
+                     f"measured tool position lies within {executed['max_mm']:.1f} mm of the planned path (95 %: "
+                     f"{executed['p95_mm']:.1f} mm).")
+    else:
+        fig514_md = "Not computed: it needs the thesis cage planned here (no `--edges`)."
     # Metrics other than planning time that agree between the planners (same paths).
     first = next(iter(instances.values())) if instances else None
     same_geometry = first is not None and len(instances) > 1 and all(
@@ -409,14 +463,23 @@ def thesis_fields(p: Preset, img: Path, edges: Path | None, configs: Path) -> di
         timing[(name, ls)] = (runs[0], float(np.median([r.wall_time_s for r in runs])) * 1e3,
                               sum(r.cost <= solved["exact"].cost + 1e-9 for r in runs))
     t55 = _table55(timing, per_planner, thesis_ls_runs)
+    # Figs 5.9–5.12 as the thesis ran them: on its RRTConnect instance (ours), over its
+    # iteration grid (the preset's); the eq. 4.1 matrix when there is no RRTConnect instance.
+    rrt_run = per_planner.get("RRTConnect")
+    sweep_problem = rrt_run.problem if rrt_run else problem
+    sweep_on = "our RRTConnect instance" if rrt_run else "the eq. 4.1 matrix"
     sweeps = {}
     for ls in ("thesis", "deliveries"):
         s = sched.SchedSettings(grasp=sched.GraspSettings(local_search=ls), iterations_sweep=p.grasp_sweep,
                                 sweep_repeats=p.sweep_repeats)
-        sweeps[ls] = sched.grasp_sweep(key, problem, s)
-    lines = {n: (timing[(n, None)][0].cost, timing[(n, None)][1]) for n in ("greedy", "astar", "exact")}
+        sweeps[ls] = sched.grasp_sweep(key, sweep_problem, s)
+    if rrt_run:
+        rows = {r["solver"]: r for r in rrt_run.rows}
+        lines = {n: (rows[n]["cost"], rows[n]["time_ms"]) for n in ("greedy", "astar", "exact") if n in rows}
+    else:
+        lines = {n: (timing[(n, None)][0].cost, timing[(n, None)][1]) for n in ("greedy", "astar", "exact")}
     fig59 = plot_sweeps(sweeps, lines, img, "thesis_fig5_9_12.png",
-                        "GRASP on the eq. 4.1 matrix (medians of the timed runs)")
+                        f"GRASP on {sweep_on} (medians of the timed runs)")
     below500 = [q for q in sweeps["thesis"] if q.iterations < 500]
 
     # Tables 5.6–5.9 and A.1–A.5 on our RRTConnect instance (the thesis's planner of these tables).
@@ -430,9 +493,15 @@ def thesis_fields(p: Preset, img: Path, edges: Path | None, configs: Path) -> di
            f"`configs/plan/default.yaml`, {p.plan_budget_s:g} s per edge ({t_plan:.0f} s with the IK targets); "
            "`--edges <run>/plan/edges.csv` of `experiments/plan.py` uses a saved run instead")
     return dict(
-        seconds=time.perf_counter() - t0, preset=p.name, how=how, instances=instance_table(instances),
+        seconds=time.perf_counter() - t0, preset=p.name, how=how, instances=instance_table(instances), fig514=fig514_md,
+        # Table 5.5's runs on eq. 4.1 as data, for the summaries quoted elsewhere (README.md).
+        eq41={f"{name}/{ls}" if ls else name: {"path": solved.path_str(), "cost": solved.cost, "ms": ms,
+                                               "optimal_of_20": optimal}
+              for (name, ls), (solved, ms, optimal) in timing.items()},
         planner_tables="\n".join(m + "\n" for m in planner_md), why=why, fig58=fig58, t55=t55,
-        eq41_greedy="-".join(map(str, sched.THESIS_EQ41_GREEDY_PATH)), fig59=fig59,
+        eq41_greedy="-".join(map(str, sched.THESIS_EQ41_GREEDY_PATH)), fig59=fig59, sweep_on=sweep_on,
+        sweep_grid=f"{p.grasp_sweep[0]}, {p.grasp_sweep[1]}–{p.grasp_sweep[-1]}" if len(p.grasp_sweep) > 2 else
+        ", ".join(map(str, p.grasp_sweep)), sweep_repeats=p.sweep_repeats,
         below500_min=min(q.cost_mean for q in below500), below500_max=max(q.cost_mean for q in below500),
         kn_bad=", ".join(kn_bad) or "none",
         weight_tables="\n".join(m + "\n" for m in w_md) if w_md else "Not computed: no RRTConnect instance.")

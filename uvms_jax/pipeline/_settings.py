@@ -6,11 +6,11 @@ import dataclasses
 from collections.abc import Mapping
 from typing import Any, Literal
 
-from uvms_jax import evo, hw, sched, surrogate
+from uvms_jax import evo, hover, hw, sched, surrogate
 from uvms_jax import plan as planning
 from uvms_jax.settings import setting
 
-STAGES = ("surrogate", "docking", "plan", "schedule", "hw", "baseline")
+STAGES = ("surrogate", "docking", "plan", "schedule", "hw", "hover", "baseline")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -34,6 +34,30 @@ class HwStageSettings:
 
 
 @dataclasses.dataclass(frozen=True)
+class HoverStageSettings:
+    """The hover stage: the scheduled plan's motion with the vehicle hovering at the docked pose
+    (:func:`uvms_jax.hover.run_plan_hovering`), in still water and in ``current``.
+
+    Attributes:
+      current: the water's velocity in the world frame [m/s]; (0, 0, 0): still water only.
+      vehicle: hull mass, water, thrusters (its hull box and arm mount are the docking scene's).
+      controller: the station keeping on (x, y, z, ψ).
+      dwell_s: how long the arm holds each segment's last waypoint (the gate) [s];
+        gripper_s: how long a gripper step takes [s].
+      tool_tolerance_m, joint_tolerance_rad: a gate is reached with the tool within this of
+        where the docked arm holds it and every joint within this of its waypoint.
+    """
+
+    current: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    vehicle: hover.VehicleSettings = hover.VehicleSettings()
+    controller: hover.ControllerSettings = hover.ControllerSettings()
+    dwell_s: float = setting(0.5, ge=0)
+    gripper_s: float = setting(1.0, ge=0)
+    tool_tolerance_m: float = setting(0.01, gt=0)
+    joint_tolerance_rad: float = setting(0.01, gt=0)
+
+
+@dataclasses.dataclass(frozen=True)
 class PipelineSettings:
     """Every stage's settings.
 
@@ -54,6 +78,7 @@ class PipelineSettings:
         the scenario's (the baseline's ``arm`` gives only the mount).
       sched_planner: whose metrics become the cost matrix (None: ``plan.planners[0]``).
       hw: the execution stage.
+      hover: the hover stage (the docked pose held on thrusters instead).
     """
 
     seed: int = 0
@@ -67,6 +92,7 @@ class PipelineSettings:
     sched: sched.SchedSettings = sched.SchedSettings()
     sched_planner: str | None = None
     hw: HwStageSettings = HwStageSettings()
+    hover: HoverStageSettings = HoverStageSettings()
 
     def __post_init__(self) -> None:
         unknown = [s for s in self.stages if s not in STAGES]
@@ -79,5 +105,7 @@ class PipelineSettings:
                              "(configs/docking/scene/); the paper's scene: experiments/docking.py")
         if self.docking_fitness == "surrogate" and "surrogate" not in self.stages:
             raise ValueError("docking_fitness=surrogate needs the surrogate stage")
+        if "hover" in self.stages and not {"docking", "schedule"} <= set(self.stages):
+            raise ValueError("the hover stage needs the docking and schedule stages (a docked pose and a plan)")
         if "baseline" in self.stages and self.baseline is None:
             raise ValueError("the baseline stage needs a baseline scenario")

@@ -13,7 +13,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from uvms_jax import evo, frames, hw, planfile, progress, sched, surrogate
+from uvms_jax import evo, frames, hover, hw, planfile, progress, sched, surrogate
 from uvms_jax import robot as robots
 from uvms_jax import plan as planning
 from uvms_jax.pipeline._report import StageReport, md_table
@@ -129,21 +129,24 @@ def docking(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
     best = int(np.argmax(run.fitness))
     rows = [[f"analytic GA run {i + 1}", *_pose(p), float(f), float(m), int(e)]
             for i, (p, f, m, e) in enumerate(zip(run.poses, run.fitness, run.M_a, run.evaluations))]
-    rows.append(["grid optimum", *_pose(run.refined_grid.pose), run.refined_grid.fitness, run.refined_grid.M_a,
+    g = s.docking.grid
+    search = "grid + zoom" if g.refine_starts == 1 else f"grid + zoom from {g.refine_starts} starts"
+    rows.append([search, *_pose(run.refined_grid.pose), run.refined_grid.fitness, run.refined_grid.M_a,
                  run.grid.candidates + run.refined_grid.candidates])
     res = {"ga_best_fitness": float(run.fitness[best]), "ga_best_M_a": float(run.M_a[best]),
            "ga_ratio_to_grid_min": float(run.ga_ratio_to_refined_grid.min()), "ga_batch_seconds": run.ga_batch_seconds,
            "grid_fitness": run.refined_grid.fitness, "ga_evaluations": int(np.sum(run.evaluations))}
-    # The analytic optimisers' best: the GA runs or the grid reference, whichever scores higher
+    # The analytic optimisers' best: the GA runs or the grid search, whichever scores higher
     # (on a small CPU budget the GA can miss the narrow region that reaches every target).
-    grid = run.refined_grid
-    if grid.fitness > run.fitness[best]:
-        pose, source, pose_M_a, best_fitness = grid.pose, "grid search", grid.M_a, grid.fitness
-    else:
-        pose, source, pose_M_a, best_fitness = run.poses[best], "analytic GA", float(run.M_a[best]), float(run.fitness[best])
+    pose, source, pose_M_a, best_fitness = run.best.pose, run.best.source, run.best.M_a, run.best.fitness
     notes = [f"{len(run.fitness)} GA runs in one jitted batch: {run.ga_batch_seconds:.1f} s after compilation "
-             f"({run.ga_evaluations_per_second:.0f} evaluations/s); GA / grid optimum "
-             f"{run.ga_ratio_to_refined_grid.min():.3f}–{run.ga_ratio_to_refined_grid.max():.3f}. Fitness: eq. 15 "
+             f"({run.ga_evaluations_per_second:.0f} evaluations/s); GA / grid search "
+             f"{run.ga_ratio_to_refined_grid.min():.3f}–{run.ga_ratio_to_refined_grid.max():.3f}. The grid search: "
+             f"{run.grid.candidates} poses of a coarse lattice, then {len(run.refine_stage_fitness)} zoom stages "
+             f"({run.refined_grid.candidates} poses) from "
+             + ("its best point" if g.refine_starts == 1 else
+                f"the {g.refine_starts} best distinct points of the lattice and the GA runs")
+             + f" ({run.grid.seconds + run.refined_grid.seconds:.1f} s). Fitness: eq. 15 "
              f"(a·M_a − b·D in Wd), M_a = min over the {problem.n_groups} targets of the best w over each target's "
              f"alternatives and IK seeds."]
     if flow.reach is not None:
@@ -197,16 +200,22 @@ def plan(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
     flow.task_plan = task_plan
     rows, res = [], {"ik_seconds": task_plan.ik_seconds}
     for planner, p in task_plan.summary.items():
-        rows.append([planner, f"{p.success}/{p.edges}", f"{p.revalidated}/{p.edges}", 1e3 * p.median_planning_time_s,
-                     1e3 * p.mean_planning_time_s, 1e3 * p.max_planning_time_s])
+        rows.append([planner, f"{p.success}/{p.edges}", f"{p.revalidated}/{p.edges}", f"{p.shortcuts}/{p.edges}",
+                     1e3 * p.median_planning_time_s, 1e3 * p.mean_planning_time_s, 1e3 * p.max_planning_time_s])
         res[f"{planner}_success"] = p.success
+        res[f"{planner}_shortcuts"] = p.shortcuts
         res[f"{planner}_median_ms"] = 1e3 * p.median_planning_time_s
-    table = md_table(["planner", "planned", "re-checked OK", "median [ms]", "mean [ms]", "max [ms]"], rows)
+    table = md_table(["planner", "planned", "re-checked OK", "straight-segment shortcut", "median [ms]", "mean [ms]",
+                      "max [ms]"], rows)
     n_edges = len(next(iter(task_plan.by_planner.values()), ()))
     pc = s.plan
     notes = [f"{n_edges} task-graph edges (thesis Table 5.1 / eq. 4.1 structure), budget {pc.budget_s} s per edge; "
              f"IK targets {task_plan.ik_seconds:.1f} s (mostly XLA compilation). Every path re-checked at "
              f"{pc.recheck_resolution} rad with margin 0 and time-parameterised ({pc.max_velocity} rad/s). "
+             + ("The straight joint-space segment replaces the planner's path wherever it is free (`plan.straight_shortcut`"
+                ", column \"straight-segment shortcut\"): fast, and the moves the planners need are the others. "
+                if pc.straight_shortcut else "Each path is the planner's own, simplified. ")
+             + 
              "The thesis publishes no per-edge planning times; BENCHMARKS.md has a 5 s-budget run of all three planners."]
     res["base_xyz"] = _pose(scene.T_world_base[:3, 3])
     res["T_world_base"] = scene.T_world_base.tolist()
@@ -303,17 +312,6 @@ def execute(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
                        res, notes)
 
 
-def _measured_arm(run_log: hw.RunLog, robot: robots.Robot) -> tuple[np.ndarray, np.ndarray]:
-    """Times ``(n,)`` [s] and measured arm angles ``(n, dof)`` [rad] of the log rows whose
-    measured arm state is complete (a state that did not arrive is NaN in the log)."""
-    names = run_log.joint_names
-    n = len(names)
-    cols = [4 + n + names.index(j) for j in robot.joint_names]
-    rows = np.asarray([[r[0], *(r[c] for c in cols)] for r in run_log.rows], dtype=float)
-    rows = rows[np.all(np.isfinite(rows), axis=1)]
-    return rows[:, 0], rows[:, 1:]
-
-
 def _run_video(s: PipelineSettings, flow: Flow, run_log: hw.RunLog, out: Path, res: dict) -> str:
     """``out/run.mp4``: the measured run in the planning stage's scene, else the scenario's
     (the example plan was planned in the thesis cage of ``configs/scenario/thesis_cage.yaml``);
@@ -324,7 +322,7 @@ def _run_video(s: PipelineSettings, flow: Flow, run_log: hw.RunLog, out: Path, r
         scene = planning.build_scene(flow.robot, s.scenario)
     else:
         return "No video of the run: no scene (run the plan stage or give a scenario)."
-    t, q = _measured_arm(run_log, scene.robot)
+    t, q = run_log.measured(scene.robot.joint_names)
     if len(t) == 0:
         return "No video of the run: no complete measured state was logged."
     try:
@@ -338,6 +336,70 @@ def _run_video(s: PipelineSettings, flow: Flow, run_log: hw.RunLog, out: Path, r
     return (f"Video of the run: [{link}]({link}) — measured joint angles in the MuJoCo scene, {video.fps:g} fps, "
             f"{VIDEO_SIZE[0]}×{VIDEO_SIZE[1]}, {video.frames} frames, rendered offscreen in {video.seconds:.1f} s "
             "(arm only: the jaws' opening and the carried objects are not drawn).")
+
+
+def hovering(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
+    """The scheduled plan's motion with the vehicle hovering at the docked pose instead of fixed
+    to it, in still water and in the configured current: how good the docking pose is if the
+    vehicle only hovers there."""
+    hs, scene = s.hover, s.docking.scene
+    hull = scene.vehicle_boxes[0]
+    if len(scene.vehicle_boxes) != 1 or any(hull.pos) or any(hull.rpy):
+        raise ValueError("the hover stage models the vehicle as one hull box centred on the vehicle frame; "
+                         f"the docking scene has {[b.name for b in scene.vehicle_boxes]}")
+    vehicle = dataclasses.replace(hs.vehicle, size=tuple(hull.size), mount_xyz=tuple(scene.mount_xyz),
+                                  mount_rpy=tuple(scene.mount_rpy))
+    currents = {"still water": (0.0, 0.0, 0.0)}
+    if any(hs.current):
+        currents[f"current {_pose(hs.current)} m/s"] = tuple(hs.current)
+    runs = {}
+    for label, v in progress.bar(list(currents.items()), desc="hover", unit="run"):
+        runs[label] = hover.run_plan_hovering(
+            flow.robot, flow.plan, flow.pose, vehicle, hs.controller, hover.CurrentSettings(velocity=v),
+            dwell_s=hs.dwell_s, gripper_s=hs.gripper_s, tool_tolerance_m=hs.tool_tolerance_m,
+            joint_tolerance_rad=hs.joint_tolerance_rad)
+    summaries = {label: r.summary() for label, r in runs.items()}
+    rows = [[label, f"{m['status']}" + (f": {m['reason']}" if m["reason"] else ""), f"{m['gates_reached']}/{m['gates']}",
+             1e3 * m["max_drift_m"], 1e3 * m["max_tool_error_m"], 1e3 * m["max_gate_tool_error_m"], m["max_tilt_deg"],
+             m["peak_thrust_N"]] for label, m in summaries.items()]
+    docked = flow.reports.get("hw")
+    if docked is not None:
+        rows.insert(0, ["docked (hw stage)", docked.results.get("status", ""),
+                        f"{docked.results.get('gates', '—')}/{docked.results.get('gates', '—')}", 0.0, 0.0, 0.0, 0.0, 0.0])
+    table = md_table(["vehicle", "result", "gates reached", "max drift [mm]", "max tool error [mm]",
+                      "max tool error at a gate [mm]", "max roll/pitch [°]", "peak thrust [N]"], rows)
+    last = list(summaries)[-1]
+    res = {**summaries[last], "runs": summaries}
+    _plot_hover(runs, out / "hover.png")
+    notes = [f"The plan's waypoints replayed on the vehicle floating at the docked pose (MuJoCo, `uvms_jax.hover`, "
+             f"docs/hover.md): {len(vehicle.thrusters)} thrusters of ±{max(t.max_thrust for t in vehicle.thrusters):g} N, "
+             f"station keeping on x, y, z, ψ, the hull ballasted neutral and level for the arm at the plan's start. "
+             f"A gate counts as reached when every joint is within {hs.joint_tolerance_rad} rad of its waypoint and "
+             f"the tool within {1e3 * hs.tool_tolerance_m:.0f} mm of where the docked arm holds it; the arm dwells "
+             f"{hs.dwell_s} s at each gate; an executor waiting at its gates would hold at the first one missed "
+             "(result), the count goes on over the whole motion. Tool error: the vehicle's motion seen at the tool. "
+             "The arm's servos "
+             "follow the waypoints directly: the BPL executor does not yet drive the hovering vehicle. "
+             "`hover/hover.png`: drift and tool error over time."]
+    return StageReport("hover", "Hovering instead of docked: the same motion on thrusters (docs/hover.md)", [table],
+                       res, notes)
+
+
+def _plot_hover(runs: dict, path: Path) -> None:
+    """Drift of the vehicle and tool error over time, one line per run → PNG."""
+    from uvms_jax.plotting import pyplot
+
+    plt = pyplot()
+    fig, (a, b) = plt.subplots(2, 1, figsize=(9, 5), sharex=True, layout="constrained")
+    for label, r in runs.items():
+        a.plot(r.log.time, 1e3 * r.drift, label=label)
+        b.plot(r.log.time, 1e3 * r.tool_error, label=label)
+        b.plot(r.gate_times, 1e3 * r.gate_tool_error, ".", color=b.lines[-1].get_color(), ms=4)
+    a.set(ylabel="vehicle drift [mm]", title="Hovering at the docked pose")
+    b.set(xlabel="time [s]", ylabel="tool error [mm] (dots: gates)")
+    a.legend(fontsize=8)
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
 
 
 def _path_figures(flow: Flow, planner: str, path) -> dict:
@@ -439,4 +501,4 @@ def chain(flow: Flow, out: Path) -> str:
 
 
 STAGE_FNS = {"surrogate": surrogates, "docking": docking, "plan": plan, "schedule": schedule, "hw": execute,
-             "baseline": baseline}
+             "hover": hovering, "baseline": baseline}

@@ -1,8 +1,8 @@
 """OMPL planning over the six arm joints, and trajectories.
 
 A plan is: ``solve`` (RRTConnect, BKPIECE1, PRM or any other OMPL geometric planner, with its
-parameters) within a time budget; the straight segment if it is free, else
-``simplifySolution``; then a check of the path at ``recheck_resolution`` [rad] with MuJoCo and
+parameters) within a time budget; ``simplifySolution`` (or, with the straight-segment shortcut,
+the straight segment when it is free); then a check of the path at ``recheck_resolution`` [rad] with MuJoCo and
 the true geometry (margin 0). States are checked with MuJoCo; motions either by OMPL state by
 state (MuJoCo, ``resolution``) or by one :class:`~uvms_jax.plan.SphereChecker` call each,
 sampled like the re-check. The planner works with the checker's safety margin, so the re-check
@@ -69,18 +69,19 @@ class PlanResult:
     """Outcome of one planning query.
 
     Attributes:
-      success: a path was found and passed the re-check.
+      success: a path was found and passed the dense re-check with margin 0.
       path: ``(k, n)`` simplified waypoints [rad] (empty when not successful).
       planning_time_s: wall time of solve + simplify over all attempts [s].
       attempts: solve calls made.
-      revalidated: the returned path passed the dense re-check with margin 0.
+      shortcut: the path is the straight segment, taken in place of the planner's own
+        (``straight_shortcut``).
     """
 
     success: bool
     path: np.ndarray
     planning_time_s: float
     attempts: int
-    revalidated: bool
+    shortcut: bool = False
 
 
 @dataclasses.dataclass(frozen=True)
@@ -160,6 +161,7 @@ def plan_motion(
     simplify_s: float = 0.2,
     fast: SphereChecker | None = None,
     params: Mapping[str, Any] | None = None,
+    straight_shortcut: bool = False,
 ) -> PlanResult:
     """Plan a collision-free joint path from ``q_start`` to ``q_goal`` in ``context``.
 
@@ -181,6 +183,10 @@ def plan_motion(
         :data:`PARTIAL_MOTIONS` then get no partial motions). None: OMPL checks motions state
         by state with MuJoCo at ``resolution``.
       params: the planner's parameters (:func:`planner_parameters`), e.g. ``{"range": 1.0}``.
+      straight_shortcut: once the planner has a path, return the straight segment instead
+        whenever it is free (one motion check, where simplification would shortcut its way
+        there): fast, but every planner then returns the same path wherever the straight
+        segment is free. False: the planner's path, simplified.
 
     Raises:
       ValueError: unknown planner or parameter (the valid ones are listed), or an invalid
@@ -221,16 +227,15 @@ def plan_motion(
     goal[0:n] = q_goal.tolist()
     ss.setStartAndGoalStates(start, goal)
     spent, attempts = 0.0, 0
-    result = PlanResult(False, np.zeros((0, n)), 0.0, 0, False)
+    result = PlanResult(False, np.zeros((0, n)), 0.0, 0)
     while spent < budget_s:
         t0 = time.perf_counter()
         solved = ss.solve(budget_s - spent)
         exact = bool(solved) and ss.haveExactSolutionPath()
+        shortcut = False
         if exact:
-            if ss.getSolutionPath().getStateCount() > 2 and si.checkMotion(start, goal):
-                # Simplification ends at the straight segment whenever it is free; one motion
-                # check finds that without the rounds of shortcutting.
-                path = np.stack([q_start, q_goal])
+            if straight_shortcut and ss.getSolutionPath().getStateCount() > 2 and si.checkMotion(start, goal):
+                path, shortcut = np.stack([q_start, q_goal]), True
             else:
                 ss.simplifySolution(simplify_s)
                 path = np.array([[s[i] for i in range(n)] for s in ss.getSolutionPath().getStates()])
@@ -240,7 +245,7 @@ def plan_motion(
             break
         path[0], path[-1] = q_start, q_goal
         ok = checker.path_is_valid(path, context, recheck_resolution, margin=0.0)
-        result = PlanResult(ok, path if ok else np.zeros((0, n)), spent, attempts, ok)
+        result = PlanResult(ok, path if ok else np.zeros((0, n)), spent, attempts, shortcut and ok)
         if ok:
             break
         ss.clear()

@@ -100,6 +100,8 @@ class PlanSettings:
         the IK targets' down/up segments [rad].
       clearance_resolution: joint step of the clearance (security) sampling [rad].
       simplify_s: path simplification time per attempt [s].
+      straight_shortcut: return the straight joint-space segment instead of the planner's
+        path whenever it is free (fast; the planners then differ only where it is not free).
       margin: safety distance while planning [m]; re-checks use 0.
       clearance_max: clearances above this read as it [m].
       max_velocity, max_acceleration: joint limits of the time parameterisation, one value
@@ -121,6 +123,7 @@ class PlanSettings:
     recheck_resolution: float = 0.01
     clearance_resolution: float = 0.05
     simplify_s: float = 0.2
+    straight_shortcut: bool = False
     margin: float = 0.005
     clearance_max: float = 0.3
     max_velocity: float | tuple[float, ...] | None = None

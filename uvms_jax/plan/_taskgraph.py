@@ -42,6 +42,8 @@ class PlannerSummary:
         free, in limits, within the velocity limits).
       median_planning_time_s, mean_planning_time_s, max_planning_time_s: over all edges [s].
       max_speed_ratio: largest sampled |q̇| / velocity limit over the trajectories.
+      shortcuts: edges whose path is the straight segment taken in place of the planner's
+        (``PlanSettings.straight_shortcut``).
     """
 
     edges: int
@@ -51,6 +53,7 @@ class PlannerSummary:
     mean_planning_time_s: float
     max_planning_time_s: float
     max_speed_ratio: float
+    shortcuts: int = 0
 
 
 @dataclasses.dataclass(frozen=True)
@@ -90,6 +93,7 @@ def _summarise(results: Sequence[EdgeResult]) -> PlannerSummary:
         mean_planning_time_s=float(times.mean()),
         max_planning_time_s=float(times.max()),
         max_speed_ratio=float(max((r.check.get("max_speed_ratio", 0.0) for r in results), default=0.0)),
+        shortcuts=int(sum(r.plan.shortcut for r in results)),
     )
 
 

@@ -141,11 +141,11 @@ def plan_edge(
     q0, q1, ctx = edge_endpoints(scene, targets, src, dst)
     recheck_resolution = s.recheck_resolution
     res = plan_motion(checker, q0, q1, ctx, planner, s.budget_s, s.resolution, recheck_resolution, s.simplify_s,
-                      fast=fast, params=s.planner_params.get(planner))
+                      fast=fast, params=s.planner_params.get(planner), straight_shortcut=s.straight_shortcut)
     if not res.success:
         return EdgeResult(planner, src, dst, res, None, None, {})
     traj = time_parameterize(res.path, s.joint_velocity(scene.robot), s.max_acceleration)
-    check = check_trajectory(checker, traj, ctx, recheck_resolution, collision_free=res.revalidated)
+    check = check_trajectory(checker, traj, ctx, recheck_resolution, collision_free=res.success)
     force = None
     if ctx.held is not None:
         force = scene.T_base_world[:3, :3] @ scene.payload_force_world(ctx.held)

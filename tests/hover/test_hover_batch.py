@@ -1,0 +1,128 @@
+"""Hovering scenarios batched with MJX (uvms_jax.hover._batch).
+
+Oracles: CPU MuJoCo. The fluid wrench computed in JAX/NumPy must give MuJoCo's own
+``qfrc_fluid`` (its inertia-box model, wind included) on a moving, tilted vehicle; and the whole
+MJX batch — K poses × N currents in one jitted call — must reproduce :class:`HoverSim` (MuJoCo's C
+engine, stepped one scenario at a time) scenario by scenario, in the vehicle's position and the
+tool's. Ordering: a stronger current drifts the vehicle further.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+
+import mujoco
+import numpy as np
+import pytest
+
+from uvms_jax import frames
+from uvms_jax.hover import ControllerSettings, CurrentSettings, HoverSim, VehicleSettings, arm_motion, hover_model, trimmed
+from uvms_jax.hover._batch import batch_scenarios, fluid_bodies, fluid_xfrc, hover_mjx
+from uvms_jax.robot import load_arm
+
+with contextlib.redirect_stdout(io.StringIO()):
+    from mujoco import mjx
+
+ARM = load_arm("bravo7")
+Q_A = (ARM.lower + ARM.upper) / 2
+Q_B = Q_A + np.array([0.3, -0.2, 0.2, 0.0, 0.3, 0.0])
+POSES = np.array([[0.1, -0.2, 1.2, 0.4], [-0.3, 0.5, 0.8, -2.5]])  # [m, rad] K = 2 docked poses
+CURRENTS = np.array([[0.0, 0.0, 0.0], [0.35, 0.35, 0.0]])  # [m/s] N = 2: still water, ~0.5 m/s
+DURATION = 1.2  # [s] 60 control periods, 600 physics steps
+GATE = 1.0  # [s] the arm has arrived (move 0.1–0.8 s)
+PERIOD = ControllerSettings().period
+# MJX (float32, the fluid force explicit) against MuJoCo (float64, implicitfast differentiating the
+# fluid force too): the vehicle's and the tool's paths agree to POS_TOL while the vehicle drifts by
+# millimetres to centimetres; FLUID_RTOL is float64 rounding.
+POS_TOL = 2e-4  # [m]
+FLUID_RTOL = 1e-9
+
+
+def _targets():
+    move = arm_motion(Q_A, Q_B, 0.1, 0.8)
+    return np.array([move(k * PERIOD) for k in range(round(DURATION / PERIOD))])
+
+
+def test_fluid_wrench_is_mujocos_inertia_box_model():
+    """On a tilted, spinning vehicle with the arm moving, in a current, ``fluid_xfrc`` applied
+    at the bodies' centres of mass gives MuJoCo's ``qfrc_fluid`` (every body, every axis)."""
+    model = hover_model(ARM, VehicleSettings(), xyz=(0.2, -0.1, 1.0), rpy=(0.2, -0.3, 1.1),
+                        current=(0.4, -0.3, 0.1))
+    data = mujoco.MjData(model)
+    rng = np.random.default_rng(3)
+    data.qvel[:] = rng.normal(size=model.nv) * 0.7
+    mujoco.mj_forward(model, data)
+    ids, box = fluid_bodies(model)
+    assert len(ids) == model.nbody - 1  # the hull and every arm link
+    rows = fluid_xfrc(data.xipos[ids], data.ximat[ids], data.cvel[ids], data.subtree_com[model.body_rootid[ids]], box,
+                      model.opt.density, model.opt.viscosity, model.opt.wind)
+    qfrc = np.zeros(model.nv)
+    for b, row in zip(ids, rows):
+        mujoco.mj_applyFT(model, data, row[:3], row[3:], data.xipos[b], b, qfrc)
+    assert np.abs(data.qfrc_fluid).max() > 1.0  # a real drag, not zeros
+    np.testing.assert_allclose(qfrc, data.qfrc_fluid, rtol=FLUID_RTOL, atol=FLUID_RTOL * np.abs(data.qfrc_fluid).max())
+
+
+def test_mjx_refuses_its_own_fluid_with_implicitfast():
+    """Why the fluid is applied as a wrench: MJX 3.17 does not put the model as it is."""
+    with pytest.raises(NotImplementedError, match="fluid"):
+        mjx.put_model(hover_model(ARM, VehicleSettings(), current=(0.3, 0.0, 0.0)))
+
+
+@pytest.fixture(scope="module")
+def batch():
+    return batch_scenarios(ARM, VehicleSettings(), ControllerSettings(), POSES, CURRENTS, _targets(), DURATION,
+                           gate_times=[GATE])
+
+
+@pytest.fixture(scope="module")
+def cpu():
+    """The same scenarios on HoverSim, one at a time: ``{(k, n): HoverLog}``."""
+    table = _targets()
+    logs = {}
+    for k, pose in enumerate(POSES):
+        for n, current in enumerate(CURRENTS):
+            sim = HoverSim(ARM, trimmed(VehicleSettings(), ARM, table[0]), ControllerSettings(),
+                           CurrentSettings(velocity=tuple(current)), xyz=pose[:3], rpy=(0.0, 0.0, pose[3]), q0=table[0])
+            logs[k, n] = sim.run(DURATION, arm_trajectory=lambda t: table[min(round(t / PERIOD), len(table) - 1)])
+    return logs
+
+
+def test_batch_reproduces_cpu_mujoco_scenario_by_scenario(batch, cpu):
+    assert batch.position.shape == (2, 2, len(_targets()) + 1, 3)
+    for (k, n), log in cpu.items():
+        np.testing.assert_allclose(batch.time, log.time, atol=1e-9)
+        np.testing.assert_allclose(batch.position[k, n], log.position, atol=POS_TOL, err_msg=f"pose {k} current {n}")
+        np.testing.assert_allclose(batch.tool[k, n], log.tool, atol=POS_TOL, err_msg=f"pose {k} current {n}")
+        np.testing.assert_allclose(batch.q[k, n], log.q, atol=1e-4)
+        # the drift being compared is real: millimetres at least
+        assert np.linalg.norm(log.position - POSES[k, :3], axis=-1).max() > 10 * POS_TOL
+
+
+def test_docked_tool_and_gates(batch):
+    """At the start the tool is where FK at the docked base puts it; the gate's errors are the
+    records' at the gate time."""
+    np.testing.assert_allclose(batch.tool_error[:, :, 0], 0.0, atol=1e-5)
+    row = round(GATE / PERIOD)
+    np.testing.assert_allclose(batch.gate_tool_error[..., 0], batch.tool_error[:, :, row])
+    np.testing.assert_allclose(batch.gate_joint_error[..., 0], np.abs(batch.q[:, :, row] - Q_B).max(axis=-1))
+    assert batch.gate_share.shape == (2, 2)
+
+
+def test_a_stronger_current_drifts_further(batch):
+    assert np.all(batch.max_drift[:, 1] > 2 * batch.max_drift[:, 0])
+    assert np.all(batch.max_tool_error[:, 1] > batch.max_tool_error[:, 0])
+
+
+def test_step_is_jittable_for_one_scenario():
+    """The one-scenario control step runs under jit on its own (state in, state out)."""
+    import jax
+
+    sim = hover_mjx(ARM, VehicleSettings(), ControllerSettings())
+    state = sim.init(POSES[0], Q_A)
+    state2, rec = jax.jit(sim.control_step)(state, Q_A, np.array([0.2, 0.0, 0.0]), POSES[0])
+    assert np.all(np.isfinite(np.asarray(rec.position)))
+    assert float(state2.data.time) == pytest.approx(PERIOD, rel=1e-5)
+    R = frames.rpy_matrix((0.0, 0.0, POSES[0, 3]))
+    np.testing.assert_allclose(np.asarray(state.data.xmat[sim.vehicle_id]), R, atol=1e-6)

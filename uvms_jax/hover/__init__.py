@@ -1,0 +1,55 @@
+"""A hovering vehicle carrying an arm, in MuJoCo: the physics core of the hover feature.
+
+The vehicle is a hull on a free joint with the arm fixed under it at its mount
+(:func:`hover_mjcf`, :func:`hover_model`). MuJoCo gives the coupled rigid-body dynamics,
+gravity, and the drag of its inertia-box fluid model, with the water current as its ``wind``.
+This package adds the buoyancy of every body at its centre of buoyancy (:func:`buoyancy_xfrc`
+on :func:`buoyancy_bodies`, set into ``MjData`` by :func:`apply_buoyancy`), thrusters
+(:class:`Thruster`; the default eight-thruster vectored layout :data:`DEFAULT_THRUSTERS`),
+station keeping on (x, y, z, ψ) (:func:`station_keeping`) and thrust allocation by the scaled
+pseudo-inverse of the thrust configuration matrix (:func:`thrust_matrix`,
+:func:`allocate_thrust`). :class:`HoverSim` steps it all on the CPU and records a
+:class:`HoverLog`. Settings: :class:`VehicleSettings` (trimmed to neutral and level for an arm
+and pose by :func:`trimmed`), :class:`ControllerSettings`, :class:`CurrentSettings`.
+
+The formulas are pure functions of arrays that take ``xp`` (``numpy`` or ``jax.numpy``), so a
+batched MJX simulator can reuse them. Frames, units and the tests' oracles: docs/hover.md.
+"""
+
+from uvms_jax.hover._control import allocate_thrust
+from uvms_jax.hover._control import level_attitude
+from uvms_jax.hover._control import station_keeping
+from uvms_jax.hover._control import thrust_matrix
+from uvms_jax.hover._control import wrap_angle
+from uvms_jax.hover._control import yaw_of_quat
+from uvms_jax.hover._hydro import buoyancy_xfrc
+from uvms_jax.hover._hydro import current_at
+from uvms_jax.hover._model import HULL_GEOM
+from uvms_jax.hover._model import SERVO_KP
+from uvms_jax.hover._model import SERVO_KV
+from uvms_jax.hover._model import VEHICLE_BODY
+from uvms_jax.hover._model import apply_buoyancy
+from uvms_jax.hover._model import buoyancy_bodies
+from uvms_jax.hover._model import hover_mjcf
+from uvms_jax.hover._model import hover_model
+from uvms_jax.hover._model import servo_name
+from uvms_jax.hover._model import thruster_name
+from uvms_jax.hover._model import trimmed
+from uvms_jax.hover._plan import HoverRun
+from uvms_jax.hover._plan import plan_targets
+from uvms_jax.hover._plan import run_plan_hovering
+from uvms_jax.hover._settings import DEFAULT_THRUSTERS
+from uvms_jax.hover._settings import GRAVITY
+from uvms_jax.hover._settings import ControllerSettings
+from uvms_jax.hover._settings import CurrentSettings
+from uvms_jax.hover._settings import Thruster
+from uvms_jax.hover._settings import VehicleSettings
+from uvms_jax.hover._sim import HoverLog
+from uvms_jax.hover._sim import HoverSim
+from uvms_jax.hover._sim import arm_motion
+
+__all__ = ["ControllerSettings", "CurrentSettings", "DEFAULT_THRUSTERS", "GRAVITY", "HULL_GEOM", "HoverLog",
+           "HoverRun", "HoverSim", "SERVO_KP", "SERVO_KV", "Thruster", "VEHICLE_BODY", "VehicleSettings",
+           "allocate_thrust", "apply_buoyancy", "level_attitude", "arm_motion", "buoyancy_bodies", "buoyancy_xfrc",
+           "current_at", "hover_mjcf", "hover_model", "plan_targets", "run_plan_hovering", "servo_name",
+           "station_keeping", "thrust_matrix", "thruster_name", "trimmed", "wrap_angle", "yaw_of_quat"]

@@ -1,0 +1,152 @@
+"""A scheduled plan's motion on the hovering vehicle: how good is a docking pose if the vehicle
+only hovers there?
+
+:func:`run_plan_hovering` replays a ``plan.json`` (:class:`uvms_jax.planfile.Plan`) on
+:class:`~uvms_jax.hover.HoverSim`: the arm's servos follow the plan's timed waypoints, dwelling
+at the end of every segment (where the executor waits for its gate) and during every gripper
+step, while the vehicle holds the docked pose on its thrusters in the given current. At each
+gate it compares the tool with where the docked arm puts it at the same joint angles: the
+vehicle's motion, seen at the tool.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from uvms_jax import frames, kin
+from uvms_jax.planfile import Plan
+from uvms_jax.robot import Robot
+
+from ._model import trimmed
+from ._settings import ControllerSettings, CurrentSettings, VehicleSettings
+from ._sim import HoverLog, HoverSim
+
+__all__ = ["HoverRun", "plan_targets", "run_plan_hovering"]
+
+
+def plan_targets(plan: Plan, dwell_s: float, gripper_s: float):
+    """The plan's arm motion as servo targets over time.
+
+    Each segment's waypoints are followed at their times (linear between them); its last
+    waypoint is held for ``dwell_s`` [s] (the gate) and a gripper-only step for ``gripper_s``.
+
+    Returns:
+      ``(targets, gate_times (g,) [s], duration [s])``: ``targets(t)`` gives the ``(n,)`` joint
+      targets [rad] at time ``t``; a gate time is the end of a segment's dwell.
+    """
+    times, qs, gates = [], [], []
+    t0 = 0.0
+    q_last = np.asarray(plan.segments[0].q[0], dtype=float)
+    for seg in plan.segments:
+        if len(seg.q):
+            t = t0 + np.asarray(seg.t, dtype=float)
+            times.append(t)
+            qs.append(np.asarray(seg.q, dtype=float))
+            t0, q_last = float(t[-1]) + dwell_s, qs[-1][-1]
+            gates.append(t0)
+        else:  # a gripper step: the arm holds still
+            t0 += gripper_s
+        times.append(np.array([t0]))
+        qs.append(q_last[None])
+    t_all, q_all = np.concatenate(times), np.concatenate(qs)
+
+    def targets(t: float) -> np.ndarray:
+        return np.array([np.interp(t, t_all, q_all[:, j]) for j in range(q_all.shape[1])])
+
+    return targets, np.asarray(gates), t0
+
+
+@dataclasses.dataclass(frozen=True)
+class HoverRun:
+    """A plan's motion on the hovering vehicle (:func:`run_plan_hovering`).
+
+    Attributes:
+      log: the simulator's record (world frame, SI).
+      gate_times: ``(g,)`` [s]; gate_tool_error: ``(g,)`` the tool's distance from its docked
+        position at each gate [m]; gate_joint_error: ``(g,)`` the largest joint error from the
+        gate's waypoint [rad].
+      tool_error: ``(k,)`` the tool's distance from where the docked arm would hold it at the
+        same joint angles, per logged row [m].
+      drift: ``(k,)`` the vehicle's distance from the docked pose [m].
+      tool_tolerance_m, joint_tolerance_rad: a gate is reached within both.
+      current: ``(3,)`` the water's velocity at the start [m/s].
+    """
+
+    log: HoverLog
+    gate_times: np.ndarray
+    gate_tool_error: np.ndarray
+    gate_joint_error: np.ndarray
+    tool_error: np.ndarray
+    drift: np.ndarray
+    tool_tolerance_m: float
+    joint_tolerance_rad: float
+    current: np.ndarray
+
+    @property
+    def gates_reached(self) -> int:
+        return int(np.sum((self.gate_tool_error <= self.tool_tolerance_m)
+                          & (self.gate_joint_error <= self.joint_tolerance_rad)))
+
+    @property
+    def status(self) -> tuple[str, str]:
+        """``("completed", "")`` when every gate is reached, else ``("held", reason)``: an
+        executor waiting at that gate holds the arm there."""
+        for i, (e_tool, e_joint) in enumerate(zip(self.gate_tool_error, self.gate_joint_error)):
+            if e_tool > self.tool_tolerance_m:
+                return "held", (f"gate {i + 1} of {len(self.gate_times)}: the tool is {1e3 * e_tool:.1f} mm from its "
+                                f"docked position (tolerance {1e3 * self.tool_tolerance_m:.0f} mm)")
+            if e_joint > self.joint_tolerance_rad:
+                return "held", (f"gate {i + 1} of {len(self.gate_times)}: a joint is {e_joint:.4f} rad from its "
+                                f"waypoint (tolerance {self.joint_tolerance_rad} rad)")
+        return "completed", ""
+
+    def summary(self) -> dict:
+        """The figures of ``results.json``'s ``hover`` entry (SI units)."""
+        status, reason = self.status
+        rpy = self.log.rpy
+        return {"current_m_s": self.current.tolist(), "status": status, "reason": reason,
+                "gates": len(self.gate_times), "gates_reached": self.gates_reached,
+                "max_drift_m": float(self.drift.max()), "max_tool_error_m": float(self.tool_error.max()),
+                "max_gate_tool_error_m": float(self.gate_tool_error.max(initial=0.0)),
+                "max_tilt_deg": float(np.degrees(np.abs(rpy[:, :2]).max())),
+                "peak_thrust_N": float(np.abs(self.log.thrust).max()),
+                "simulated_s": float(self.log.time[-1])}
+
+
+def run_plan_hovering(robot: Robot, plan: Plan, pose, vehicle: VehicleSettings = VehicleSettings(),
+                      controller: ControllerSettings = ControllerSettings(),
+                      current: CurrentSettings = CurrentSettings(), *, dwell_s: float = 0.5,
+                      gripper_s: float = 1.0, tool_tolerance_m: float = 0.01,
+                      joint_tolerance_rad: float = 0.01) -> HoverRun:
+    """Replay ``plan`` with the vehicle hovering at the docked ``pose`` ``(4,) = [x, y, z, ψ]``
+    [m, rad] instead of fixed there.
+
+    The vehicle is ballasted for the arm at the plan's first waypoint (:func:`trimmed`: neutral
+    and level), starts at rest at ``pose`` and holds it by station keeping. ``vehicle``'s mount
+    must be the docking problem's, so that the docked base is where the plan was made for.
+
+    Raises:
+      ValueError: a plan for other joints than the robot's, or a waypoint outside its limits.
+    """
+    if tuple(plan.joint_names) != tuple(robot.joint_names):
+        raise ValueError(f"the plan moves {plan.joint_names}, the arm has {robot.joint_names}")
+    pose = np.asarray(pose, dtype=float)
+    targets, gate_times, duration = plan_targets(plan, dwell_s, gripper_s)
+    q0 = targets(0.0)
+    sim = HoverSim(robot, trimmed(vehicle, robot, q0), controller, current, xyz=pose[:3], rpy=(0.0, 0.0, pose[3]),
+                   q0=q0)
+    log = sim.run(duration + controller.period, arm_trajectory=targets)
+    # Where the docked arm holds the tool at the logged joint angles.
+    T_world_base = frames.pose(frames.rot_z(pose[3]), pose[:3]) @ frames.rpy_pose(vehicle.mount_xyz, vehicle.mount_rpy)
+    p_base = np.asarray(kin.fk(robot.chain, log.q))[:, :3, 3]
+    docked_tool = p_base @ T_world_base[:3, :3].T + T_world_base[:3, 3]
+    tool_error = np.linalg.norm(log.tool - docked_tool, axis=-1)
+    rows = np.searchsorted(log.time, gate_times - 1e-9).clip(max=len(log.time) - 1)
+    joint_error = np.abs(log.q[rows] - np.array([targets(t) for t in gate_times])).max(axis=-1) \
+        if len(rows) else np.zeros(0)
+    return HoverRun(log=log, gate_times=gate_times, gate_tool_error=tool_error[rows], gate_joint_error=joint_error,
+                    tool_error=tool_error, drift=np.linalg.norm(log.position - pose[:3], axis=-1),
+                    tool_tolerance_m=float(tool_tolerance_m), joint_tolerance_rad=float(joint_tolerance_rad),
+                    current=sim.current_velocity(0.0))
