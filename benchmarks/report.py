@@ -120,7 +120,7 @@ def demo() -> str:
         ["surrogate", f"map learned from {sur['n_train_poses']} poses ({sur['n_test_poses']} held out); held-out RMSE "
                       f"of w {sur['rmse_w']:.4f} (largest w {sur['w_range']:.3f})", f"{t['surrogate']:.1f}"],
         ["docking", f"GA runs: best {dock['ga_best_fitness']:.3f} (M_a {dock['ga_best_M_a']:.4f}), worst "
-                    f"{dock['ga_ratio_to_grid_min'] * dock['grid_fitness']:.2f}; grid + zoom: **{dock['grid_fitness']:.3f} "
+                    f"{dock['ga_ratio_to_grid_min'] * dock['grid_fitness']:.2f}; multistart grid search: **{dock['grid_fitness']:.3f} "
                     f"(M_a {dock['pose_M_a']:.4f})**, chosen ({dock['pose_source']}); GA on the map: "
                     f"{dock['map_best_fitness']:.3f}, a loss of optimum of {dock['map_loss_of_optimum']:.1%}, its "
                     f"evaluations {dock['map_eval_speedup']:.0f}× faster than the analytic ones", f"{t['docking']:.1f}"],
