@@ -178,6 +178,29 @@ def docking_search() -> str:
                       for r in runs if r["ratio"] < 0.99) + "\n")
 
 
+def hover_mjx() -> str:
+    rows = []
+    for name in ("hover_mjx_cpu.json", "hover_mjx_h100.json"):
+        d = _load(name)
+        where = "2-core CPU" if d["device"]["platform"] == "cpu" else d["device"]["device_kind"]
+        cpu = d["cpu_mujoco_hoversim"]["steps_per_s"]
+        for r in d["mjx"]:
+            rows.append([where, str(r["batch"]), f"{r['compile_s']:.1f}", f"{r['run_s']:.3f}", _rate(r["env_steps_per_s"]),
+                         _rate(r["scenarios_per_s"]), f"{r['env_steps_per_s'] / cpu:.0f}×"])
+    gpu, cpu_file = _load("hover_mjx_h100.json"), _load("hover_mjx_cpu.json")
+    return (f"`{cpu_file['command']}` (2-core CPU, jax {cpu_file['versions']['jax']}) and `{gpu['command']}` "
+            f"({gpu['device']['device_kind']}, jax {gpu['versions']['jax']}); {gpu['physics_steps_per_scenario']} "
+            f"physics steps of {gpu['model']['physics_dt_s'] * 1e3:g} ms per scenario on the GPU "
+            f"({gpu['simulated_s']:g} s simulated), float32. CPU MuJoCo (`HoverSim`, one thread, the same model and "
+            f"motion): {_rate(cpu_file['cpu_mujoco_hoversim']['steps_per_s'])} steps/s here, "
+            f"{_rate(gpu['cpu_mujoco_hoversim']['steps_per_s'])} on the GPU machine's CPU (MuJoCo's C step alone, "
+            f"without our buoyancy and control: {_rate(cpu_file['cpu_mujoco_mj_step_only']['steps_per_s'])} and "
+            f"{_rate(gpu['cpu_mujoco_mj_step_only']['steps_per_s'])}); the last column is the batch against `HoverSim` "
+            "on the same machine.\n\n"
+            + _table(["device", "scenarios", "compile [s]", "run [s]", "env-steps/s", "scenarios/s", "vs CPU MuJoCo"],
+                     rows) + "\n")
+
+
 def kin_summary() -> str:
     """The kinematics line of README.md's results, from the indices benchmark's files."""
     cpu = next(r for r in _load("kin_indices_uvms12_cpu.json")["results"] if r["batch"] == 100000)
@@ -243,7 +266,7 @@ def papers() -> str:
 
 
 BLOCKS = {f.__name__: f for f in (kin_indices_cpu, kin_indices_accuracy, kin_indices_gpu, demo, docking_search,
-                                                  kin_summary, papers)}
+                                                  kin_summary, papers, hover_mjx)}
 
 
 def render(text: str) -> str:

@@ -16,6 +16,17 @@ The formulas are pure functions of arrays that take ``xp`` (``numpy`` or ``jax.n
 batched MJX simulator can reuse them. Frames, units and the tests' oracles: docs/hover.md.
 """
 
+from uvms_jax.hover._batch import BatchResult
+from uvms_jax.hover._batch import HoverMJX
+from uvms_jax.hover._batch import HoverState
+from uvms_jax.hover._batch import PeriodRecord
+from uvms_jax.hover._batch import batch_plan
+from uvms_jax.hover._batch import batch_scenarios
+from uvms_jax.hover._batch import currents_grid
+from uvms_jax.hover._batch import fluid_bodies
+from uvms_jax.hover._batch import fluid_xfrc
+from uvms_jax.hover._batch import hover_mjx
+from uvms_jax.hover._batch import plot_robustness
 from uvms_jax.hover._control import allocate_thrust
 from uvms_jax.hover._control import level_attitude
 from uvms_jax.hover._control import station_keeping
@@ -48,8 +59,11 @@ from uvms_jax.hover._sim import HoverLog
 from uvms_jax.hover._sim import HoverSim
 from uvms_jax.hover._sim import arm_motion
 
-__all__ = ["ControllerSettings", "CurrentSettings", "DEFAULT_THRUSTERS", "GRAVITY", "HULL_GEOM", "HoverLog",
-           "HoverRun", "HoverSim", "SERVO_KP", "SERVO_KV", "Thruster", "VEHICLE_BODY", "VehicleSettings",
-           "allocate_thrust", "apply_buoyancy", "level_attitude", "arm_motion", "buoyancy_bodies", "buoyancy_xfrc",
-           "current_at", "hover_mjcf", "hover_model", "plan_targets", "run_plan_hovering", "servo_name",
-           "station_keeping", "thrust_matrix", "thruster_name", "trimmed", "wrap_angle", "yaw_of_quat"]
+__all__ = ["BatchResult", "ControllerSettings", "CurrentSettings", "DEFAULT_THRUSTERS", "GRAVITY",
+           "HULL_GEOM", "HoverLog", "HoverMJX", "HoverRun", "HoverSim", "HoverState", "PeriodRecord",
+           "SERVO_KP", "SERVO_KV", "Thruster", "VEHICLE_BODY", "VehicleSettings", "allocate_thrust",
+           "apply_buoyancy", "arm_motion", "batch_plan", "batch_scenarios", "buoyancy_bodies",
+           "buoyancy_xfrc", "current_at", "currents_grid", "fluid_bodies", "fluid_xfrc", "hover_mjcf",
+           "hover_mjx", "hover_model", "level_attitude", "plan_targets", "plot_robustness",
+           "run_plan_hovering", "servo_name", "station_keeping", "thrust_matrix", "thruster_name", "trimmed",
+           "wrap_angle", "yaw_of_quat"]
