@@ -82,3 +82,15 @@ def test_levelling_keeps_the_vehicle_flatter_than_the_hydrostatics_alone(runs):
     free = run_plan_hovering(ARM, _plan(), POSE, VehicleSettings(), ControllerSettings(level_kp=0.0, level_kd=0.0))
     assert runs[0.0].summary()["max_tilt_deg"] < 0.5 * free.summary()["max_tilt_deg"]
     assert runs[0.0].summary()["max_tool_error_m"] < free.summary()["max_tool_error_m"]
+
+
+def test_coordination_removes_most_of_the_tool_error(runs):
+    """The arm correcting for the vehicle's motion through its Jacobian keeps the tool nearer the
+    docked path than the arm that only follows its waypoints, in the same current, within limits."""
+    coord = run_plan_hovering(ARM, _plan(), POSE, VehicleSettings(), current=CurrentSettings(velocity=(0.4, 0.0, 0.0)),
+                              coordinate=True)
+    plain, fixed = runs[0.4].summary(), coord.summary()
+    assert fixed["coordinated"] and not plain["coordinated"]
+    assert fixed["max_gate_tool_error_m"] < 0.5 * plain["max_gate_tool_error_m"]
+    assert fixed["gates_reached"] >= plain["gates_reached"]
+    assert np.all((coord.log.q_target >= ARM.lower - 1e-9) & (coord.log.q_target <= ARM.upper + 1e-9))

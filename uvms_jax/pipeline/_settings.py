@@ -46,6 +46,8 @@ class HoverStageSettings:
         gripper_s: how long a gripper step takes [s].
       tool_tolerance_m, joint_tolerance_rad: a gate is reached with the tool within this of
         where the docked arm holds it and every joint within this of its waypoint.
+      coordinate: also run the current with the arm correcting for the vehicle's motion (the
+        tool's offset mapped to joint corrections through the arm's Jacobian, within limits).
     """
 
     current: tuple[float, float, float] = (0.0, 0.0, 0.0)
@@ -55,6 +57,7 @@ class HoverStageSettings:
     gripper_s: float = setting(1.0, ge=0)
     tool_tolerance_m: float = setting(0.01, gt=0)
     joint_tolerance_rad: float = setting(0.01, gt=0)
+    coordinate: bool = True
 
 
 @dataclasses.dataclass(frozen=True)
