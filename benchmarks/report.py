@@ -201,6 +201,17 @@ def hover_mjx() -> str:
                      rows) + "\n")
 
 
+def hover_robustness() -> str:
+    d = _load("hover_robustness_cpu.json")
+    rows = [[f"{r['speed_m_s']:.1f}", f"{r['gate_share_worst']:.2f}", f"{r['gate_share_mean']:.2f}",
+             f"{1e3 * r['max_tool_error_m']:.0f}", f"{1e3 * r['max_drift_m']:.0f}"] for r in d["per_speed"]]
+    return (f"`{d['command']}` (the run of `benchmarks/results/demo_cpu.json`; 2-core CPU, jax {d['jax']}): "
+            f"{d['scenarios']} currents, {d['simulated_s']:.0f} s each, {d['gates']} gates, in one MJX call "
+            f"({d['compile_s']:.1f} s compile, {d['run_s']:.1f} s run).\n\n"
+            + _table(["current [m/s]", "gates reached, worst direction", "gates reached, mean", "worst tool error [mm]",
+                      "worst drift [mm]"], rows) + "\n")
+
+
 def kin_summary() -> str:
     """The kinematics line of README.md's results, from the indices benchmark's files."""
     cpu = next(r for r in _load("kin_indices_uvms12_cpu.json")["results"] if r["batch"] == 100000)
@@ -266,7 +277,8 @@ def papers() -> str:
 
 
 BLOCKS = {f.__name__: f for f in (kin_indices_cpu, kin_indices_accuracy, kin_indices_gpu, demo, docking_search,
-                                                  kin_summary, papers, hover_mjx)}
+                                                  kin_summary, papers, hover_mjx,
+                                                  hover_robustness)}
 
 
 def render(text: str) -> str:

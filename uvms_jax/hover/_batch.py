@@ -359,8 +359,8 @@ class BatchResult:
       poses: ``(K, 4)`` docked poses ``[x, y, z, ψ]``; currents: ``(N, 3)`` [m/s].
       time: ``(T,)`` the record times: the start and every control period's end [s].
       position, quat, q, tool, thrust: ``(K, N, T, ...)`` the records (:class:`PeriodRecord`).
-      docked_tool: ``(K, N, T, 3)`` where the docked arm holds the tool at the recorded joint
-        angles (FK at the docked base, as :func:`~uvms_jax.hover.run_plan_hovering`).
+      docked_tool: ``(K, N, T, 3)`` where the docked arm holds the tool on the plan: FK of the
+        targets at the docked base, as :func:`~uvms_jax.hover.run_plan_hovering` measures it.
       drift: ``(K, N, T)`` the vehicle's distance from its docked pose; tool_error:
         ``(K, N, T)`` the tool's from its docked position [m].
       gate_times: ``(g,)``; gate_tool_error, gate_joint_error: ``(K, N, g)`` at the gates [m,
@@ -507,8 +507,11 @@ def batch_scenarios(robot: Robot, vehicle: VehicleSettings, controller: Controll
     T_world_base = np.stack([frames.pose(frames.rot_z(p[3]), p[:3]) @ frames.rpy_pose(vehicle.mount_xyz,
                                                                                        vehicle.mount_rpy)
                              for p in poses])  # (K, 4, 4)
-    p_base = np.asarray(kin.fk(robot.chain, recs.q))[..., :3, 3]  # (K, N, T, 3)
-    docked = np.einsum("kij,kntj->knti", T_world_base[:, :3, :3], p_base) + T_world_base[:, None, None, :3, 3]
+    # Where the docked arm holds the tool on the plan: its targets at the record times.
+    q_plan = table[:, np.minimum(np.arange(periods + 1), periods - 1)]  # (K, T, n)
+    p_base = np.asarray(kin.fk(robot.chain, q_plan))[..., :3, 3]  # (K, T, 3)
+    docked = np.einsum("kij,ktj->kti", T_world_base[:, :3, :3], p_base) + T_world_base[:, None, :3, 3]
+    docked = np.broadcast_to(docked[:, None], recs.tool.shape)
     tool_error = np.linalg.norm(recs.tool - docked, axis=-1)
     drift = np.linalg.norm(recs.position - poses[:, None, None, :3], axis=-1)
     gate_times = np.asarray(gate_times, dtype=float).reshape(-1)
