@@ -28,8 +28,11 @@ from uvms_jax.hover._batch import fluid_xfrc
 from uvms_jax.hover._batch import hover_mjx
 from uvms_jax.hover._batch import plot_robustness
 from uvms_jax.hover._control import allocate_thrust
+from uvms_jax.hover._control import control_steps
+from uvms_jax.hover._control import hold_pose
 from uvms_jax.hover._control import level_attitude
 from uvms_jax.hover._control import station_keeping
+from uvms_jax.hover._control import thrust_layout
 from uvms_jax.hover._control import thrust_matrix
 from uvms_jax.hover._control import wrap_angle
 from uvms_jax.hover._control import yaw_of_quat
@@ -47,6 +50,7 @@ from uvms_jax.hover._model import servo_name
 from uvms_jax.hover._model import thruster_name
 from uvms_jax.hover._model import trimmed
 from uvms_jax.hover._plan import HoverRun
+from uvms_jax.hover._plan import docked_tool
 from uvms_jax.hover._plan import plan_targets
 from uvms_jax.hover._plan import run_plan_hovering
 from uvms_jax.hover._settings import DEFAULT_THRUSTERS
@@ -63,7 +67,7 @@ __all__ = ["BatchResult", "ControllerSettings", "CurrentSettings", "DEFAULT_THRU
            "HULL_GEOM", "HoverLog", "HoverMJX", "HoverRun", "HoverSim", "HoverState", "PeriodRecord",
            "SERVO_KP", "SERVO_KV", "Thruster", "VEHICLE_BODY", "VehicleSettings", "allocate_thrust",
            "apply_buoyancy", "arm_motion", "batch_plan", "batch_scenarios", "buoyancy_bodies",
-           "buoyancy_xfrc", "current_at", "currents_grid", "fluid_bodies", "fluid_xfrc", "hover_mjcf",
-           "hover_mjx", "hover_model", "level_attitude", "plan_targets", "plot_robustness",
-           "run_plan_hovering", "servo_name", "station_keeping", "thrust_matrix", "thruster_name", "trimmed",
+           "buoyancy_xfrc", "control_steps", "current_at", "docked_tool", "currents_grid", "fluid_bodies", "fluid_xfrc", "hover_mjcf",
+           "hover_mjx", "hover_model", "hold_pose", "level_attitude", "plan_targets", "plot_robustness",
+           "run_plan_hovering", "servo_name", "station_keeping", "thrust_layout", "thrust_matrix", "thruster_name", "trimmed",
            "wrap_angle", "yaw_of_quat"]

@@ -41,6 +41,7 @@ times slower here (jax 0.10.2). The flag does not concern GPUs.
 from __future__ import annotations
 
 import contextlib
+import copy
 import dataclasses
 import io
 import math
@@ -53,12 +54,12 @@ import jax.numpy as jnp
 import mujoco
 import numpy as np
 
-from uvms_jax import frames, kin
 from uvms_jax.robot import TOOL_SITE, Robot
 
-from ._control import allocate_thrust, level_attitude, station_keeping, thrust_matrix, wrap_angle, yaw_of_quat
+from ._control import control_steps, hold_pose, thrust_layout
 from ._hydro import buoyancy_xfrc
 from ._model import VEHICLE_BODY, buoyancy_bodies, hover_model, servo_name, thruster_name, trimmed
+from ._plan import docked_tool, plan_targets
 from ._settings import ControllerSettings, VehicleSettings
 
 with contextlib.redirect_stdout(io.StringIO()):  # mujoco.mjx prints "Failed to import warp" on CPU
@@ -250,18 +251,12 @@ class HoverMJX:
     def thrust(self, state: HoverState, reference) -> tuple[jax.Array, jax.Array]:
         """``(thrust (n_thrusters,) [N], integral (4,))``: station keeping on ``reference``
         ``[x, y, z, ψ]`` plus levelling, allocated (zeros when the controller is off)."""
-        d, c = state.data, self.controller
-        if not c.enabled:
+        d = state.data
+        if not self.controller.enabled:
             return jnp.zeros(self.limits.size, self.dtype), state.integral
-        R = d.xmat[self.vehicle_id]
-        error = jnp.concatenate([reference[:3] - d.qpos[:3],
-                                 wrap_angle(reference[3:] - yaw_of_quat(d.qpos[3:7], xp=jnp))])
-        yaw_rate = (R @ d.qvel[3:6])[2]  # the free joint's angular velocity is in V
-        gains = [self._c(g) for g in (c.kp, c.kd, c.ki, c.integral_limit, c.integral_band)]
-        demand, integral = station_keeping(error, d.qvel[:3], yaw_rate, state.integral, R, *gains, c.period, xp=jnp)
-        demand = demand + jnp.concatenate([jnp.zeros(3, self.dtype),
-                                           level_attitude(R, d.qvel[3:6], c.level_kp, c.level_kd, xp=jnp)])
-        return allocate_thrust(demand, self._c(self.B_pinv), self._c(self.limits), xp=jnp), integral
+        u, _, integral = hold_pose(reference, d.qpos[:3], d.qpos[3:7], d.xmat[self.vehicle_id], d.qvel[:3], d.qvel[3:6],
+                                   state.integral, self.controller, self._c(self.B_pinv), self._c(self.limits), xp=jnp)
+        return u, integral
 
     def control_step(self, state: HoverState, targets, wind, reference, volume=None,
                      cob=None) -> tuple[HoverState, PeriodRecord]:
@@ -324,12 +319,9 @@ def hover_mjx(robot: Robot, vehicle: VehicleSettings = VehicleSettings(),
     Raises:
       ValueError: ``controller.period`` not a whole number of ``physics_dt``.
     """
-    steps = round(controller.period / physics_dt)
-    if steps < 1 or abs(steps * physics_dt - controller.period) > 1e-9:
-        raise ValueError(f"controller period {controller.period} s is not a whole number of physics "
-                         f"steps of {physics_dt} s")
+    steps = control_steps(controller.period, physics_dt)
     model = hover_model(robot, vehicle, physics_dt=physics_dt)
-    device_model = hover_model(robot, vehicle, physics_dt=physics_dt)
+    device_model = copy.copy(model)
     device_model.opt.density = 0.0  # the fluid is fluid_xfrc's (MJX: no fluid with implicitfast)
     device_model.opt.viscosity = 0.0
     device_model.opt.wind[:] = 0.0
@@ -337,8 +329,7 @@ def hover_mjx(robot: Robot, vehicle: VehicleSettings = VehicleSettings(),
     mx = mjx.put_model(device_model)
     ids, volume, cob = buoyancy_bodies(model, robot, vehicle)
     fluid_ids, box = fluid_bodies(model)
-    B = thrust_matrix(np.array([t.pos for t in vehicle.thrusters], dtype=float),
-                      np.array([t.direction for t in vehicle.thrusters], dtype=float))
+    _, B_pinv, limits = thrust_layout(vehicle)
     return HoverMJX(model=model, mx=mx, robot=robot, vehicle=vehicle, controller=controller, physics_steps=steps,
                     vehicle_id=model.body(VEHICLE_BODY).id,
                     qadr=np.array([model.jnt_qposadr[model.joint(j).id] for j in robot.joint_names], dtype=int),
@@ -347,7 +338,7 @@ def hover_mjx(robot: Robot, vehicle: VehicleSettings = VehicleSettings(),
                                       dtype=int),
                     tool_site=model.site(TOOL_SITE).id, buoyant=ids, volume=volume, cob=cob, fluid_ids=fluid_ids,
                     fluid_box=box, fluid_root=np.asarray(model.body_rootid[fluid_ids], dtype=int),
-                    B_pinv=np.linalg.pinv(B), limits=np.array([t.max_thrust for t in vehicle.thrusters], dtype=float))
+                    B_pinv=B_pinv, limits=limits)
 
 
 # -- the batch ------------------------------------------------------------------------------------
@@ -504,13 +495,9 @@ def batch_scenarios(robot: Robot, vehicle: VehicleSettings, controller: Controll
     recs = PeriodRecord(*(np.asarray(a, dtype=float) for a in recs))
 
     times = period * np.arange(periods + 1)
-    T_world_base = np.stack([frames.pose(frames.rot_z(p[3]), p[:3]) @ frames.rpy_pose(vehicle.mount_xyz,
-                                                                                       vehicle.mount_rpy)
-                             for p in poses])  # (K, 4, 4)
     # Where the docked arm holds the tool on the plan: its targets at the record times.
     q_plan = table[:, np.minimum(np.arange(periods + 1), periods - 1)]  # (K, T, n)
-    p_base = np.asarray(kin.fk(robot.chain, q_plan))[..., :3, 3]  # (K, T, 3)
-    docked = np.einsum("kij,ktj->kti", T_world_base[:, :3, :3], p_base) + T_world_base[:, None, :3, 3]
+    docked = np.stack([docked_tool(robot, vehicle, p, q) for p, q in zip(poses, q_plan)])  # (K, T, 3)
     docked = np.broadcast_to(docked[:, None], recs.tool.shape)
     tool_error = np.linalg.norm(recs.tool - docked, axis=-1)
     drift = np.linalg.norm(recs.position - poses[:, None, None, :3], axis=-1)
@@ -536,8 +523,6 @@ def batch_plan(robot: Robot, plan, poses, currents, vehicle: VehicleSettings = V
     """:func:`batch_scenarios` for a ``plan.json``'s motion (:func:`~uvms_jax.hover.plan_targets`),
     its gates and its duration plus one control period, as
     :func:`~uvms_jax.hover.run_plan_hovering` replays it at one pose in one current."""
-    from ._plan import plan_targets
-
     if tuple(plan.joint_names) != tuple(robot.joint_names):
         raise ValueError(f"the plan moves {plan.joint_names}, the arm has {robot.joint_names}")
     targets, gate_times, duration = plan_targets(plan, dwell_s, gripper_s)

@@ -19,7 +19,8 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["allocate_thrust", "level_attitude", "station_keeping", "thrust_matrix", "wrap_angle", "yaw_of_quat"]
+__all__ = ["allocate_thrust", "control_steps", "hold_pose", "level_attitude", "station_keeping", "thrust_layout",
+           "thrust_matrix", "wrap_angle", "yaw_of_quat"]
 
 
 def thrust_matrix(positions, directions, xp=np):
@@ -119,4 +120,46 @@ def level_attitude(R_world_vehicle, angular_velocity, kp, kd, xp=np):
     pitch = -xp.arcsin(xp.clip(R_world_vehicle[2, 0], -1.0, 1.0))
     tilt = xp.stack([roll, pitch])
     return xp.concatenate([-kp * tilt - kd * angular_velocity[:2], xp.zeros(1, dtype=tilt.dtype)])
+
+
+def thrust_layout(vehicle) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(B (6, n), B⁺ (n, 6), limits (n,) [N])`` of a vehicle's thrusters (:func:`thrust_matrix`)."""
+    B = thrust_matrix(np.array([t.pos for t in vehicle.thrusters], dtype=float),
+                      np.array([t.direction for t in vehicle.thrusters], dtype=float))
+    return B, np.linalg.pinv(B), np.array([t.max_thrust for t in vehicle.thrusters], dtype=float)
+
+
+def control_steps(period: float, physics_dt: float) -> int:
+    """Physics steps per control period; raises ValueError unless ``period`` is a whole number
+    of ``physics_dt`` [s]."""
+    steps = round(period / physics_dt)
+    if steps < 1 or abs(steps * physics_dt - period) > 1e-9:
+        raise ValueError(f"controller period {period} s is not a whole number of physics steps of {physics_dt} s")
+    return steps
+
+
+def hold_pose(reference, position, quat, R_world_vehicle, velocity, angular_velocity, integral, controller, B_pinv,
+              limits, xp=np):
+    """One control period of the vehicle holding ``reference`` ``(4,) = [x, y, z, ψ]``:
+    :func:`station_keeping` plus :func:`level_attitude`, allocated (:func:`allocate_thrust`).
+
+    Args:
+      position, quat: ``(3,)`` V's origin [m] and ``(4,)`` orientation ``(w, x, y, z)``;
+        R_world_vehicle ``(3, 3)`` the same orientation.
+      velocity: ``(3,)`` linear velocity in the world [m/s]; angular_velocity: ``(3,)`` in V
+        [rad/s] (a free joint's ``qvel``).
+      integral: ``(4,)`` the station keeping's state; controller: its
+        :class:`~uvms_jax.hover.ControllerSettings`; B_pinv, limits: of :func:`thrust_layout`.
+
+    Returns:
+      ``(thrust (n,) [N], demand (6,) wrench in V [N, N·m], integral (4,))``.
+    """
+    c = controller
+    gains = [xp.asarray(g, dtype=position.dtype) for g in (c.kp, c.kd, c.ki, c.integral_limit, c.integral_band)]
+    error = xp.concatenate([reference[:3] - position, wrap_angle(reference[3:] - yaw_of_quat(quat, xp=xp))])
+    yaw_rate = (R_world_vehicle @ angular_velocity)[2]
+    demand, integral = station_keeping(error, velocity, yaw_rate, integral, R_world_vehicle, *gains, c.period, xp=xp)
+    level = level_attitude(R_world_vehicle, angular_velocity, c.level_kp, c.level_kd, xp=xp)
+    demand = demand + xp.concatenate([xp.zeros(3, dtype=demand.dtype), level])
+    return allocate_thrust(demand, B_pinv, limits, xp=xp), demand, integral
 

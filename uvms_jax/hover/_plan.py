@@ -24,7 +24,7 @@ from ._model import trimmed
 from ._settings import ControllerSettings, CurrentSettings, VehicleSettings
 from ._sim import HoverLog, HoverSim
 
-__all__ = ["HoverRun", "plan_targets", "run_plan_hovering"]
+__all__ = ["HoverRun", "docked_tool", "plan_targets", "run_plan_hovering"]
 
 
 def plan_targets(plan: Plan, dwell_s: float, gripper_s: float):
@@ -57,6 +57,15 @@ def plan_targets(plan: Plan, dwell_s: float, gripper_s: float):
         return np.array([np.interp(t, t_all, q_all[:, j]) for j in range(q_all.shape[1])])
 
     return targets, np.asarray(gates), t0
+
+
+def docked_tool(robot: Robot, vehicle: VehicleSettings, pose, q) -> np.ndarray:
+    """``(..., 3)`` where the arm holds its tool [m, world] at joint angles ``q (..., n)`` with the
+    vehicle docked at ``pose = [x, y, z, ψ]`` (its base on ``vehicle``'s mount): the reference
+    a hovering run is measured against."""
+    pose = np.asarray(pose, dtype=float)
+    T = frames.pose(frames.rot_z(pose[3]), pose[:3]) @ frames.rpy_pose(vehicle.mount_xyz, vehicle.mount_rpy)
+    return np.asarray(kin.fk(robot.chain, np.asarray(q)))[..., :3, 3] @ T[:3, :3].T + T[:3, 3]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -149,8 +158,7 @@ def run_plan_hovering(robot: Robot, plan: Plan, pose, vehicle: VehicleSettings =
     period = controller.period
     times = period * np.arange(round(duration / period) + 2)
     q_plan = np.array([targets(t) for t in times])
-    T_world_base = frames.pose(frames.rot_z(pose[3]), pose[:3]) @ frames.rpy_pose(vehicle.mount_xyz, vehicle.mount_rpy)
-    p_docked = np.asarray(kin.fk(robot.chain, q_plan))[:, :3, 3] @ T_world_base[:3, :3].T + T_world_base[:3, 3]
+    p_docked = docked_tool(robot, vehicle, pose, q_plan)
     arm = _coordinated(sim, robot, q_plan, p_docked, period) if coordinate else (lambda t: q_plan[round(t / period)])
     log = sim.run(times[-1], arm_trajectory=arm)
     tool_error = np.linalg.norm(log.tool - p_docked[: len(log.time)], axis=-1)

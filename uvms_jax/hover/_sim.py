@@ -22,7 +22,7 @@ import numpy as np
 from uvms_jax import frames
 from uvms_jax.robot import TOOL_SITE, Robot
 
-from ._control import allocate_thrust, level_attitude, station_keeping, thrust_matrix, wrap_angle, yaw_of_quat
+from ._control import control_steps, hold_pose, thrust_layout
 from ._hydro import current_at
 from ._model import VEHICLE_BODY, apply_buoyancy, buoyancy_bodies, hover_model, servo_name, thruster_name
 from ._settings import ControllerSettings, CurrentSettings, VehicleSettings
@@ -104,10 +104,7 @@ class HoverSim:
                  controller: ControllerSettings = ControllerSettings(), current: CurrentSettings = CurrentSettings(),
                  *, xyz: Sequence[float] = (0.0, 0.0, 0.0), rpy: Sequence[float] = (0.0, 0.0, 0.0),
                  q0: Sequence[float] | None = None, physics_dt: float = 0.002) -> None:
-        steps = round(controller.period / physics_dt)
-        if steps < 1 or abs(steps * physics_dt - controller.period) > 1e-9:
-            raise ValueError(f"controller period {controller.period} s is not a whole number of physics "
-                             f"steps of {physics_dt} s")
+        steps = control_steps(controller.period, physics_dt)
         self.robot, self.vehicle, self.controller, self.current = robot, vehicle, controller, current
         self._steps = steps
         self._current_times, self._current_values = current.profile()
@@ -117,11 +114,8 @@ class HoverSim:
         self.data = mujoco.MjData(self.model)
         m = self.model
         self._thr = np.array([m.actuator(thruster_name(k)).id for k in range(len(vehicle.thrusters))])
-        self.limits = np.array([t.max_thrust for t in vehicle.thrusters])
-        # Thrust configuration matrix about V's origin and its pseudo-inverse, fixed for the layout.
-        self.B = thrust_matrix(np.array([t.pos for t in vehicle.thrusters], dtype=float),
-                               np.array([t.direction for t in vehicle.thrusters], dtype=float))
-        self.B_pinv = np.linalg.pinv(self.B)
+        # Thrust configuration matrix about V's origin, its pseudo-inverse and the limits.
+        self.B, self.B_pinv, self.limits = thrust_layout(vehicle)
         self._buoyant = buoyancy_bodies(m, robot, vehicle)
         self._vehicle = m.body(VEHICLE_BODY).id
         n = robot.n_joints if robot is not None else 0
@@ -136,9 +130,6 @@ class HoverSim:
         mujoco.mj_forward(m, self.data)
         self.reference = np.concatenate([np.asarray(xyz, dtype=float), [float(rpy[2])]])
         self.integral = np.zeros(4)
-        self._gains = tuple(np.asarray(g, dtype=float) for g in
-                            (controller.kp, controller.kd, controller.ki, controller.integral_limit,
-                             controller.integral_band))
         self._last_demand = np.zeros(6)
 
     # -- state -------------------------------------------------------------------------------
@@ -170,16 +161,11 @@ class HoverSim:
         """``(thrust (n,) [N], demand (6,) [N, N·m])`` for the present state, advancing the
         controller's integral by one period."""
         d = self.data
-        R = d.xmat[self._vehicle].reshape(3, 3)
-        quat = d.qpos[3:7]
-        error = np.concatenate([self.reference[:3] - d.qpos[:3],
-                                [wrap_angle(self.reference[3] - yaw_of_quat(quat))]])
-        yaw_rate = (R @ d.qvel[3:6])[2]  # the free joint's angular velocity is in V
-        demand, self.integral = station_keeping(error, d.qvel[:3].copy(), yaw_rate, self.integral, R,
-                                                *self._gains, self.controller.period)
-        c = self.controller
-        demand = demand + np.concatenate([np.zeros(3), level_attitude(R, d.qvel[3:6], c.level_kp, c.level_kd)])
-        return allocate_thrust(demand, self.B_pinv, self.limits), demand
+        u, demand, self.integral = hold_pose(self.reference, d.qpos[:3].copy(), d.qpos[3:7].copy(),
+                                             d.xmat[self._vehicle].reshape(3, 3), d.qvel[:3].copy(),
+                                             d.qvel[3:6].copy(), self.integral, self.controller, self.B_pinv,
+                                             self.limits)
+        return u, demand
 
     def step(self, arm_targets: Sequence[float] | None = None, thrust: Sequence[float] | None = None) -> None:
         """One control period: thrusts and arm targets set, then the physics steps.
