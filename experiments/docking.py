@@ -53,7 +53,8 @@ def main(cfg: DictConfig) -> dict:
     log.info("GA/grid ratios %s (refined grid: %s); %.0f GA evaluations/s; outputs in %s",
              summary["ga_ratio_to_grid"], summary["ga_ratio_to_refined_grid"], summary["ga_evaluations_per_s"], out)
     if run.wmax_best is not None:
-        log.info("zero-w best %.3f, ill-placed %.3f", run.wmax_best.zero_fraction, run.wmax_ill_placed.zero_fraction)
+        log.info("zero-w best %.3f, ill-placed %.3f", run.wmax_best.map.zero_fraction,
+                 run.wmax_ill_placed.map.zero_fraction)
     return summary
 
 

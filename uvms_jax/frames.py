@@ -15,7 +15,7 @@ import mujoco
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-__all__ = ["matrix_quat", "matrix_rpy", "pose", "quat_matrix", "rot_z", "rpy_matrix", "rpy_pose"]
+__all__ = ["matrix_euler_xyz", "matrix_quat", "matrix_rpy", "pose", "quat_matrix", "rot_z", "rpy_matrix", "rpy_pose"]
 
 
 def pose(R=None, p=(0.0, 0.0, 0.0)) -> np.ndarray:
@@ -51,6 +51,12 @@ def matrix_rpy(R: np.ndarray) -> np.ndarray:
     if abs(R[2, 0]) < 1.0 - 1e-9:
         return np.array([np.arctan2(R[2, 1], R[2, 2]), pitch, np.arctan2(R[1, 0], R[0, 0])])
     return np.array([0.0, pitch, np.arctan2(-R[0, 1], R[1, 1])])
+
+
+def matrix_euler_xyz(R: np.ndarray) -> np.ndarray:
+    """Angles ``(a, b, c)`` [rad] with ``R = Rx(a) Ry(b) Rz(c)`` (intrinsic x, y, z): the
+    vehicle's roll, pitch and yaw joints of :func:`uvms_jax.kin.uvms`."""
+    return Rotation.from_matrix(np.asarray(R, dtype=np.float64)).as_euler("XYZ")
 
 
 def matrix_quat(R: np.ndarray) -> np.ndarray:

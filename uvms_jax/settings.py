@@ -36,7 +36,7 @@ import typing
 from collections.abc import Mapping
 from typing import Any, TypeVar
 
-__all__ = ["Check", "SettingsError", "check_keys", "from_mapping", "setting"]
+__all__ = ["Check", "SettingsError", "check_fields", "check_keys", "from_mapping", "setting"]
 
 T = TypeVar("T")
 
@@ -129,6 +129,17 @@ def setting(default: Any = dataclasses.MISSING, *, default_factory: Any = datacl
     """
     check = Check(ge=ge, gt=gt, le=le, lt=lt, choices=None if choices is None else tuple(choices), file=file)
     return dataclasses.field(default=default, default_factory=default_factory, metadata={"check": check})
+
+
+def check_fields(settings: Any) -> None:
+    """Raise :class:`SettingsError` naming every field of the dataclass instance ``settings``
+    whose value its :func:`setting` check refuses: the same check :func:`from_mapping` makes,
+    for settings built directly (call it from ``__post_init__``)."""
+    name = type(settings).__name__
+    problems = [m for f in dataclasses.fields(settings) if "check" in f.metadata
+                for m in f.metadata["check"].problems(getattr(settings, f.name), f"{name}.{f.name}")]
+    if problems:
+        raise SettingsError("; ".join(problems))
 
 
 def parameters(cls: type[T], settings: Any, **given: Any) -> T:

@@ -170,3 +170,18 @@ def test_robustness_plot_is_written(batch, tmp_path):
 
     plot_robustness(batch, tmp_path / "robustness.png")
     assert (tmp_path / "robustness.png").stat().st_size > 10_000
+
+
+def test_candidates_follow_the_docked_tool_path_and_the_unreachable_is_left_out():
+    """Three docking candidates for one plan: its own pose, one nearby, one 3 m away. The
+    nearby one moves the tool along the same world path (the docked pose's forward kinematics,
+    to the IK tolerance), the far one cannot reach it and is left out of the batch."""
+    from uvms_jax.hover import batch_candidates
+    from uvms_jax.planfile import Plan, Segment
+
+    plan = Plan(ARM.joint_names, (Segment("there", (0.0, 0.4, 0.8), tuple(map(tuple, (Q_A, (Q_A + Q_B) / 2, Q_B)))),))
+    poses = np.stack([POSES[0], POSES[0] + [0.05, -0.03, 0.02, 0.2], POSES[0] + [3.0, 0.0, 0.0, 0.0]])
+    res, reached = batch_candidates(ARM, plan, poses, CURRENTS[:1], dwell_s=0.2, gripper_s=0.0)
+    assert reached[:2].tolist() == [1.0, 1.0] and reached[2] < 1.0 and res.poses.shape == (2, 4)
+    np.testing.assert_allclose(res.docked_tool[1], res.docked_tool[0], atol=2e-4)  # float32 IK tolerance 1e-4
+    assert np.all(res.gate_share == 1.0)  # still water: every gate, from both poses

@@ -22,6 +22,7 @@ STAGE_FILES = {  # each stage's folder must hold these files
     "plan": ["edges.csv", "targets.json", "cost_RRTConnect.csv", "ee_paths_RRTConnect.png"],
     "schedule": ["table.md", "results.json", "plan.json"],
     "hw": ["run.csv", "result.json", "joint_trajectory.yaml"],
+    "hover": ["hover.png"],
     "baseline": ["plan/edges.csv", "schedule/plan.json", "hw/result.json"],
 }
 
@@ -82,7 +83,7 @@ def test_pipeline_tiny_end_to_end(tmp_path):
     res = _run(tmp_path, ["experiment=tiny"])
     summary = (tmp_path / "summary.md").read_text()
     titled = _tables_of(summary)
-    for words in ("Stage times", "Docking", "Surrogate", "Planning", "Schedules", "Execution", "Baseline"):
+    for words in ("Stage times", "Docking", "Surrogate", "Planning", "Schedules", "Execution", "Hovering", "Baseline"):
         assert any(words in t for t in titled), (words, titled)
     for stage, files in STAGE_FILES.items():
         for f in files:
@@ -103,3 +104,11 @@ def test_pipeline_tiny_end_to_end(tmp_path):
     mount = np.array([[1.0, 0, 0, 0.35], [0, -1.0, 0, 0], [0, 0, -1.0, -0.2], [0, 0, 0, 1.0]])
     np.testing.assert_allclose(res["plan"]["T_world_base"], T_world_vehicle @ mount, atol=1e-6)
     assert res["docking"]["pose_M_a"] > 0 and res["baseline"]["fixed"]["ok"]
+    # Hovering: the hw stage's executor and gates, the vehicle afloat; a current drifts further.
+    runs = res["hover"]["runs"]
+    still, flowing = runs["still water"], runs["current [0.3, 0.0, 0.0] m/s"]
+    for m in (still, flowing):
+        assert m["driver"] == "BPL executor" and m["status"] == "completed", m["reason"]
+        assert m["gates"] == m["gates_reached"] == res["hw"]["gates"]
+    assert flowing["max_drift_m"] > still["max_drift_m"] > 0
+    assert res["hover"]["coordination_removes"]["max_gate_tool_error_m"] > 0.5

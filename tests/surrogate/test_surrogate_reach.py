@@ -34,7 +34,7 @@ def test_features_are_position_and_two_axes():
 def test_terms_from_one_w_per_pose_equal_the_analytic_terms(problem):
     """With the analytic best w of each tool pose in place of a map, the surrogate's formula
     (S = 1) gives the analytic fitness: eq. 15 is written once."""
-    poses = jax.random.uniform(jax.random.key(3), (BATCH, 4), jnp.float32, problem.low, problem.high)
+    poses = jax.random.uniform(jax.random.key(3), (BATCH, 4), jnp.float32, problem.pose_low, problem.pose_high)
     _, _, w = evo.arm_solutions_jit(problem, poses)
     ours = jax.jit(evo.arm_terms)(problem, poses, jnp.max(w, axis=-1)[..., None])  # one compile, not op by op
     ref = evo.evaluate_arm(problem, poses)

@@ -47,7 +47,7 @@ class ArmDockingProblem:
       T_world_tool: ``(k, 4, 4)`` demanded tool poses in the world W [m].
       group: ``(k,)`` target index of each pose, ``0 … n_groups − 1``.
       seeds: ``(S, n)`` IK seeds inside the joint limits [rad or m].
-      low, high: ``(4,)`` box of vehicle poses ``[x, y, z, ψ]`` [m, rad].
+      pose_low, pose_high: ``(4,)`` box of vehicle poses ``[x, y, z, ψ]`` [m, rad].
       p_dock: ``(3,)`` docking point of the vehicle in V [m] (D of eq. 3 is measured there).
       p_i: ``(3,)`` initial position of the docking point in W [m].
       a, b: weights of eq. 8.
@@ -64,8 +64,8 @@ class ArmDockingProblem:
     T_world_tool: Array
     group: Array
     seeds: Array
-    low: Array
-    high: Array
+    pose_low: Array
+    pose_high: Array
     p_dock: Array
     p_i: Array
     a: Array
@@ -78,14 +78,6 @@ class ArmDockingProblem:
     damping: Array
     n_groups: int = struct.field(pytree_node=False)
     iterations: int = struct.field(pytree_node=False)
-
-    @property
-    def pose_low(self) -> Array:
-        return self.low
-
-    @property
-    def pose_high(self) -> Array:
-        return self.high
 
     def fitness(self, pose: Array) -> Array:
         """Fitness of eq. 15 for ``(..., 4)`` vehicle poses (traceable)."""
@@ -168,8 +160,8 @@ def make_arm_docking_problem(
         T_world_tool=arr(T_tool),
         group=jnp.asarray(group, dtype=jnp.int32),
         seeds=arr(lo + u * (up - lo)),
-        low=arr(low),
-        high=arr(high),
+        pose_low=arr(low),
+        pose_high=arr(high),
         p_dock=arr(p_dock),
         p_i=arr(p_i),
         a=arr(a),
@@ -250,7 +242,7 @@ def arm_terms(problem: ArmDockingProblem, pose: Array, w: Array) -> DockingEval:
     M_a = jnp.min(target_w(p, w), axis=-1)  # eq. 1
     p_d = kin.matvec(base_transform(pose)[..., :3, :3], p.p_dock) + pose[..., :3]
     D = jnp.linalg.norm(p_d - p.p_i, axis=-1)  # eq. 3
-    inside = jnp.all((pose >= p.low) & (pose <= p.high), axis=-1)
+    inside = jnp.all((pose >= p.pose_low) & (pose <= p.pose_high), axis=-1)
     feasible = inside & vehicle_clear(p, pose)  # eq. 14: Wd
     return DockingEval(fitness=docking_fitness(M_a, D, feasible, p.a, p.b), M_a=M_a, D=D, feasible=feasible)
 

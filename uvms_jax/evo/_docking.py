@@ -101,15 +101,6 @@ class PoseMap:
     map: WmaxMap
     M_a: float
 
-    @property
-    def zero_fraction(self) -> float:
-        """Share of the task area with no valid IK branch."""
-        return self.map.zero_fraction
-
-    @property
-    def w_max_mean(self) -> float:
-        return float(self.map.w_max.mean())
-
 
 @dataclasses.dataclass(frozen=True)
 class BestPose:
@@ -145,6 +136,9 @@ class DockingRun:
       ga_compile_seconds: compilation and the first batch [s].
       grid, refined_grid: the dense grid's optimum and its polish by zoom stages.
       refine_stage_fitness: best fitness after each zoom stage.
+      candidates, candidate_fitness: ``(K, 4)`` the distinct local optima the polish found
+        (best first; K ≤ ``grid.refine_starts``) and ``(K,)`` their fitness: the docking
+        poses to compare further, e.g. hovering (:func:`uvms_jax.hover.batch_candidates`).
       cmaes: the CMA-ES baseline, or None when disabled.
       wmax_best, wmax_ill_placed: w_max maps of the best GA pose and the ill-placed pose
         (paper scene; None for an arm scene).
@@ -168,6 +162,8 @@ class DockingRun:
     grid: GridOptimum
     refined_grid: GridOptimum
     refine_stage_fitness: tuple[float, ...]
+    candidates: np.ndarray
+    candidate_fitness: np.ndarray
     cmaes: CMAESRuns | None
     wmax_best: PoseMap | None
     wmax_ill_placed: PoseMap | None
@@ -234,13 +230,15 @@ def _polish(problem: Problem, grid, ga, g, periodic) -> tuple:
     """Zoom stages from the grid's best point (``g.refine_starts == 1``: the reference's
     polish) or from the ``g.refine_starts`` best distinct points of the grid and the GA runs
     ``ga``. Returns the best point (``x``, ``fitness``), the best fitness after each stage,
-    the poses evaluated and the wall time [s]."""
+    the poses evaluated, the wall time [s], and the distinct polished points best first
+    (``(K, 4)`` poses, ``(K,)`` fitness; the best alone with one start)."""
     t0 = time.perf_counter()
     per_box = int(np.prod(g.refine_counts))
     if g.refine_starts == 1:
         stages = refine_grid_search(problem, grid, g.refine_counts, g.refine_stages, g.refine_shrink, g.chunk_size)
         best = stages[-1] if stages else grid
-        return best, tuple(float(st.fitness) for st in stages), len(stages) * per_box, time.perf_counter() - t0
+        return (best, tuple(float(st.fitness) for st in stages), len(stages) * per_box, time.perf_counter() - t0,
+                (np.asarray(best.x)[None], np.asarray(best.fitness).reshape(1)))
     x = np.concatenate([np.asarray(grid.top_x), np.asarray(ga.best_x)])
     f = np.concatenate([np.asarray(grid.top_fitness), np.asarray(ga.best_fitness)])
     cell = np.asarray(problem.pose_high - problem.pose_low) / np.asarray(g.counts)
@@ -249,8 +247,9 @@ def _polish(problem: Problem, grid, ga, g, periodic) -> tuple:
                      g.refine_stages, g.refine_shrink, periodic, width=cell / g.refine_shrink, chunk_size=g.chunk_size)
     k = int(np.argmax(zoom.fitness))
     best = grid._replace(x=jnp.asarray(zoom.x[k]), fitness=jnp.asarray(zoom.fitness[k]))
+    kept = distinct_best(zoom.x, zoom.fitness, len(starts), cell)  # starts may polish into one optimum
     return (best, tuple(float(v) for v in zoom.fitness_history.max(axis=-1)), g.refine_stages * per_box * len(starts),
-            time.perf_counter() - t0)
+            time.perf_counter() - t0, (zoom.x[kept], zoom.fitness[kept]))
 
 
 def run_docking(settings: DockingSettings, task: ArmTask | None = None, robot=None) -> DockingRun:
@@ -298,7 +297,7 @@ def run_docking(settings: DockingSettings, task: ArmTask | None = None, robot=No
     grid_search(problem, low, high, (2, 2, 2, 2), per, g.chunk_size, keep, shift)  # compile
     grid, t_grid = _timed(grid_search, problem, low, high, g.counts, per, g.chunk_size, keep, shift)
     bar.update()
-    ref, stage_fitness, n_refine, t_refine = _polish(problem, grid, res, g, per)
+    ref, stage_fitness, n_refine, t_refine, (candidates, candidate_fitness) = _polish(problem, grid, res, g, per)
     bar.update()
     # Objective terms of the GA bests and the two grid optima in one call (one compilation).
     scored = jnp.concatenate([res.best_x, grid.x[None], ref.x[None]])
@@ -344,6 +343,8 @@ def run_docking(settings: DockingSettings, task: ArmTask | None = None, robot=No
         grid=grid_opt,
         refined_grid=refined,
         refine_stage_fitness=stage_fitness,
+        candidates=candidates,
+        candidate_fitness=candidate_fitness,
         cmaes=cmaes,
         wmax_best=_pose_map(problem, poses[best_ga], s.wmax.n_per_side) if paper else None,
         wmax_ill_placed=_pose_map(problem, list(s.ill_placed_pose), s.wmax.n_per_side) if paper else None,

@@ -13,7 +13,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from uvms_jax.papers import D11_ARM_LENGTHS, D11_BLOCK_SIZE, D11_ILL_PLACED_POSE, D11_P_BP, D11_P_INIT, D11_TASK_SIZE
-from uvms_jax.settings import from_mapping, setting
+from uvms_jax.settings import check_fields, from_mapping, setting
 
 FIELDS = ("x", "y", "z", "psi")  # the variables of a docking pose, in chromosome order
 DTYPES = ("float32", "float64")  # DockingSettings.dtype
@@ -117,8 +117,7 @@ class ArmSceneSettings:
     ik_seed: int = 0
 
     def __post_init__(self):
-        if self.alternatives is not None and self.alternatives < 1:
-            raise ValueError(f"alternatives must be >= 1 or null, got {self.alternatives}")
+        check_fields(self)
 
 
 @dataclasses.dataclass(frozen=True)

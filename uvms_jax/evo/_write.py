@@ -46,7 +46,8 @@ def docking_summary(run: DockingRun) -> dict:
             "all_bases_in_near_quarter": all(c["base_in_near_quarter"] for c in checks),
             "all_docking_points_in_near_quarter": all(c["docking_point_in_near_quarter"] for c in checks),
             "all_face_task_area": run.all_face_task_area,
-            "zero_w_fraction": {"best": run.wmax_best.zero_fraction, "ill_placed": run.wmax_ill_placed.zero_fraction},
+            "zero_w_fraction": {"best": run.wmax_best.map.zero_fraction,
+                                "ill_placed": run.wmax_ill_placed.map.zero_fraction},
         }
     return summary
 
@@ -58,8 +59,8 @@ def _write_wmax(run: DockingRun, out: Path) -> None:
         label = ", ".join(f"{float(v):.3f}" for v in m.pose)
         plot_wmax(m.map, f"{name.replace('_', '-')} pose [{label}]", out / f"wmax_{name}.png", vmax)
     (out / "wmax.json").write_text(json.dumps({
-        name: {"pose": _pose(m.pose), "zero_w_fraction": m.zero_fraction, "Ma": m.M_a,
-               "w_max_mean": m.w_max_mean, "n_per_side": run.settings.wmax.n_per_side}
+        name: {"pose": _pose(m.pose), "zero_w_fraction": m.map.zero_fraction, "Ma": m.M_a,
+               "w_max_mean": float(m.map.w_max.mean()), "n_per_side": run.settings.wmax.n_per_side}
         for name, m in maps.items()
     }, indent=2))
 
@@ -71,6 +72,7 @@ def _write_arm_pose(run: DockingRun, out: Path) -> None:
     pose, ik = best.pose, best.ik
     (out / "best_pose.json").write_text(json.dumps({
         "pose": _pose(pose), "source": best.source, "fitness": best.fitness, "Ma": float(ik.terms.M_a),
+        "candidates": [{"pose": _pose(x), "fitness": float(f)} for x, f in zip(run.candidates, run.candidate_fitness)],
         "targets": [{"reached": bool(o), "w": float(wi), "q": None if not o else qi.round(5).tolist()}
                     for qi, o, wi in zip(ik.q, ik.valid, ik.w)],
     }, indent=2))
@@ -84,7 +86,8 @@ def write_docking(run: DockingRun, out: Path) -> dict:
     grid_optimum.json (grid optimum and its zoom refinement), cmaes.json (when CMA-ES ran),
     wmax.json (zero-w fraction, M_a and mean w_max of the best and the ill-placed pose),
     wmax_best.png, wmax_ill_placed.png (eq. 16 maps) for the paper's scene, or
-    best_pose.json (IK solution and w per target) and docked_top_view.png for an arm scene,
+    best_pose.json (IK solution and w per target, the distinct candidate poses) and
+    docked_top_view.png for an arm scene,
     convergence.png, summary.json.
     """
     out = Path(out)

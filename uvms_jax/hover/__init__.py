@@ -20,6 +20,7 @@ from uvms_jax.hover._batch import BatchResult
 from uvms_jax.hover._batch import HoverMJX
 from uvms_jax.hover._batch import HoverState
 from uvms_jax.hover._batch import PeriodRecord
+from uvms_jax.hover._batch import batch_candidates
 from uvms_jax.hover._batch import batch_plan
 from uvms_jax.hover._batch import batch_scenarios
 from uvms_jax.hover._batch import currents_grid
@@ -51,8 +52,12 @@ from uvms_jax.hover._model import thruster_name
 from uvms_jax.hover._model import trimmed
 from uvms_jax.hover._plan import HoverRun
 from uvms_jax.hover._plan import docked_tool
+from uvms_jax.hover._plan import execute_plan_hovering
+from uvms_jax.hover._plan import follow_tool_path
 from uvms_jax.hover._plan import plan_targets
 from uvms_jax.hover._plan import run_plan_hovering
+from uvms_jax.hover._plan import vehicle_arm_chain
+from uvms_jax.hover._plan import vehicle_displacement
 from uvms_jax.hover._settings import DEFAULT_THRUSTERS
 from uvms_jax.hover._settings import GRAVITY
 from uvms_jax.hover._settings import ControllerSettings
@@ -61,13 +66,16 @@ from uvms_jax.hover._settings import Thruster
 from uvms_jax.hover._settings import VehicleSettings
 from uvms_jax.hover._sim import HoverLog
 from uvms_jax.hover._sim import HoverSim
+from uvms_jax.hover._sim import HoverWorld
 from uvms_jax.hover._sim import arm_motion
 
-__all__ = ["BatchResult", "ControllerSettings", "CurrentSettings", "DEFAULT_THRUSTERS", "GRAVITY",
-           "HULL_GEOM", "HoverLog", "HoverMJX", "HoverRun", "HoverSim", "HoverState", "PeriodRecord",
-           "SERVO_KP", "SERVO_KV", "Thruster", "VEHICLE_BODY", "VehicleSettings", "allocate_thrust",
-           "apply_buoyancy", "arm_motion", "batch_plan", "batch_scenarios", "buoyancy_bodies",
-           "buoyancy_xfrc", "control_steps", "current_at", "docked_tool", "currents_grid", "fluid_bodies", "fluid_xfrc", "hover_mjcf",
-           "hover_mjx", "hover_model", "hold_pose", "level_attitude", "plan_targets", "plot_robustness",
-           "run_plan_hovering", "servo_name", "station_keeping", "thrust_layout", "thrust_matrix", "thruster_name", "trimmed",
-           "wrap_angle", "yaw_of_quat"]
+__all__ = ["allocate_thrust", "apply_buoyancy", "arm_motion", "batch_candidates", "batch_plan",
+           "batch_scenarios", "BatchResult", "buoyancy_bodies", "buoyancy_xfrc", "control_steps",
+           "ControllerSettings", "current_at", "currents_grid", "CurrentSettings", "DEFAULT_THRUSTERS",
+           "docked_tool", "execute_plan_hovering", "fluid_bodies", "fluid_xfrc", "follow_tool_path",
+           "GRAVITY", "hold_pose", "hover_mjcf", "hover_mjx", "hover_model", "HoverLog", "HoverMJX",
+           "HoverRun", "HoverSim", "HoverState", "HoverWorld", "HULL_GEOM", "level_attitude", "PeriodRecord",
+           "plan_targets", "plot_robustness", "run_plan_hovering", "SERVO_KP", "SERVO_KV", "servo_name",
+           "station_keeping", "thrust_layout", "thrust_matrix", "Thruster", "thruster_name", "trimmed",
+           "vehicle_arm_chain", "VEHICLE_BODY", "vehicle_displacement", "VehicleSettings", "wrap_angle",
+           "yaw_of_quat"]

@@ -56,20 +56,19 @@ import numpy as np
 
 from uvms_jax.robot import TOOL_SITE, Robot
 
-from ._control import control_steps, hold_pose, thrust_layout
+from ._control import LIMIT_SLACK, control_steps, hold_pose, thrust_layout
 from ._hydro import buoyancy_xfrc
 from ._model import VEHICLE_BODY, buoyancy_bodies, hover_model, servo_name, thruster_name, trimmed
-from ._plan import docked_tool, plan_targets
+from ._plan import docked_tool, follow_tool_path, plan_targets
 from ._settings import ControllerSettings, VehicleSettings
 
 with contextlib.redirect_stdout(io.StringIO()):  # mujoco.mjx prints "Failed to import warp" on CPU
     from mujoco import mjx
 
-__all__ = ["BatchResult", "HoverMJX", "HoverState", "PeriodRecord", "batch_plan", "batch_scenarios", "currents_grid",
+__all__ = ["BatchResult", "HoverMJX", "HoverState", "PeriodRecord", "batch_candidates", "batch_plan", "batch_scenarios", "currents_grid",
            "fluid_bodies", "fluid_xfrc", "hover_mjx", "plot_robustness"]
 
 _MIN_MASS = 1e-15  # MuJoCo's mjMINVAL: lighter bodies get no fluid force
-_LIMIT_SLACK = 1e-9  # [rad] float rounding allowed on a joint target
 
 
 # -- the fluid force, as MuJoCo computes it --------------------------------------------------------
@@ -474,7 +473,7 @@ def batch_scenarios(robot: Robot, vehicle: VehicleSettings, controller: Controll
         raise ValueError(f"duration must be at least one control period ({period} s), got {duration}")
     K, N, n = len(poses), len(currents), robot.n_joints
     table = _target_table(targets, periods, period, n, K)
-    if np.any(table < robot.lower - _LIMIT_SLACK) or np.any(table > robot.upper + _LIMIT_SLACK):
+    if np.any(table < robot.lower - LIMIT_SLACK) or np.any(table > robot.upper + LIMIT_SLACK):
         raise ValueError("arm targets outside the joint limits")
     volumes, cobs = [], []
     for k in range(K):
@@ -528,6 +527,38 @@ def batch_plan(robot: Robot, plan, poses, currents, vehicle: VehicleSettings = V
     targets, gate_times, duration = plan_targets(plan, dwell_s, gripper_s)
     return batch_scenarios(robot, vehicle, controller, poses, currents, targets, duration + controller.period,
                            gate_times=gate_times, **kwargs)
+
+
+def batch_candidates(robot: Robot, plan, poses, currents, vehicle: VehicleSettings = VehicleSettings(),
+                     controller: ControllerSettings = ControllerSettings(), *, dwell_s: float = 0.5,
+                     gripper_s: float = 1.0, **kwargs) -> tuple[BatchResult, np.ndarray]:
+    """Docking candidates in every current in one batch: the plan's motion at its own docked
+    pose ``poses[0]``, and the same tool motion from each other pose ``poses[1:]``
+    (:func:`~uvms_jax.hover.follow_tool_path`), timed and gated as :func:`batch_plan`.
+
+    A candidate from which the tool cannot follow the whole path (a row out of reach within
+    the joint limits) is left out of the batch.
+
+    Returns:
+      ``(result, reached)``: the batch over the kept poses, and ``reached (K,)`` the share of the
+      path's rows each pose's tool follows (1 for the first; a pose is kept when it is 1).
+    """
+    if tuple(plan.joint_names) != tuple(robot.joint_names):
+        raise ValueError(f"the plan moves {plan.joint_names}, the arm has {robot.joint_names}")
+    poses = np.atleast_2d(np.asarray(poses, dtype=float))
+    targets, gate_times, duration = plan_targets(plan, dwell_s, gripper_s)
+    duration += controller.period
+    periods = round(duration / controller.period)
+    docked = np.array([targets(k * controller.period) for k in range(periods)])
+    tables, share = [docked], [1.0]
+    for p in poses[1:]:
+        q, reached = follow_tool_path(robot, vehicle, docked, poses[0], p)
+        share.append(float(np.mean(reached)))
+        if share[-1] == 1.0:
+            tables.append(q)
+    share = np.array(share)
+    return batch_scenarios(robot, vehicle, controller, poses[share == 1.0], currents, np.stack(tables), duration,
+                           gate_times=gate_times, **kwargs), share
 
 
 def plot_robustness(result: BatchResult, path, labels: Sequence[str] | None = None) -> None:

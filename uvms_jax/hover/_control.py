@@ -22,6 +22,10 @@ import numpy as np
 __all__ = ["allocate_thrust", "control_steps", "hold_pose", "level_attitude", "station_keeping", "thrust_layout",
            "thrust_matrix", "wrap_angle", "yaw_of_quat"]
 
+# Float rounding allowed on a commanded thrust [N] or a joint target [rad] before it counts
+# as outside its limit: a target computed on a limit may land 1 ulp beyond it.
+LIMIT_SLACK = 1e-9
+
 
 def thrust_matrix(positions, directions, xp=np):
     """The thrust configuration matrix of a thruster layout.

@@ -73,7 +73,7 @@ def _hull_inertia(vehicle: VehicleSettings) -> np.ndarray:
 
 def hover_mjcf(robot: Robot | None, vehicle: VehicleSettings = VehicleSettings(), *,
                xyz: Sequence[float] = (0.0, 0.0, 0.0), rpy: Sequence[float] = (0.0, 0.0, 0.0),
-               current: Sequence[float] = (0.0, 0.0, 0.0), physics_dt: float = 0.002) -> str:
+               current: Sequence[float] = (0.0, 0.0, 0.0), physics_dt: float = 0.002, servos: bool = True) -> str:
     """MJCF of the vehicle hovering in open water, the arm (if any) hanging at its mount.
 
     Args:
@@ -85,6 +85,8 @@ def hover_mjcf(robot: Robot | None, vehicle: VehicleSettings = VehicleSettings()
       current: the water's velocity at the start [m/s] (``opt.wind``; a simulator changes it
         over time).
       physics_dt: MuJoCo's time step [s].
+      servos: a position servo on every arm joint; False: none, for a simulator that adds its
+        own drives (the hardware runner's simulated arm, :class:`~uvms_jax.hover.HoverWorld`).
 
     Returns:
       the model as an MJCF string (``mujoco.MjModel.from_xml_string``; :func:`hover_model`).
@@ -124,7 +126,7 @@ def hover_mjcf(robot: Robot | None, vehicle: VehicleSettings = VehicleSettings()
         d = d / np.linalg.norm(d)
         lines.append(f'    <motor name="{thruster_name(k)}" site="{thruster_name(k)}" gear="{_fmt(d)} 0 0 0" '
                      f'ctrllimited="true" ctrlrange="{-t.max_thrust!r} {t.max_thrust!r}"/>')
-    if robot is not None:
+    if robot is not None and servos:
         for j, lo, hi in zip(robot.joint_names, robot.lower, robot.upper):
             lines.append(f'    <position name="{servo_name(j)}" joint="{j}" kp="{SERVO_KP!r}" kv="{SERVO_KV!r}" '
                          f'ctrllimited="true" ctrlrange="{float(lo)!r} {float(hi)!r}"/>')

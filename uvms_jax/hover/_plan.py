@@ -13,18 +13,23 @@ from __future__ import annotations
 
 import dataclasses
 
-import mujoco
+import functools
+
+import jax
+import jax.numpy as jnp
 import numpy as np
 
 from uvms_jax import frames, kin
+from uvms_jax.hw import HwConfig, HwRun, SimConfig, run_plan
 from uvms_jax.planfile import Plan
 from uvms_jax.robot import TOOL_SITE, Robot
 
 from ._model import trimmed
 from ._settings import ControllerSettings, CurrentSettings, VehicleSettings
-from ._sim import HoverLog, HoverSim
+from ._sim import HoverLog, HoverSim, HoverWorld
 
-__all__ = ["HoverRun", "docked_tool", "plan_targets", "run_plan_hovering"]
+__all__ = ["HoverRun", "docked_tool", "execute_plan_hovering", "follow_tool_path", "plan_targets", "run_plan_hovering", "vehicle_arm_chain",
+           "vehicle_displacement"]
 
 
 def plan_targets(plan: Plan, dwell_s: float, gripper_s: float):
@@ -83,6 +88,13 @@ class HoverRun:
       tool_tolerance_m, joint_tolerance_rad: a gate is reached within both.
       current: ``(3,)`` the water's velocity at the start [m/s].
       coordinated: the arm corrected for the vehicle's motion (gates judged by the tool alone).
+      world: the executed run's vehicle and its model (e.g. for :meth:`HoverWorld.write_video`).
+      planned_gates: the plan's gates (an executed run: the executor's count, gripper steps
+        included).
+      executed: the BPL executor's run that drove the arm (:func:`execute_plan_hovering`: its
+        gates are the run's, judged on the joints as on a fixed base, and its result the run's
+        status), or None for a replay (:func:`run_plan_hovering`: gates judged here, on the
+        joints and the tool).
     """
 
     log: HoverLog
@@ -95,6 +107,9 @@ class HoverRun:
     joint_tolerance_rad: float
     current: np.ndarray
     coordinated: bool = False
+    executed: HwRun | None = None
+    planned_gates: int = 0
+    world: HoverWorld | None = None
 
     @property
     def _joints_checked(self) -> np.ndarray:
@@ -102,12 +117,19 @@ class HoverRun:
 
     @property
     def gates_reached(self) -> int:
+        """Gates passed: the executor's, or in a replay those within both tolerances."""
+        if self.executed is not None:
+            return len(self.gate_times)
         return int(np.sum((self.gate_tool_error <= self.tool_tolerance_m) & self._joints_checked))
 
     @property
     def status(self) -> tuple[str, str]:
-        """``("completed", "")`` when every gate is reached, else ``("held", reason)``: an
-        executor waiting at that gate holds the arm there."""
+        """The executor's ``(status, reason)``; in a replay ``("completed", "")`` when every gate
+        is reached, else ``("held", reason)``: an executor waiting at that gate holds the arm
+        there."""
+        if self.executed is not None:
+            r = self.executed.result
+            return self.executed.status, "" if r.ok else r.reason
         for i, (e_tool, e_joint) in enumerate(zip(self.gate_tool_error, self.gate_joint_error)):
             if e_tool > self.tool_tolerance_m:
                 return "held", (f"gate {i + 1} of {len(self.gate_times)}: the tool is {1e3 * e_tool:.1f} mm from its "
@@ -121,8 +143,11 @@ class HoverRun:
         """The figures of ``results.json``'s ``hover`` entry (SI units)."""
         status, reason = self.status
         rpy = self.log.rpy
-        return {"current_m_s": self.current.tolist(), "coordinated": self.coordinated, "status": status, "reason": reason,
-                "gates": len(self.gate_times), "gates_reached": self.gates_reached,
+        gates = len(self.gate_times) if self.executed is None else self.planned_gates
+        return {"driver": "replay" if self.executed is None else "BPL executor",
+                "current_m_s": self.current.tolist(), "coordinated": self.coordinated, "status": status, "reason": reason,
+                "gates": gates, "gates_reached": self.gates_reached,
+                "gates_tool_within_tolerance": int(np.sum(self.gate_tool_error <= self.tool_tolerance_m)),
                 "max_drift_m": float(self.drift.max()), "max_tool_error_m": float(self.tool_error.max()),
                 "max_gate_tool_error_m": float(self.gate_tool_error.max(initial=0.0)),
                 "max_tilt_deg": float(np.degrees(np.abs(rpy[:, :2]).max())),
@@ -159,7 +184,7 @@ def run_plan_hovering(robot: Robot, plan: Plan, pose, vehicle: VehicleSettings =
     times = period * np.arange(round(duration / period) + 2)
     q_plan = np.array([targets(t) for t in times])
     p_docked = docked_tool(robot, vehicle, pose, q_plan)
-    arm = _coordinated(sim, robot, q_plan, p_docked, period) if coordinate else (lambda t: q_plan[round(t / period)])
+    arm = _coordinated(sim, robot, vehicle, pose, q_plan, p_docked, period) if coordinate else (lambda t: q_plan[round(t / period)])
     log = sim.run(times[-1], arm_trajectory=arm)
     tool_error = np.linalg.norm(log.tool - p_docked[: len(log.time)], axis=-1)
     rows = np.searchsorted(log.time, gate_times - 1e-9).clip(max=len(log.time) - 1)
@@ -171,23 +196,140 @@ def run_plan_hovering(robot: Robot, plan: Plan, pose, vehicle: VehicleSettings =
                     current=sim.current_velocity(0.0), coordinated=coordinate)
 
 
-def _coordinated(sim: HoverSim, robot: Robot, q_plan: np.ndarray, p_docked: np.ndarray, period: float,
-                 gain: float = 0.5, damping: float = 0.02):
+def execute_plan_hovering(robot: Robot, plan: Plan, pose, vehicle: VehicleSettings = VehicleSettings(),
+                          controller: ControllerSettings = ControllerSettings(),
+                          current: CurrentSettings = CurrentSettings(), *, config: HwConfig = HwConfig(),
+                          sim: SimConfig = SimConfig(), tool_tolerance_m: float = 0.01) -> HoverRun:
+    """Execute ``plan`` with the BPL executor on the simulated arm mounted on the vehicle
+    hovering at the docked ``pose`` ``(4,) = [x, y, z, ψ]`` [m, rad]: the executor, its gates and
+    its safety checks are the fixed base's (:func:`uvms_jax.hw.run_plan` over the loopback link),
+    only the arm's base moves (:class:`HoverWorld` around :class:`uvms_jax.hw.SimArm`).
+
+    The vehicle is ballasted for the arm at the plan's first waypoint (:func:`trimmed`), starts
+    at rest at ``pose`` and holds it by station keeping. The tool error of a row is the tool's
+    distance from where the docked arm holds it at the same measured joint angles: the
+    vehicle's motion, seen at the tool. The executor does not see it (its gates are on the
+    encoders); ``gates_tool_within_tolerance`` of the summary counts the gates where the tool
+    was within ``tool_tolerance_m`` [m] as well. The run's ``world`` draws it
+    (:meth:`HoverWorld.write_video`).
+
+    Raises:
+      PlanError: the plan was made for another arm, or the dry run refused it.
+    """
+    pose = np.asarray(pose, dtype=float)
+    q0 = np.asarray(next(seg.q[0] for seg in plan.segments if len(seg.q)), dtype=float)
+    world = HoverWorld(trimmed(vehicle, robot, q0), controller, current, xyz=pose[:3], rpy=(0.0, 0.0, pose[3]))
+    run = run_plan(plan, robot, config=config, sim=sim, world=world)
+    log = world.log()
+    tool_error = np.linalg.norm(log.tool - docked_tool(robot, vehicle, pose, log.q), axis=-1)
+    # A gate passed at the last tick the executor logged for its waypoint (log times count
+    # from the run's start on the simulator's clock).
+    last_tick = {(row[1], row[2]): row[0] for row in run.log.rows}
+    gate_times = np.array([run.result.start_s + last_tick[g.segment, g.waypoint] for g in run.result.gates])
+    rows = np.searchsorted(log.time, gate_times - 1e-9).clip(max=len(log.time) - 1)
+    planned = sum(len(seg.q) - (i > 0 and len(seg.q) > 0) + (seg.jaws_mm is not None)
+                  for i, seg in enumerate(plan.segments))
+    return HoverRun(log=log, gate_times=gate_times, gate_tool_error=tool_error[rows],
+                    gate_joint_error=np.array([g.error_rad for g in run.result.gates]), tool_error=tool_error,
+                    drift=np.linalg.norm(log.position - pose[:3], axis=-1), tool_tolerance_m=float(tool_tolerance_m),
+                    joint_tolerance_rad=config.gate_threshold_rad, current=world.current_velocity(0.0),
+                    executed=run, planned_gates=int(planned), world=world)
+
+
+def follow_tool_path(robot: Robot, vehicle: VehicleSettings, q_docked, docked_pose, pose, *, key=None,
+                     iterations: int = 20) -> tuple[np.ndarray, np.ndarray]:
+    """Joint angles that move the tool along the same world path from another docking pose:
+    the task a plan made at ``docked_pose`` does, done from ``pose`` (both ``(4,) = [x, y, z,
+    ψ]`` [m, rad], the arm on ``vehicle``'s mount). No collision check: a comparison of poses
+    for the same tool motion, not a plan.
+
+    The tool poses of ``q_docked`` ``(P, n)`` [rad] at the docked base are expressed at the
+    other base and followed by damped least squares (:func:`uvms_jax.kin.dls_ik`, ``iterations``
+    per row, within the joint limits) from the previous row's solution, so the arm stays on one
+    branch: from each IK solution of the first row (32 random seeds, ``key``, and the docked
+    angles), keeping the path that reaches the most rows, then the one whose joints travel least.
+
+    Returns:
+      ``(q (P, n) [rad], reached (P,))``: a row is reached when its forward kinematics meets
+      the tool pose within the IK tolerances.
+    """
+    chain = robot.chain
+    mount = frames.rpy_pose(vehicle.mount_xyz, vehicle.mount_rpy)
+    base = [frames.pose(frames.rot_z(p[3]), p[:3]) @ mount for p in np.asarray([docked_pose, pose], dtype=float)]
+    T_tool = np.linalg.solve(base[1], base[0]) @ np.asarray(kin.fk(chain, np.asarray(q_docked)), dtype=float)
+    key = jax.random.key(0) if key is None else key
+    # Every IK branch of the first row is followed (one per converged seed, and the docked
+    # angles): the path from one may leave the reach or the limits where another's does not.
+    first = kin.numeric_ik(key, chain, T_tool[0], n_seeds=_FOLLOW_SEEDS, iterations=100, all_seeds=True)
+    seeds = jnp.concatenate([jnp.where(first.valid[:, None], first.q, q_docked[0]), jnp.asarray(q_docked[:1], first.q.dtype)])
+    q, reached = _follow(chain, jnp.asarray(T_tool, seeds.dtype), seeds, iterations)
+    q, reached = np.asarray(q), np.asarray(reached)
+    # The branch that reaches the most rows, of those the one whose joints travel least.
+    travel = np.abs(np.diff(q, axis=1)).sum(axis=(1, 2))
+    best = np.lexsort((travel, -reached.sum(axis=1)))[0]
+    return q[best], reached[best]
+
+
+_FOLLOW_SEEDS = 32
+
+
+@functools.partial(jax.jit, static_argnums=3)
+def _follow(chain: kin.Chain, T_tool, seeds, iterations: int):
+    """From each seed ``(S, n)``: the rows' solutions ``(S, P, n)`` and whether each is reached
+    ``(S, P)``."""
+    def from_seed(q0):
+        def row(q, T):
+            q = kin.dls_ik(chain, T, q, iterations)
+            return q, q
+
+        _, q = jax.lax.scan(row, q0, T_tool)
+        return q, kin.reaches(T_tool, kin.fk(chain, q))
+
+    return jax.vmap(from_seed)(seeds)
+
+
+def vehicle_arm_chain(robot: Robot, vehicle: VehicleSettings) -> kin.Chain:
+    """The arm on its vehicle as one chain (:func:`uvms_jax.kin.uvms`): six vehicle joints (x, y,
+    z, then rotations about x, y, z of the docked vehicle frame), then the arm's, at ``vehicle``'s
+    mount."""
+    return kin.uvms(robot.chain, mount=frames.rpy_pose(vehicle.mount_xyz, vehicle.mount_rpy))
+
+
+def vehicle_displacement(T_dock: np.ndarray, free_qpos: np.ndarray) -> np.ndarray:
+    """``(6,)`` the vehicle joints of :func:`vehicle_arm_chain` for a vehicle whose free joint
+    holds ``free_qpos`` ``(7,) = (position [m], quaternion (w, x, y, z))`` in the world, relative
+    to the docked pose ``T_dock`` ``(4, 4)``: its displacement [m] and XYZ Euler angles [rad] in
+    the docked vehicle frame."""
+    T_rel = np.linalg.solve(T_dock, frames.pose(frames.quat_matrix(free_qpos[3:7]), free_qpos[:3]))
+    return np.concatenate([T_rel[:3, 3], frames.matrix_euler_xyz(T_rel[:3, :3])])
+
+
+@jax.jit
+def _arm_position_columns(chain: kin.Chain, q):
+    """``(3, n_arm)`` the tool position's rows of the geometric Jacobian, the arm's columns."""
+    return kin.jacobian(chain, q)[:3, 6:]
+
+
+def _coordinated(sim: HoverSim, robot: Robot, vehicle: VehicleSettings, pose: np.ndarray, q_plan: np.ndarray,
+                 p_docked: np.ndarray, period: float, gain: float = 0.5, damping: float = 0.02):
     """Arm targets that correct for the vehicle's motion: each tick, the tool's offset from
     where the docked arm holds it on the plan, mapped to joint corrections through the arm's
-    part of the tool Jacobian (MuJoCo's, of the whole vehicle–arm system: damped least
-    squares, damping [m]), accumulated with ``gain`` and kept within the joint limits."""
+    columns of the vehicle–arm Jacobian (:func:`uvms_jax.kin.uvms` on the docked vehicle frame,
+    at the vehicle's measured displacement from the docked pose and the arm's measured joints;
+    damped least squares, damping [m]), accumulated with ``gain`` and kept within the joint
+    limits."""
+    chain = vehicle_arm_chain(robot, vehicle)
+    T_dock = frames.pose(frames.rot_z(pose[3]), pose[:3])
     m, d = sim.model, sim.data
     site = m.site(TOOL_SITE).id
-    dofs = np.array([m.jnt_dofadr[m.joint(j).id] for j in robot.joint_names])
-    jacp = np.zeros((3, m.nv))
+    qadr = np.array([m.jnt_qposadr[m.joint(j).id] for j in robot.joint_names])
     correction = np.zeros(robot.n_joints)
 
     def targets(t: float) -> np.ndarray:
         nonlocal correction
         k = round(t / period)
-        mujoco.mj_jacSite(m, d, jacp, None, site)
-        J = jacp[:, dofs]
+        q = np.concatenate([vehicle_displacement(T_dock, d.qpos[:7]), d.qpos[qadr]])
+        J = T_dock[:3, :3] @ np.asarray(_arm_position_columns(chain, q), dtype=float)  # in the world
         error = p_docked[k] - d.site_xpos[site]
         step = J.T @ np.linalg.solve(J @ J.T + damping**2 * np.eye(3), error)
         correction = np.clip(q_plan[k] + correction + gain * step, robot.lower, robot.upper) - q_plan[k]

@@ -22,14 +22,19 @@ import numpy as np
 from uvms_jax import frames
 from uvms_jax.robot import TOOL_SITE, Robot
 
-from ._control import control_steps, hold_pose, thrust_layout
+from ._control import LIMIT_SLACK, control_steps, hold_pose, thrust_layout
 from ._hydro import current_at
-from ._model import VEHICLE_BODY, apply_buoyancy, buoyancy_bodies, hover_model, servo_name, thruster_name
+from ._model import VEHICLE_BODY, apply_buoyancy, buoyancy_bodies, hover_mjcf, servo_name, thruster_name
 from ._settings import ControllerSettings, CurrentSettings, VehicleSettings
 
-__all__ = ["HoverLog", "HoverSim", "arm_motion"]
+__all__ = ["HoverLog", "HoverSim", "HoverWorld", "arm_motion"]
 
-_LIMIT_SLACK = 1e-9  # [N; rad] float rounding allowed on a commanded thrust or joint target
+# The video's camera: fixed, looking at a point below the starting pose (the arm hangs under
+# the hull) from 2.5 m, from the world's +x+y side, a little above; and the name of the hull's
+# outline at the starting pose that the video shows the drift against.
+_START_OUTLINE = "start_outline"
+_VIDEO_LOOKAT = (0.0, 0.0, -0.3)  # [m] from the starting position
+_VIDEO_DISTANCE, _VIDEO_AZIMUTH, _VIDEO_ELEVATION = 2.5, 135.0, -15.0  # [m, deg, deg]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -86,8 +91,180 @@ def arm_motion(q_from: Sequence[float], q_to: Sequence[float], t_start: float,
     return target
 
 
+class HoverWorld:
+    """The hovering vehicle around an arm: its model, the water's forces on every body, and its
+    station keeping, stepped by whoever drives the arm.
+
+    :class:`HoverSim` drives the arm with position servos; the hardware runner's simulated arm
+    (:class:`uvms_jax.hw.SimArm`, ``world=``: this class is an :class:`uvms_jax.hw.ArmWorld`)
+    drives it with its own motor model and answers the BPL executor, so a plan runs on the
+    hovering vehicle through the same executor and gates as on a fixed base. Every physics step
+    sets the current (``opt.wind``) for its time and the bodies' buoyancy for their pose between
+    MuJoCo's position stage and its acceleration stage (``mj_step1`` / ``mj_step2``), so the lift
+    always matches the pose being integrated; every control period the station keeping sets the
+    thrusts, and the state is recorded (:meth:`log`).
+
+    Args:
+      vehicle: hull, water and thrusters.
+      controller: station keeping; its reference is the starting pose (:meth:`set_reference`).
+      current: the water's velocity over time.
+      xyz, rpy: the vehicle's starting pose [m; URDF roll, pitch, yaw, rad].
+    """
+
+    def __init__(self, vehicle: VehicleSettings = VehicleSettings(),
+                 controller: ControllerSettings = ControllerSettings(), current: CurrentSettings = CurrentSettings(),
+                 *, xyz: Sequence[float] = (0.0, 0.0, 0.0), rpy: Sequence[float] = (0.0, 0.0, 0.0)) -> None:
+        self.vehicle, self.controller, self.current = vehicle, controller, current
+        self.xyz, self.rpy = tuple(map(float, xyz)), tuple(map(float, rpy))
+        self._current_times, self._current_values = current.profile()
+        self._current_varies = len(self._current_times) > 1
+        # Thrust configuration matrix about V's origin, its pseudo-inverse and the limits.
+        self.B, self.B_pinv, self.limits = thrust_layout(vehicle)
+        self.reference = np.array([*self.xyz, self.rpy[2]])
+        self.integral = np.zeros(4)
+        self.robot: Robot | None = None
+
+    def current_velocity(self, t: float) -> np.ndarray:
+        """(3,) the water's velocity at time ``t`` [m/s]."""
+        return current_at(self._current_times, self._current_values, t)
+
+    def set_reference(self, xyz: Sequence[float], yaw: float) -> None:
+        """Hold V's origin at ``xyz`` [m] and its heading at ``yaw`` [rad] from now on (the
+        integral state is kept)."""
+        self.reference = np.concatenate([np.asarray(xyz, dtype=float), [float(yaw)]])
+
+    # -- the model -----------------------------------------------------------------------------
+    def spec(self, robot: Robot | None, physics_dt: float = 0.002, servos: bool = False) -> mujoco.MjSpec:
+        """The vehicle's model carrying ``robot`` at its mount (:func:`hover_mjcf`; ``servos``:
+        position servos on the arm's joints), at the starting pose and current."""
+        self.robot = robot
+        spec = mujoco.MjSpec.from_string(hover_mjcf(robot, self.vehicle, xyz=self.xyz, rpy=self.rpy,
+                                                    current=self.current_velocity(0.0), physics_dt=physics_dt,
+                                                    servos=servos))
+        # The hull's outline at the starting pose, fixed in the world: what a video measures the
+        # drift against. Drawn only (no mass, no contact, in no body: no force).
+        spec.worldbody.add_geom(name=_START_OUTLINE, type=mujoco.mjtGeom.mjGEOM_BOX, contype=0, conaffinity=0,
+                                size=np.asarray(self.vehicle.size, dtype=float) / 2.0, pos=self.xyz,
+                                quat=frames.matrix_quat(frames.rpy_matrix(self.rpy)), rgba=(1.0, 1.0, 1.0, 0.15))
+        return spec
+
+    def prepare(self, model: mujoco.MjModel, data: mujoco.MjData) -> None:
+        """Take ``model`` (compiled from :meth:`spec`, drives added or not) with ``data`` at the
+        start: look up its parts, set the lift, record the first row."""
+        robot, m = self.robot, model
+        self.model = m
+        self._steps = control_steps(self.controller.period, m.opt.timestep)
+        self._thr = np.array([m.actuator(thruster_name(k)).id for k in range(len(self.vehicle.thrusters))])
+        ids, volume, cob = buoyancy_bodies(m, robot, self.vehicle)
+        # A body the arm's drive model holds up by gravity compensation floats already.
+        floats = m.body_gravcomp[ids] == 0
+        self._buoyant = ids[floats], volume[floats], cob[floats]
+        self._vehicle = m.body(VEHICLE_BODY).id
+        joints = robot.joint_names if robot is not None else ()
+        self._qadr = np.array([m.jnt_qposadr[m.joint(j).id] for j in joints], dtype=int)
+        self._tool = m.site(TOOL_SITE).id if joints else -1
+        self._tick = 0
+        mujoco.mj_forward(m, data)
+        apply_buoyancy(m, data, self._buoyant, self.vehicle.water_density)
+        self.start_log(m, data)
+
+    def start_log(self, model: mujoco.MjModel, data: mujoco.MjData, q_target: np.ndarray | None = None) -> None:
+        """Start a new log with the present state as its first row, thrusters off."""
+        self._rows = {f.name: [] for f in dataclasses.fields(HoverLog)}
+        self._last_demand = np.zeros(6)
+        data.ctrl[self._thr] = 0.0
+        self.record(model, data, q_target)
+
+    def station_keeping(self, data: mujoco.MjData) -> np.ndarray:
+        """Thrusts ``(n,)`` [N] for the present state, advancing the controller's integral by one
+        period (the wrench is kept for the log)."""
+        d = data
+        u, self._last_demand, self.integral = hold_pose(
+            self.reference, d.qpos[:3].copy(), d.qpos[3:7].copy(), d.xmat[self._vehicle].reshape(3, 3),
+            d.qvel[:3].copy(), d.qvel[3:6].copy(), self.integral, self.controller, self.B_pinv, self.limits)
+        return u
+
+    def command(self, data: mujoco.MjData, thrust: np.ndarray | None) -> None:
+        """Set the thrusts for the next period: ``thrust`` [N] open loop (beyond a thruster's
+        limit raises), or the station keeping's (None; zeros when it is off)."""
+        self._last_demand = np.zeros(6)
+        if thrust is not None:
+            u = np.asarray(thrust, dtype=float)
+            if u.shape != self.limits.shape or not np.all(np.abs(u) <= self.limits + LIMIT_SLACK):
+                raise ValueError(f"thrust must be {self.limits.size} values within ±{self.limits.tolist()} N, "
+                                 f"got {u!r}")
+        elif self.controller.enabled:
+            u = self.station_keeping(data)
+        else:
+            u = np.zeros(self.limits.size)
+        data.ctrl[self._thr] = u
+
+    def physics_step(self, model: mujoco.MjModel, data: mujoco.MjData) -> None:
+        """One physics step with the current and the buoyancy of the pose being integrated."""
+        if self._current_varies:
+            model.opt.wind[:] = self.current_velocity(data.time)
+        mujoco.mj_step1(model, data)  # positions and velocities: the pose the lift is for
+        apply_buoyancy(model, data, self._buoyant, self.vehicle.water_density)
+        mujoco.mj_step2(model, data)
+
+    def step(self, model: mujoco.MjModel, data: mujoco.MjData) -> None:
+        """One physics step of a world whose arm another simulator drives: at each control
+        period's start the state is recorded (after the first) and the station keeping sets the
+        thrusts."""
+        if self._tick % self._steps == 0:
+            if self._tick:
+                self.record(model, data)
+            self.command(data, None)
+        self.physics_step(model, data)
+        self._tick += 1
+
+    # -- the record ----------------------------------------------------------------------------
+    def record(self, model: mujoco.MjModel, data: mujoco.MjData, q_target: np.ndarray | None = None) -> None:
+        """Add the present state to the log (``q_target``: the arm's servo targets, NaN when the
+        arm's drives are not this world's)."""
+        m, d, rows = model, data, self._rows
+        mujoco.mj_kinematics(m, d)  # after mj_step2 the kinematics are the step's start's
+        mujoco.mj_comPos(m, d)
+        quat = d.qpos[3:7].copy()
+        rows["time"].append(d.time)
+        rows["position"].append(d.qpos[:3].copy())
+        rows["quat"].append(quat)
+        rows["rpy"].append(frames.matrix_rpy(frames.quat_matrix(quat)))
+        rows["velocity"].append(d.qvel[:3].copy())
+        rows["angular_velocity"].append(d.qvel[3:6].copy())
+        rows["thrust"].append(d.ctrl[self._thr].copy())
+        rows["demand"].append(self._last_demand.copy())
+        rows["q"].append(d.qpos[self._qadr].copy())
+        rows["q_target"].append(np.full(self._qadr.size, np.nan) if q_target is None else q_target.copy())
+        rows["tool"].append(d.site_xpos[self._tool].copy() if self._tool >= 0 else np.full(3, np.nan))
+        rows["com"].append(d.subtree_com[0].copy())
+        rows["current"].append(m.opt.wind.copy())
+
+    def log(self) -> HoverLog:
+        """What was recorded since :meth:`prepare` (the rows up to the last control period)."""
+        return HoverLog(**{k: np.array(v, dtype=float) for k, v in self._rows.items()})
+
+    def write_video(self, path, *, fps: float = 8.0, size: tuple[int, int] = (480, 360)):
+        """The recorded motion, vehicle and arm, as an MP4 at ``path`` seen from a camera fixed
+        near the starting pose (:func:`uvms_jax.video.write_video`; other joints, e.g. the
+        jaws, at their reference positions). Returns the :class:`uvms_jax.video.VideoInfo`."""
+        from uvms_jax.video import write_video
+
+        log, m = self.log(), self.model
+        qpos = np.tile(m.qpos0, (len(log.time), 1))
+        qpos[:, :3], qpos[:, 3:7], qpos[:, self._qadr] = log.position, log.quat, log.q
+        cam = mujoco.MjvCamera()
+        cam.lookat[:] = np.asarray(self.xyz) + _VIDEO_LOOKAT
+        cam.distance, cam.azimuth, cam.elevation = _VIDEO_DISTANCE, _VIDEO_AZIMUTH, _VIDEO_ELEVATION
+        return write_video(m, log.time, qpos, path, cam, fps=fps, size=size)
+
+
 class HoverSim:
-    """The vehicle with its arm in open water, station keeping on (x, y, z, ψ).
+    """The vehicle with its arm on position servos in open water, station keeping on (x, y, z, ψ).
+
+    It runs in control periods: at each tick the station keeping reads the vehicle's pose and
+    sets the thrusts (or takes commanded thrusts), the arm's joint targets are set, then
+    ``period / physics_dt`` physics steps of its :class:`HoverWorld` follow.
 
     Args:
       robot: the arm, or None (the hull alone).
@@ -104,33 +281,21 @@ class HoverSim:
                  controller: ControllerSettings = ControllerSettings(), current: CurrentSettings = CurrentSettings(),
                  *, xyz: Sequence[float] = (0.0, 0.0, 0.0), rpy: Sequence[float] = (0.0, 0.0, 0.0),
                  q0: Sequence[float] | None = None, physics_dt: float = 0.002) -> None:
-        steps = control_steps(controller.period, physics_dt)
+        self._steps = control_steps(controller.period, physics_dt)
         self.robot, self.vehicle, self.controller, self.current = robot, vehicle, controller, current
-        self._steps = steps
-        self._current_times, self._current_values = current.profile()
-        self._current_varies = len(self._current_times) > 1
-        self.model = hover_model(robot, vehicle, xyz=xyz, rpy=rpy, physics_dt=physics_dt,
-                                 current=self.current_velocity(0.0))
+        self.world = HoverWorld(vehicle, controller, current, xyz=xyz, rpy=rpy)
+        self.model = self.world.spec(robot, physics_dt, servos=True).compile()
         self.data = mujoco.MjData(self.model)
         m = self.model
-        self._thr = np.array([m.actuator(thruster_name(k)).id for k in range(len(vehicle.thrusters))])
-        # Thrust configuration matrix about V's origin, its pseudo-inverse and the limits.
-        self.B, self.B_pinv, self.limits = thrust_layout(vehicle)
-        self._buoyant = buoyancy_bodies(m, robot, vehicle)
-        self._vehicle = m.body(VEHICLE_BODY).id
         n = robot.n_joints if robot is not None else 0
         self._qadr = np.array([m.jnt_qposadr[m.joint(j).id] for j in robot.joint_names] if n else [], dtype=int)
         self._servo = np.array([m.actuator(servo_name(j)).id for j in robot.joint_names] if n else [], dtype=int)
-        self._tool = m.site(TOOL_SITE).id if n else -1
         if n:
             q0 = (robot.lower + robot.upper) / 2.0 if q0 is None else np.asarray(q0, dtype=float)
             self._check_targets(q0)
             self.data.qpos[self._qadr] = q0
             self.data.ctrl[self._servo] = q0
-        mujoco.mj_forward(m, self.data)
-        self.reference = np.concatenate([np.asarray(xyz, dtype=float), [float(rpy[2])]])
-        self.integral = np.zeros(4)
-        self._last_demand = np.zeros(6)
+        self.world.prepare(m, self.data)
 
     # -- state -------------------------------------------------------------------------------
     @property
@@ -140,33 +305,23 @@ class HoverSim:
 
     def current_velocity(self, t: float) -> np.ndarray:
         """(3,) the water's velocity at time ``t`` [m/s]."""
-        return current_at(self._current_times, self._current_values, t)
+        return self.world.current_velocity(t)
 
     def set_reference(self, xyz: Sequence[float], yaw: float) -> None:
         """Hold V's origin at ``xyz`` [m] and its heading at ``yaw`` [rad] from now on (the
         integral state is kept)."""
-        self.reference = np.concatenate([np.asarray(xyz, dtype=float), [float(yaw)]])
+        self.world.set_reference(xyz, yaw)
 
     def _check_targets(self, q: np.ndarray) -> None:
         r = self.robot
         if q.shape != (r.n_joints,) or not np.all(np.isfinite(q)):
             raise ValueError(f"arm targets must be {r.n_joints} finite joint angles, got {q!r}")
-        bad = (q < r.lower - _LIMIT_SLACK) | (q > r.upper + _LIMIT_SLACK)
+        bad = (q < r.lower - LIMIT_SLACK) | (q > r.upper + LIMIT_SLACK)
         if np.any(bad):
             k = int(np.flatnonzero(bad)[0])
             raise ValueError(f"arm target {r.joint_names[k]} = {q[k]} outside [{r.lower[k]}, {r.upper[k]}]")
 
     # -- control -----------------------------------------------------------------------------
-    def station_keeping_thrust(self) -> tuple[np.ndarray, np.ndarray]:
-        """``(thrust (n,) [N], demand (6,) [N, N·m])`` for the present state, advancing the
-        controller's integral by one period."""
-        d = self.data
-        u, demand, self.integral = hold_pose(self.reference, d.qpos[:3].copy(), d.qpos[3:7].copy(),
-                                             d.xmat[self._vehicle].reshape(3, 3), d.qvel[:3].copy(),
-                                             d.qvel[3:6].copy(), self.integral, self.controller, self.B_pinv,
-                                             self.limits)
-        return u, demand
-
     def step(self, arm_targets: Sequence[float] | None = None, thrust: Sequence[float] | None = None) -> None:
         """One control period: thrusts and arm targets set, then the physics steps.
 
@@ -176,51 +331,15 @@ class HoverSim:
           thrust: ``(n_thrusters,)`` thrusts to command open loop [N] (None: the station
             keeping's, or zeros when it is off); beyond a thruster's limit raises.
         """
-        m, d = self.model, self.data
         if arm_targets is not None:
             q = np.asarray(arm_targets, dtype=float)
             self._check_targets(q)
-            d.ctrl[self._servo] = q
-        demand = np.zeros(6)
-        if thrust is not None:
-            u = np.asarray(thrust, dtype=float)
-            if u.shape != self.limits.shape or not np.all(np.abs(u) <= self.limits + _LIMIT_SLACK):
-                raise ValueError(f"thrust must be {self.limits.size} values within ±{self.limits.tolist()} N, "
-                                 f"got {u!r}")
-        elif self.controller.enabled:
-            u, demand = self.station_keeping_thrust()
-        else:
-            u = np.zeros(self.limits.size)
-        d.ctrl[self._thr] = u
-        self._last_demand = demand
-        buoyant, rho = self._buoyant, self.vehicle.water_density
+            self.data.ctrl[self._servo] = q
+        self.world.command(self.data, thrust)
         for _ in range(self._steps):
-            if self._current_varies:
-                m.opt.wind[:] = self.current_velocity(d.time)
-            mujoco.mj_step1(m, d)  # positions and velocities: the pose the lift is for
-            apply_buoyancy(m, d, buoyant, rho)
-            mujoco.mj_step2(m, d)
+            self.world.physics_step(self.model, self.data)
 
     # -- runs --------------------------------------------------------------------------------
-    def _record(self, rows: dict[str, list]) -> None:
-        m, d = self.model, self.data
-        mujoco.mj_kinematics(m, d)  # after mj_step2 the kinematics are the step's start's
-        mujoco.mj_comPos(m, d)
-        quat = d.qpos[3:7].copy()
-        rows["time"].append(d.time)
-        rows["position"].append(d.qpos[:3].copy())
-        rows["quat"].append(quat)
-        rows["rpy"].append(frames.matrix_rpy(frames.quat_matrix(quat)))
-        rows["velocity"].append(d.qvel[:3].copy())
-        rows["angular_velocity"].append(d.qvel[3:6].copy())
-        rows["thrust"].append(d.ctrl[self._thr].copy())
-        rows["demand"].append(self._last_demand.copy())
-        rows["q"].append(d.qpos[self._qadr].copy())
-        rows["q_target"].append(d.ctrl[self._servo].copy())
-        rows["tool"].append(d.site_xpos[self._tool].copy() if self._tool >= 0 else np.full(3, np.nan))
-        rows["com"].append(d.subtree_com[0].copy())
-        rows["current"].append(m.opt.wind.copy())
-
     def run(self, duration: float, arm_trajectory: Callable[[float], Sequence[float]] | None = None,
             thrust: Sequence[float] | Callable[[float], Sequence[float]] | None = None) -> HoverLog:
         """Run for ``duration`` [s] (a whole number of control periods, rounded), recording the
@@ -235,14 +354,12 @@ class HoverSim:
         periods = round(duration / self.controller.period)
         if periods < 0 or not math.isfinite(duration):
             raise ValueError(f"duration must be >= 0 [s], got {duration}")
-        rows: dict[str, list] = {f.name: [] for f in dataclasses.fields(HoverLog)}
-        self._last_demand = np.zeros(6)
-        self.data.ctrl[self._thr] = 0.0
-        self._record(rows)
+        w = self.world
+        w.start_log(self.model, self.data, self.data.ctrl[self._servo])
         for _ in range(periods):
             t = self.time
             targets = None if arm_trajectory is None else arm_trajectory(t)
             u = thrust(t) if callable(thrust) else thrust
             self.step(targets, u)
-            self._record(rows)
-        return HoverLog(**{k: np.array(v, dtype=float) for k, v in rows.items()})
+            w.record(self.model, self.data, self.data.ctrl[self._servo])
+        return w.log()

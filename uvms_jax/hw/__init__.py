@@ -89,6 +89,7 @@ from ._run import run_plan
 from ._run import run_report
 from ._run import write_run
 from ._runlog import RunLog
+from ._sim import ArmWorld
 from ._sim import SimArm
 from ._sim_link import LoopbackTransport
 from ._sim_link import SimLink
@@ -138,6 +139,7 @@ __all__ = [
     "RunResult",
     "Segment",
     "SerialTransport",
+    "ArmWorld",
     "SimArm",
     "SimConfig",
     "SimCounts",

@@ -15,7 +15,7 @@ import numbers
 from collections.abc import Mapping
 from typing import Any
 
-from uvms_jax.settings import from_mapping
+from uvms_jax.settings import check_fields, from_mapping, setting
 
 __all__ = ["HwConfig", "HwSettings", "SimConfig", "config_from_mapping"]
 
@@ -58,42 +58,28 @@ class HwConfig:
         anything else is a corrupted frame that passed the 8-bit CRC, and is skipped.
     """
 
-    rate_hz: float = 50.0
-    gate_threshold_rad: float = 0.01
-    gate_threshold_mm: float = 0.5
-    gate_timeout_s: float = 2.0
-    tracking_error_rad: float = 0.3
-    link_timeout_s: float = 0.5
-    request_timeout_s: float = 0.02
-    status_period_s: float = 0.25
-    speed_scale: float = 1.0
-    continuity_tol_rad: float = 1e-3
-    start_tolerance_rad: float = 0.05
+    rate_hz: float = setting(50.0, gt=0)
+    gate_threshold_rad: float = setting(0.01, gt=0)
+    gate_threshold_mm: float = setting(0.5, gt=0)
+    gate_timeout_s: float = setting(2.0, gt=0)
+    tracking_error_rad: float = setting(0.3, gt=0)
+    link_timeout_s: float = setting(0.5, gt=0)
+    request_timeout_s: float = setting(0.02, gt=0)
+    status_period_s: float = setting(0.25, gt=0)
+    speed_scale: float = setting(1.0, gt=0, le=1)
+    continuity_tol_rad: float = setting(1e-3, gt=0)
+    start_tolerance_rad: float = setting(0.05, gt=0)
     approach: bool = False
-    connect_retries: int = 10
-    limit_margin_rad: float = 0.05
-    limit_margin_mm: float = 1.0
-    grip_settle_s: float = 0.3
-    stream_hz: int = 0
-    max_state_age_s: float = 0.1
-    plausible_speed_factor: float = 2.0
+    connect_retries: int = setting(10, ge=1)
+    limit_margin_rad: float = setting(0.05, gt=0)
+    limit_margin_mm: float = setting(1.0, gt=0)
+    grip_settle_s: float = setting(0.3, gt=0)
+    stream_hz: int = setting(0, ge=0, le=255)
+    max_state_age_s: float = setting(0.1, gt=0)
+    plausible_speed_factor: float = setting(2.0, ge=1)
 
     def __post_init__(self) -> None:
-        positive = ("rate_hz", "gate_threshold_rad", "gate_threshold_mm", "gate_timeout_s",
-                    "tracking_error_rad", "link_timeout_s", "request_timeout_s", "status_period_s",
-                    "continuity_tol_rad", "start_tolerance_rad", "limit_margin_rad", "limit_margin_mm",
-                    "grip_settle_s", "max_state_age_s")
-        for name in positive:
-            if not getattr(self, name) > 0:
-                raise ValueError(f"HwConfig.{name} must be positive, got {getattr(self, name)!r}")
-        if not 0 < self.speed_scale <= 1:
-            raise ValueError(f"HwConfig.speed_scale must be in (0, 1], got {self.speed_scale!r}")
-        if self.connect_retries < 1:
-            raise ValueError("HwConfig.connect_retries must be at least 1")
-        if not 0 <= self.stream_hz <= 255:
-            raise ValueError(f"HwConfig.stream_hz must be 0 (request) or 1..255 Hz, got {self.stream_hz!r}")
-        if not self.plausible_speed_factor >= 1:
-            raise ValueError(f"HwConfig.plausible_speed_factor must be at least 1, got {self.plausible_speed_factor!r}")
+        check_fields(self)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -129,35 +115,27 @@ class SimConfig:
       seed: seed of the fault-injection random generator.
     """
 
-    physics_dt: float = 0.002
-    servo_gain: float = 8.0
-    drop: float = 0.0
-    corrupt: float = 0.0
-    latency_s: float = 0.0
+    physics_dt: float = setting(0.002, gt=0)
+    servo_gain: float = setting(8.0, gt=0)
+    drop: float = setting(0.0, ge=0, le=1)
+    corrupt: float = setting(0.0, ge=0, le=1)
+    latency_s: float = setting(0.0, ge=0)
     stuck_joint: str = ""
     fault_joint: str = ""
-    fault_bits: int = 0
-    fault_after_s: float = 0.0
-    object_width_mm: float = 0.0
+    fault_bits: int = setting(0, ge=0, le=0xFFFFFFFF)
+    fault_after_s: float = setting(0.0, ge=0)
+    object_width_mm: float = setting(0.0, ge=0)
     dynamics: bool = True
-    water_density: float = 1000.0
+    water_density: float = setting(1000.0, ge=0)
     base_rpy: tuple[float, float, float] = (0.0, 0.0, 0.0)
     coalesce: bool = False
     seed: int = 0
 
     def __post_init__(self) -> None:
-        for name in ("drop", "corrupt"):
-            if not 0 <= getattr(self, name) <= 1:
-                raise ValueError(f"SimConfig.{name} must be a probability, got {getattr(self, name)!r}")
-        if self.latency_s < 0 or self.fault_after_s < 0 or self.object_width_mm < 0 or self.water_density < 0:
-            raise ValueError("SimConfig latency_s, fault_after_s, object_width_mm and water_density must be non-negative")
-        if not (self.physics_dt > 0 and self.servo_gain > 0):
-            raise ValueError("SimConfig physics_dt and servo_gain must be positive")
+        check_fields(self)
         for name in ("stuck_joint", "fault_joint"):
             if not isinstance(getattr(self, name), str):
                 raise ValueError(f"SimConfig.{name} must be a joint name or empty, got {getattr(self, name)!r}")
-        if not 0 <= self.fault_bits <= 0xFFFFFFFF:
-            raise ValueError("SimConfig.fault_bits must fit in the 4 status bytes")
         try:
             rpy = tuple(float(v) if isinstance(v, numbers.Real) else math.nan for v in self.base_rpy)
         except TypeError:  # not a sequence

@@ -101,6 +101,8 @@ class RunResult:
       rejected_states: received states skipped as implausible (a jump no joint can make:
         a corrupted frame that passed the CRC).
       interrupted: the run was stopped by SIGINT (Ctrl-C), not by a fault; ``ok`` is False.
+      start_s: the executor's clock when the run started [s]: the log's times count from it
+        (on a simulated link, the simulator's time).
     """
 
     ok: bool
@@ -114,6 +116,7 @@ class RunResult:
     summary: PlanSummary
     rejected_states: int = 0
     interrupted: bool = False
+    start_s: float = 0.0
 
     @property
     def max_gate_error_mm(self) -> float:
@@ -230,7 +233,7 @@ class Executor:
                 summary: PlanSummary, interrupted: bool = False) -> RunResult:
         errs = [g.error_rad for g in gates]
         return RunResult(ok, reason, tuple(gates), max(errs) if errs else math.nan, self.clock() - t0,
-                         self._ticks, self._timeouts, after, summary, self._rejected, interrupted)
+                         self._ticks, self._timeouts, after, summary, self._rejected, interrupted, t0)
 
     # -- steps -----------------------------------------------------------------------------
     def _connect(self, plan: Plan) -> None:

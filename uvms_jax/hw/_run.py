@@ -24,7 +24,7 @@ from ._config import HwConfig, SimConfig
 from ._executor import Executor, RunInterrupted, RunResult
 from ._joints import joint_specs
 from ._runlog import RunLog
-from ._sim import SimArm
+from ._sim import ArmWorld, SimArm
 from ._sim_link import LoopbackTransport, SimLink, SimServer, VirtualClock
 from ._transport import UdpTransport
 
@@ -104,6 +104,7 @@ def run_plan(
     config: HwConfig = HwConfig(),
     sim: SimConfig = SimConfig(),
     progress: Callable[[int, int, str], None] | None = None,
+    world: ArmWorld | None = None,
 ) -> HwRun:
     """Check that ``plan`` was made for ``robot``, dry-run check it, then execute it on ``link``.
 
@@ -120,6 +121,8 @@ def run_plan(
         on the simulated links only.
       config: executor, safety and link settings.
       sim: the simulated arm and its faults (ignored for a client).
+      world: where the simulated arm is mounted (:class:`ArmWorld`, e.g. a hovering vehicle,
+        :class:`uvms_jax.hover.HoverWorld`); None: a fixed base. Simulated links only.
       progress: called ``(segment index, n_segments, segment name)`` as segments start.
 
     Returns:
@@ -137,6 +140,8 @@ def run_plan(
     """
     if not (isinstance(link, ReachArm) or link in SIM_LINKS):
         raise ValueError(f"link must be one of {list(SIM_LINKS)} or an open ReachArm client, got {link!r}")
+    if world is not None and isinstance(link, ReachArm):
+        raise ValueError("a world (e.g. a hovering vehicle) is simulated: it needs a simulated link, not a client")
     check_arm(plan, robot)
     specs = joint_specs(robot)
     if isinstance(link, ReachArm):
@@ -156,7 +161,7 @@ def run_plan(
             raise
         return HwRun(result, log, _link_name(link), time.perf_counter() - t0)
     interrupted = None
-    with _simulated(link, plan, robot, config, sim) as (client, sleep, sim_link):
+    with _simulated(link, plan, robot, config, sim, world) as (client, sleep, sim_link):
         try:
             result = Executor(client, config, sleep=sleep, log=log, progress=progress).run(plan)
         except RunInterrupted as e:  # the simulator stops first (leaving the with), then it is raised
@@ -171,11 +176,11 @@ def run_plan(
 
 
 @contextlib.contextmanager
-def _simulated(link: str, plan: Plan, robot, config: HwConfig,
-               sim: SimConfig) -> Iterator[tuple[ReachArm, Callable[[float], None], SimLink]]:
+def _simulated(link: str, plan: Plan, robot, config: HwConfig, sim: SimConfig,
+               world: ArmWorld | None) -> Iterator[tuple[ReachArm, Callable[[float], None], SimLink]]:
     """A client of a simulated ``robot`` at the plan's start: ``(client, sleep, link)``."""
     start = next(s.q[0] for s in plan.segments if s.q)  # the dry run ensured there is one
-    arm = SimArm(robot, sim, [*start, joint_specs(robot)[-1].lower])  # the jaws at their lower limit
+    arm = SimArm(robot, sim, [*start, joint_specs(robot)[-1].lower], world)  # the jaws at their lower limit
     if link == "loopback":
         clock = VirtualClock()
         sim_link = SimLink(arm)

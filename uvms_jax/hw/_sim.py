@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
@@ -32,9 +33,12 @@ from ._codec import Packet, decode_float, encode_floats, encode_packet
 from ._config import SimConfig
 from ._ids import BASE_COMPUTER, BASE_ROUTER, BROADCAST, HardwareStatus, Mode, PacketID
 from ._joints import MM_PER_M, joint_specs
-from ._sim_model import GRAVITY, massive_bodies, sim_spec, world_up
+from ._sim_model import GRAVITY, add_drives, massive_bodies, sim_spec, world_up
 
-__all__ = ["SimArm"]
+if TYPE_CHECKING:
+    import mujoco
+
+__all__ = ["ArmWorld", "SimArm"]
 
 _MM = 1.0 / MM_PER_M  # jaws: mm on the wire, m in MuJoCo
 
@@ -56,6 +60,26 @@ _CURRENT_LIMIT_MA = 4000.0
 _DEFAULT_EFFORT = 10.0
 _HEARTBEAT_SLOTS = 10  # HEARTBEAT_SET carries 10 packet ids; a REQUEST lists at most 10
 _BASE_DEVICES = (BASE_ROUTER, BASE_COMPUTER)
+_NO_BODIES = (np.zeros(0, dtype=int), np.zeros(0), np.zeros((0, 3)))
+
+
+class ArmWorld(Protocol):
+    """Where a :class:`SimArm` is mounted when its base is not fixed (e.g. a hovering vehicle).
+
+    The world builds the MuJoCo model around the arm, and steps the physics with its own
+    forces and controllers; the simulated arm adds its drives and runs them every step.
+    """
+
+    def spec(self, robot, physics_dt: float) -> mujoco.MjSpec:
+        """The world's model holding ``robot``'s body tree as :func:`uvms_jax.robot.mjcf_body`
+        names it, with no actuators on the arm's joints; time step ``physics_dt`` [s]."""
+
+    def prepare(self, model: mujoco.MjModel, data: mujoco.MjData) -> None:
+        """Called once, with the arm at its initial positions and kinematics computed."""
+
+    def step(self, model: mujoco.MjModel, data: mujoco.MjData) -> None:
+        """One physics step (``mj_step``, or ``mj_step1`` and ``mj_step2`` with the world's forces
+        between); the arm's actuator controls are already set."""
 
 
 def _joint_index(names: Sequence[str], name: str, what: str) -> int:
@@ -81,17 +105,28 @@ class SimArm:
         named as the robot names them, case ignored).
       q0: ``(n + 1,)`` initial positions in plan order, the arm's joints then the jaws [rad …,
         mm]; default mid-range arm and jaws at their lower limit.
+      world: where the arm is mounted, if not on a fixed base (:class:`ArmWorld`, e.g. a
+        hovering vehicle, :class:`uvms_jax.hover.HoverWorld`): its model holds the arm's body
+        tree, and it steps the physics with its own forces (buoyancy included: the arm's then
+        too, and ``base_rpy`` is not used).
     """
 
-    def __init__(self, robot, config: SimConfig = SimConfig(), q0: Sequence[float] | None = None) -> None:
+    def __init__(self, robot, config: SimConfig = SimConfig(), q0: Sequence[float] | None = None,
+                 world: ArmWorld | None = None) -> None:
         import mujoco  # imported here: the protocol layer must not need MuJoCo
+
+        from uvms_jax.robot import TOOL_SITE, base_body
 
         self._mj = mujoco
         self.robot = robot
         self.config = config
+        self.world = world
         self.joints = joint_specs(robot)
-        self.model = sim_spec(robot, physics_dt=config.physics_dt, dynamics=config.dynamics,
-                              base_rpy=config.base_rpy).compile()
+        if world is None:
+            spec = sim_spec(robot, physics_dt=config.physics_dt, dynamics=config.dynamics, base_rpy=config.base_rpy)
+        else:
+            spec = add_drives(world.spec(robot, config.physics_dt), robot, dynamics=config.dynamics)
+        self.model = spec.compile()
         self.data = mujoco.MjData(self.model)
         names = [j.name for j in self.joints]
         self._qadr = np.array([self.model.jnt_qposadr[self.model.joint(n).id] for n in names])
@@ -115,10 +150,13 @@ class SimArm:
                 raise ValueError(f"initial {j.name} = {v} outside [{j.lower}, {j.upper}]")
         self.data.qpos[self._qadr] = q0 * self._scale
         self._mj.mj_forward(self.model, self.data)
+        if world is not None:
+            world.prepare(self.model, self.data)
         # Buoyancy of each body with mass: body ids, lifts [N] along the world's up, and the
         # lift-weighted mean of the parts' centres of buoyancy less the body's centre of mass
-        # [m, in the body], fixed in the base frame (the base does not move).
-        self._buoy_ids, lifts, arms = self._buoyant_bodies()
+        # [m, in the body], fixed in the base frame (the base does not move). A world applies
+        # its own.
+        self._buoy_ids, lifts, arms = self._buoyant_bodies() if world is None else _NO_BODIES
         self._buoy_arm = arms
         lift = lifts[:, None] * world_up(config.base_rpy)  # (k, 3) [N]
         self.data.xfrc_applied[self._buoy_ids, :3] = lift
@@ -147,7 +185,8 @@ class SimArm:
         self.heartbeat_ids: dict[int, tuple[int, ...]] = {}
         self.heartbeat_hz: dict[int, int] = {}
         self._next_heartbeat: dict[int, float] = {}
-        self._tool = self.model.site("tool").id  # uvms_jax.robot.TOOL_SITE
+        self._tool = self.model.site(TOOL_SITE).id
+        self._base = self.model.body(base_body(robot)).id
         efforts = np.array([*robot.effort_limits, robot.gripper.effort], dtype=float)
         efforts[~(efforts > 0)] = _DEFAULT_EFFORT
         self._torque_constant = efforts / (_EFFORT_CURRENT_MA * 1e-3)
@@ -225,8 +264,11 @@ class SimArm:
             integral += (v - qvel[d_idx]) * dt
             np.clip(integral, lo, hi, out=integral)
             ctrl[iact] = _KI * integral
-            self._apply_buoyancy()
-            self._mj.mj_step(self.model, d)
+            if self.world is None:
+                self._apply_buoyancy()
+                self._mj.mj_step(self.model, d)
+            else:
+                self.world.step(self.model, d)
             # what the drive's lag still carries past a limit (MuJoCo's limits are soft) stops there
             qn = qpos[q_idx]
             if np.any(qn > upper_mj) or np.any(qn < lower_mj):
@@ -278,20 +320,25 @@ class SimArm:
     def end_pose(self) -> np.ndarray:
         """(6,) tool-frame pose in the base frame: X, Y, Z [mm], then ZYX yaw, pitch, roll [rad]."""
         self._mj.mj_kinematics(self.model, self.data)
-        p = self.data.site_xpos[self._tool] * MM_PER_M
-        return np.concatenate([p, _ypr(self.data.site_xmat[self._tool].reshape(3, 3))])
+        d, t, b = self.data, self._tool, self._base
+        R_base = d.xmat[b].reshape(3, 3)
+        p = R_base.T @ (d.site_xpos[t] - d.xpos[b]) * MM_PER_M
+        return np.concatenate([p, _ypr(R_base.T @ d.site_xmat[t].reshape(3, 3))])
 
     def end_velocity(self) -> np.ndarray:
-        """(6,) tool-frame velocity in the base frame: X, Y, Z [mm/s], then the rates of the
-        yaw, pitch and roll of :meth:`end_pose` [rad/s]."""
-        mj = self._mj
-        mj.mj_kinematics(self.model, self.data)
-        mj.mj_comPos(self.model, self.data)
-        mj.mj_comVel(self.model, self.data)
-        v = np.zeros(6)  # [angular (3), linear (3)] in the world frame, at the site
-        mj.mj_objectVelocity(self.model, self.data, mj.mjtObj.mjOBJ_SITE, self._tool, v, 0)
-        yaw, pitch, _ = _ypr(self.data.site_xmat[self._tool].reshape(3, 3))
-        return np.concatenate([v[3:] * MM_PER_M, _ypr_rates(yaw, pitch, v[:3])])
+        """(6,) tool-frame velocity relative to the base, in the base frame: X, Y, Z [mm/s],
+        then the rates of the yaw, pitch and roll of :meth:`end_pose` [rad/s]."""
+        mj, m, d = self._mj, self.model, self.data
+        mj.mj_kinematics(m, d)
+        mj.mj_comPos(m, d)
+        mj.mj_comVel(m, d)
+        tool, base = np.zeros(6), np.zeros(6)  # [angular (3), linear (3)] in the world, at each origin
+        mj.mj_objectVelocity(m, d, mj.mjtObj.mjOBJ_SITE, self._tool, tool, 0)
+        mj.mj_objectVelocity(m, d, mj.mjtObj.mjOBJ_BODY, self._base, base, 0)
+        R_base = d.xmat[self._base].reshape(3, 3)
+        linear = tool[3:] - base[3:] - np.cross(base[:3], d.site_xpos[self._tool] - d.xpos[self._base])
+        yaw, pitch, _ = _ypr(R_base.T @ d.site_xmat[self._tool].reshape(3, 3))
+        return np.concatenate([R_base.T @ linear * MM_PER_M, _ypr_rates(yaw, pitch, R_base.T @ (tool[:3] - base[:3]))])
 
     # -- protocol --------------------------------------------------------------------------
     def _devices(self, device_id: int) -> list[int]:

@@ -21,7 +21,7 @@ from ._joints import MM_PER_M, joint_specs
 if TYPE_CHECKING:
     import mujoco
 
-__all__ = ["GRAVITY", "JAWS_BODY", "KV", "sim_spec", "world_up"]
+__all__ = ["GRAVITY", "JAWS_BODY", "KV", "add_drives", "sim_spec", "world_up"]
 
 _MM = 1.0 / MM_PER_M  # jaws: mm on the wire, m in MuJoCo
 
@@ -59,18 +59,13 @@ def massive_bodies(robot) -> set[int]:
 
 def sim_spec(robot, kv: float = KV, physics_dt: float = SimConfig.physics_dt, dynamics: bool = True,
              base_rpy: Sequence[float] = SimConfig.base_rpy) -> mujoco.MjSpec:
-    """MuJoCo model of the simulated ``robot``: its body tree (:func:`uvms_jax.robot.mjcf_body`),
-    the jaws' slide joint, a velocity actuator and an integral-torque motor on every joint.
+    """MuJoCo model of the simulated ``robot`` with its base fixed: its body tree
+    (:func:`uvms_jax.robot.mjcf_body`) with the drives of :func:`add_drives`.
 
     MuJoCo's world is the arm's base frame; nothing collides. With ``dynamics`` each link
     carries the robot's mass properties (``robot.inertials``, summed per body) under gravity
     along the world's -z (:func:`world_up`: the base's -z when upright); buoyancy is applied by
-    :class:`~uvms_jax.hw.SimArm`. Bodies without mass properties (all of them without
-    ``dynamics``, or for an arm whose description has none, e.g. the Reach Alpha 5) are the
-    capsules at the density of water, gravity compensated: such an arm is servoed
-    kinematically, weightless. The jaws (a slide body at the tool frame, opening along its x
-    axis; a 0.2 kg box) are light and gravity compensated either way. Position limits are the
-    hardware path's (:func:`~uvms_jax.hw.joint_specs`: rad; the jaws' mm as m).
+    :class:`~uvms_jax.hw.SimArm`.
 
     Args:
       robot: the arm (:class:`uvms_jax.robot.Robot`, with a gripper).
@@ -85,19 +80,41 @@ def sim_spec(robot, kv: float = KV, physics_dt: float = SimConfig.physics_dt, dy
     """
     import mujoco  # imported here: the protocol layer must not need MuJoCo
 
-    from uvms_jax.robot import TOOL_SITE, base_body, mjcf_assets, mjcf_body
+    from uvms_jax.robot import mjcf_assets, mjcf_body
 
-    specs = joint_specs(robot)
-    massive = massive_bodies(robot) if dynamics else set()
+    inertial = bool(massive_bodies(robot)) and dynamics
     xml = (f'<mujoco model="{robot.name}_hw_sim"><compiler angle="radian"/>'
            '<default><geom contype="0" conaffinity="0" density="1000"/></default>'
            f"<asset>{''.join(mjcf_assets(robot))}</asset>"
-           f"<worldbody>{mjcf_body(robot, inertial=bool(massive))}</worldbody></mujoco>")
+           f"<worldbody>{mjcf_body(robot, inertial=inertial)}</worldbody></mujoco>")
     spec = mujoco.MjSpec.from_string(xml)
-    spec.modelname = f"{robot.name}_hw_sim"
     spec.option.timestep = physics_dt
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
     spec.option.gravity = -GRAVITY * world_up(base_rpy)
+    return add_drives(spec, robot, kv, dynamics)
+
+
+def add_drives(spec: mujoco.MjSpec, robot, kv: float = KV, dynamics: bool = True) -> mujoco.MjSpec:
+    """Add what the simulated device needs to the model ``spec`` holding ``robot``'s body tree
+    (as :func:`uvms_jax.robot.mjcf_body` names it; anywhere in the world, e.g. under a vehicle):
+    the jaws' slide joint, and a velocity actuator and an integral-torque motor on every joint.
+
+    Bodies without mass properties (all of them without ``dynamics``, or for an arm whose
+    description has none, e.g. the Reach Alpha 5) are gravity compensated: such an arm is
+    servoed kinematically, weightless. The jaws (a slide body at the tool frame, opening along
+    its x axis; a 0.2 kg box) are light and gravity compensated either way. Position limits are
+    the hardware path's (:func:`~uvms_jax.hw.joint_specs`: rad; the jaws' mm as m); every joint
+    gets the device's rotor inertia and damping.
+
+    Returns:
+      ``spec``, changed in place.
+    """
+    import mujoco
+
+    from uvms_jax.robot import TOOL_SITE, base_body
+
+    specs = joint_specs(robot)
+    massive = massive_bodies(robot) if dynamics else set()
     for k, name in enumerate(robot.link_names):
         spec.body(name).gravcomp = 0.0 if k in massive else 1.0
     spec.body(base_body(robot)).gravcomp = 0.0 if -1 in massive else 1.0

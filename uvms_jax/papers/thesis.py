@@ -200,37 +200,22 @@ def _returns(path: str) -> int:
     return path.split("-")[1:-1].count("0")
 
 
-def planner_differences(table: str, run, thesis_ls) -> str:
-    """The differences between a thesis table of 5.2–5.4 and ours, each with its reason
-    (Markdown bullets computed from the runs)."""
+def planner_differences(table: str, run) -> str:
+    """Per algorithm of a thesis table of 5.2–5.4 against ours (Markdown table): the same
+    schedule or not, returns to the start, our cost against the exact optimum, and the thesis's
+    cost above its own A*."""
     rows = {r["solver"]: r for r in run.rows}
-    on_ours = thesis_path_sums(table, run.normalised)
     thesis = {r[0]: r for r in T22_TABLES[table]}
     opt = run.optimal_cost
     out = []
     for alg in ("Dijkstra", "GRASP", "A*"):
         _, path, _, _, C, _ = thesis[alg]
         r = rows[SOLVER_OF[alg]]
-        if r["path"] == path:
-            what = "the thesis's path"
-        else:
-            what = (f"another path than the thesis's, which costs {on_ours[alg][1]:.3f} on our instance "
-                    f"(ours {r['cost']:.3f})")
-        if alg == "Dijkstra":
-            extra = (f"; it returns to the start {_returns(r['path'])} times (thesis: {_returns(path)}): with no "
-                     "look-ahead the cheapest next move out of a base is at times the one home")
-        else:
-            ls = "" if alg == "A*" else (f", with the thesis's local search {thesis_ls.rows[0]['cost']:.3f}")
-            extra = (f"; cost {r['cost']:.3f}{ls}, the exact optimum {opt:.3f}"
-                     + (" (optimal)" if abs(r["cost"] - opt) < 1e-9 else ""))
-        out.append(f"- **{alg}**: {what}{extra}.")
-    g, a = thesis["GRASP"][4], thesis["A*"][4]
-    both = all(abs(rows[k]["cost"] - opt) < 1e-9 for k in ("grasp", "astar"))
-    out.append(f"- **GRASP against A***: the thesis's A* is {g - a:.3f} below its GRASP; "
-               + ("ours are equal and optimal: our A* is exact and our GRASP (1000 iterations, delivery swaps) "
-                  "finds the optimum of a graph this small." if both else
-                  f"ours: GRASP {rows['grasp']['cost']:.3f}, A* {rows['astar']['cost']:.3f}."))
-    return "\n".join(out)
+        optimal = " (optimal)" if abs(r["cost"] - opt) < 1e-9 else ""
+        out.append([alg, "yes" if r["path"] == path else "no", f"{_returns(r['path'])} / {_returns(path)}",
+                    f"{r['cost']:.3f} / {opt:.3f}{optimal}", f"{C - thesis['A*'][4]:+.3f}"])
+    return md_table(["algorithm", "our schedule is the thesis's", "returns to the start: ours / thesis",
+                     "ours: C / exact optimum", "thesis: C − its A*'s C"], out)
 
 
 def plot_sweeps(sweeps: dict, lines: dict, img: Path, name: str, title: str) -> str:
@@ -304,74 +289,53 @@ def instance_table(instances: dict[str, Instance]) -> str:
                      "max torque [N·m]: empty moves / holding an object"], rows)
 
 
-def thesis_why(instances: dict[str, Instance], runs: dict, same_geometry: bool) -> str:
-    """The reasons why Tables 5.2–5.4 differ from ours, with the numbers that show them (Markdown)."""
+def why_fields(instances: dict[str, Instance], runs: dict) -> dict:
+    """The numbers behind "why Tables 5.2–5.4 differ from ours" (the ``why_*`` fields of the
+    template): the RRTConnect instance (else the first) against the thesis's tables."""
     from uvms_jax import sched
 
     if not runs:
-        return ""
+        raise ValueError("no planner's scheduling instance was computed: nothing to compare with Tables 5.2-5.4")
     run = runs.get("RRTConnect") or next(iter(runs.values()))
     inst = instances.get("RRTConnect") or next(iter(instances.values()))
     table = T22_PLANNER_TABLES[inst.planner]
-    best_thesis = min(c for _, c in thesis_path_sums(table, run.normalised).values())
-    bullets = ["- *The instance.* The thesis prints per-path sums of normalised metrics, never the "
-               "per-move values, so its instances cannot be rebuilt. Its cage is rebuilt here from its "
-               "description (the positions of the tables and the incline are our defaults), so which "
-               "delivery is cheapest first is our own: on our " + inst.planner + " instance the best of the "
-               f"thesis's schedules costs {best_thesis:.3f} against the optimum {run.optimal_cost:.3f} "
-               "(columns \"thesis path on ours\")."]
-    if same_geometry:
-        straight = (f" ({inst.straight} of {inst.attempted} moves)" if inst.straight is not None else "")
-        bullets.append(
-            "- *The planners.* Every move of our cage is free along the straight joint-space segment"
-            f"{straight}, and each planner's own path, simplified by OMPL's `simplifySolution` (no shortcut "
-            "of ours: `plan.straight_shortcut` is off here), ends as that segment, so the three planners give "
-            "the same paths: joint movement, EE distance, security and torque are the same in all three tables "
-            "and only planning time differs. The thesis's tables show nearly the same: its A* path has "
-            "N = 1.200–1.201, 2.597–2.598, 2.788–2.791 and 5.280–5.281 for those four metrics under all "
-            "three planners.")
+    thesis = {t: {r[0]: r for r in T22_TABLES[t]} for t in T22_TABLES}
+    # Moves whose geometric metrics (all but planning time) agree under every planner: the same path.
+    moves = np.all(np.isfinite(inst.raw), axis=0)
+    same = np.all([np.all(np.isclose(i.raw[1:], inst.raw[1:], atol=1e-9), axis=0) for i in instances.values()], axis=0)
+    a_star = np.array([thesis[t]["A*"][3] for t in T22_PLANNER_TABLES.values()])
+    dij = np.array([thesis[t]["Dijkstra"][3] for t in T22_PLANNER_TABLES.values()])
     med = [float(np.nanmedian(i.raw[0])) * 1e3 for i in instances.values()]
-    dij = np.array([next(r[3] for r in T22_TABLES[t] if r[0] == "Dijkstra") for t in T22_PLANNER_TABLES.values()])
-    spread = np.ptp(dij, axis=0)
-    bullets.append(
-        f"- *Planning time.* Ours takes milliseconds per move (medians {min(med):.2g}–{max(med):.2g} ms) and "
-        "changes from run to run (OMPL's random sampling, the machine's load); min–max normalisation (eq. 4.15) "
-        "stretches it to [0, 1] like any other metric, so it still moves the schedule. It is the metric "
-        f"that sets the thesis's planners apart too: the same Dijkstra path has N = {dij[:, 0].min():.3f}–"
-        f"{dij[:, 0].max():.3f} under its three planners, while its other four sums change by at most "
-        f"{spread[1:].max():.3f}.")
     nm = run.normalised
     edge = np.all(np.isfinite(nm), axis=0)
     best = run.solved["exact"].path if "exact" in run.solved else run.best.path
-    moves = len(best) - 1
-    along = sched.path_metric_sums(nm, best) / moves
-    a_star = next(r for r in T22_TABLES["5.2"] if r[0] == "A*")
-    a_star_moves = len(a_star[1].split("-")) - 1
-    thesis_along = np.array(a_star[3]) / a_star_moves
+    along = sched.path_metric_sums(nm, best) / (len(best) - 1)
+    a_star_moves = len(thesis["5.2"]["A*"][1].split("-")) - 1
+    thesis_along = np.array(thesis["5.2"]["A*"][3]) / a_star_moves
     rows = [[label, f"{np.median(nm[k][edge]):.2f}", f"{along[k]:.2f}", f"{thesis_along[k]:.2f}"]
             for k, label in enumerate(METRIC_LABELS)]
-    moves_raw = np.all(np.isfinite(inst.raw), axis=0)
-    torque = inst.raw[4][moves_raw]
+    torque = inst.raw[4][moves]
     dear = [label for k, label in enumerate(METRIC_LABELS) if np.median(nm[k][edge]) > 0.5]
-    thesis_best = min(r[4] for r in T22_TABLES[table])
-    bullets.append(
-        "- *Torque.* Like the thesis's, our max-torque metric counts the arm's own weight and buoyancy "
-        f"besides the held object (theory §5): every move has torque ({torque.min():.1f}–{torque.max():.1f} N·m "
-        "here; the held object adds less than 0.6 N·m), so torque sums grow with the number of moves in both.")
-    levels = (
-        "**The levels of N.** Each metric is normalised by its own minimum and maximum over all moves of "
-        f"the instance, so the sums depend on where most moves lie in that range. Ours ({inst.planner}) "
-        "against the thesis's, per move:\n\n"
-        + md_table(["metric", "ours: median N over all moves", f"ours: mean N along our optimum ({moves} moves)",
-                    f"thesis: mean N along its A* path (Table 5.2, {a_star_moves} moves)"], rows)
-        + f"\n\nMost of our moves lie in the dear half of the range of {_and(dear) or 'no metric'} "
-        "(median N above 0.5), which therefore weigh more in our sums than in the thesis's; our optimum "
-        f"costs {run.optimal_cost:.3f} against the thesis's best {thesis_best:.3f} (Table {table}).")
-    bullets.append(
-        "- *The algorithms.* Our A* is optimal on every tested instance (checked against the exact DP and "
-        "brute force); the thesis's is not (Table A.1: 2.164 against GRASP's 1.991; A.5: 5.242 against 4.755). "
-        "Compare the rankings, which agree: greedy worst, GRASP and A* at or near the optimum.")
-    return "**Why they differ, in all three tables:**\n\n" + "\n".join(bullets) + "\n\n" + levels
+    return dict(
+        why_planner=inst.planner, why_table=table,
+        why_best_thesis=min(c for _, c in thesis_path_sums(table, run.normalised).values()),
+        why_optimal=run.optimal_cost,
+        why_straight="—" if inst.straight is None else f"{inst.straight} of {inst.attempted}",
+        why_same_moves=f"{int(np.sum(same & moves))} of {int(moves.sum())}",
+        why_thesis_a_star_n=", ".join(f"{lo:.3f}–{hi:.3f}" for lo, hi in
+                                      zip(a_star[:, 1:].min(axis=0), a_star[:, 1:].max(axis=0))),
+        why_time_ms=f"{min(med):.2g}–{max(med):.2g}",
+        why_dijkstra_time_n=f"{dij[:, 0].min():.3f}–{dij[:, 0].max():.3f}",
+        why_dijkstra_other=float(np.ptp(dij, axis=0)[1:].max()),
+        why_torque=f"{torque.min():.1f}–{torque.max():.1f}",
+        why_a1=f"{thesis['A.1']['A*'][4]:.3f} against GRASP's {thesis['A.1']['GRASP'][4]:.3f}",
+        why_a5=f"{thesis['A.5']['A*'][4]:.3f} against GRASP's {thesis['A.5']['GRASP'][4]:.3f}",
+        why_levels=md_table(["metric", "ours: median N over all moves",
+                             f"ours: mean N along our optimum ({len(best) - 1} moves)",
+                             f"thesis: mean N along its A* path (Table 5.2, {a_star_moves} moves)"], rows),
+        why_dear=_and(dear) or "no metric",
+        why_thesis_best=min(r[4] for r in T22_TABLES[table]),
+    )
 
 
 def _table55(timing: dict, per_planner: dict, thesis_ls_runs: dict) -> str:
@@ -435,7 +399,7 @@ def thesis_fields(p: Preset, img: Path, edges: Path | None, configs: Path) -> di
         planner_md.append(f"**Table {table} — {planner}** (ours: {inst.note}; GRASP 1000 iterations, our local "
                           f"search and the thesis's; the exact optimum is {run.optimal_cost:.3f})\n\n"
                           + thesis_table(table, {"ours": run, "ours, thesis LS": thesis_ls}, run.normalised)
-                          + "\n\n" + planner_differences(table, run, thesis_ls))
+                          + "\n\n" + planner_differences(table, run))
     fig58 = plot_final_costs(per_planner, img, "motion planner")
     if task_plan is not None and "RRTConnect" in per_planner:
         fig514, executed = executed_tool_paths(task_plan, per_planner["RRTConnect"], img)
@@ -445,10 +409,6 @@ def thesis_fields(p: Preset, img: Path, edges: Path | None, configs: Path) -> di
                      f"{executed['p95_mm']:.1f} mm).")
     else:
         fig514_md = "Not computed: it needs the thesis cage planned here (no `--edges`)."
-    # Metrics other than planning time that agree between the planners (same paths).
-    first = next(iter(instances.values())) if instances else None
-    same_geometry = first is not None and len(instances) > 1 and all(
-        np.allclose(i.raw[1:], first.raw[1:], equal_nan=True, atol=1e-9) for i in instances.values())
 
     # Table 5.5 and Figs 5.9–5.12 on the eq. 4.1 matrix (the thesis's worked example).
     problem = sched.thesis_problem()
@@ -487,7 +447,6 @@ def thesis_fields(p: Preset, img: Path, edges: Path | None, configs: Path) -> di
     w_md = [_scenario_table(rrt, configs, scen, table) for scen, table in
             progress.bar(T22_SCENARIO_TABLES.items() if rrt else (), desc="weight scenarios", unit="table")]
     kn_bad = [t for t, rows in T22_TABLES.items() if any(abs(float(np.dot(r[2], r[3])) - r[4]) > 0.01 for r in rows)]
-    why = thesis_why(instances, per_planner, same_geometry)
     how = (f"the edges in `{edges}`" if edges else
            f"the thesis cage (`configs/scenario/thesis_cage.yaml`) planned here with the three planners under "
            f"`configs/plan/default.yaml`, {p.plan_budget_s:g} s per edge ({t_plan:.0f} s with the IK targets); "
@@ -498,7 +457,7 @@ def thesis_fields(p: Preset, img: Path, edges: Path | None, configs: Path) -> di
         eq41={f"{name}/{ls}" if ls else name: {"path": solved.path_str(), "cost": solved.cost, "ms": ms,
                                                "optimal_of_20": optimal}
               for (name, ls), (solved, ms, optimal) in timing.items()},
-        planner_tables="\n".join(m + "\n" for m in planner_md), why=why, fig58=fig58, t55=t55,
+        planner_tables="\n".join(m + "\n" for m in planner_md), **why_fields(instances, per_planner), fig58=fig58, t55=t55,
         eq41_greedy="-".join(map(str, sched.THESIS_EQ41_GREEDY_PATH)), fig59=fig59, sweep_on=sweep_on,
         sweep_grid=f"{p.grasp_sweep[0]}, {p.grasp_sweep[1]}–{p.grasp_sweep[-1]}" if len(p.grasp_sweep) > 2 else
         ", ".join(map(str, p.grasp_sweep)), sweep_repeats=p.sweep_repeats,

@@ -35,19 +35,22 @@ class HwStageSettings:
 
 @dataclasses.dataclass(frozen=True)
 class HoverStageSettings:
-    """The hover stage: the scheduled plan's motion with the vehicle hovering at the docked pose
-    (:func:`uvms_jax.hover.run_plan_hovering`), in still water and in ``current``.
+    """The hover stage: the scheduled plan executed with the vehicle hovering at the docked pose
+    (:func:`uvms_jax.hover.execute_plan_hovering`: the hw stage's executor and settings), in
+    still water and in ``current``.
 
     Attributes:
       current: the water's velocity in the world frame [m/s]; (0, 0, 0): still water only.
       vehicle: hull mass, water, thrusters (its hull box and arm mount are the docking scene's).
       controller: the station keeping on (x, y, z, ψ).
-      dwell_s: how long the arm holds each segment's last waypoint (the gate) [s];
-        gripper_s: how long a gripper step takes [s].
-      tool_tolerance_m, joint_tolerance_rad: a gate is reached with the tool within this of
-        where the docked arm holds it and every joint within this of its waypoint.
+      tool_tolerance_m: a gate counts as kept by the tool when it is within this of where the
+        docked arm holds it [m].
       coordinate: also run the current with the arm correcting for the vehicle's motion (the
-        tool's offset mapped to joint corrections through the arm's Jacobian, within limits).
+        tool's offset mapped to joint corrections through the vehicle–arm Jacobian, within
+        limits): a replay of the plan's timed waypoints (:func:`uvms_jax.hover.run_plan_hovering`),
+        since the executor streams the plan unchanged.
+      dwell_s, gripper_s, joint_tolerance_rad: that replay's dwell at each gate and gripper
+        step [s], and its gate on the joints [rad].
     """
 
     current: tuple[float, float, float] = (0.0, 0.0, 0.0)

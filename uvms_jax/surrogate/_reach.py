@@ -106,11 +106,11 @@ class SurrogateDockingProblem:
 
     @property
     def pose_low(self) -> Array:
-        return self.problem.low
+        return self.problem.pose_low
 
     @property
     def pose_high(self) -> Array:
-        return self.problem.high
+        return self.problem.pose_high
 
     def terms(self, pose: Array) -> evo.DockingEval:
         """Objective terms (eq. 1, 3, 14, 15) of vehicle poses ``(..., 4)`` [m, rad]."""
@@ -162,9 +162,9 @@ def reach_dataset(key: Array, problem: evo.ArmDockingProblem, n_poses: int, chun
       :class:`ReachData` (NumPy arrays).
     """
     free = _without_scene(problem)
-    dtype = problem.low.dtype
+    dtype = problem.pose_low.dtype
     n = -(-n_poses // chunk) * chunk  # whole chunks: one compilation
-    poses = jax.random.uniform(key, (n, 4), dtype, problem.low, problem.high)
+    poses = jax.random.uniform(key, (n, 4), dtype, problem.pose_low, problem.pose_high)
     jax.block_until_ready(_score(free, poses[:chunk]))  # compile
     t0 = time.perf_counter()
     parts = [jax.block_until_ready(_score(free, poses[i:i + chunk])) for i in range(0, n, chunk)]
@@ -329,7 +329,7 @@ def dock_with_map(problem: evo.ArmDockingProblem, run: ReachMapRun, ga: evo.GASe
         seconds += time.perf_counter() - t0
     poses = np.asarray(res.best_x)
     terms = evo.arm_report(problem, poses).terms
-    sample = jax.random.uniform(jax.random.key(seed + 1), (timing_batch, 4), problem.low.dtype, problem.low, problem.high)
+    sample = jax.random.uniform(jax.random.key(seed + 1), (timing_batch, 4), problem.pose_low.dtype, problem.pose_low, problem.pose_high)
     eval_seconds = time_index_fn(learned.fitness, sample, repeats=3)["seconds"] / timing_batch
     return MapDocking(poses, np.asarray(res.best_fitness), np.asarray(terms.fitness), np.asarray(terms.M_a),
                       evaluations, n_infill, seconds, eval_seconds)

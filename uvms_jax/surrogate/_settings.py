@@ -12,7 +12,7 @@ import math
 
 from uvms_jax.surrogate._dataset import INDEX_NAMES, Sampling
 from uvms_jax.surrogate._design import TRAINERS
-from uvms_jax.settings import setting
+from uvms_jax.settings import check_fields, setting
 from uvms_jax.surrogate._form import IndexForm
 
 NETWORK_KINDS = ("ffbn", "rbfn")
@@ -216,8 +216,7 @@ class SurrogateSettings:
     acceptance: AcceptanceSettings = AcceptanceSettings()
 
     def __post_init__(self):
-        if self.train_dtype not in TRAIN_DTYPES:
-            raise ValueError(f"train_dtype must be one of {TRAIN_DTYPES}, got {self.train_dtype!r}")
+        check_fields(self)
         if not self.networks:
             raise ValueError("networks must name at least one network")
         for name in self.networks:
