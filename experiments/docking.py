@@ -9,6 +9,8 @@ A thin entry point: config → :class:`uvms_jax.evo.DockingSettings` → :func:`
   wmax_best.png, wmax_ill_placed.png   w_max heat maps (eq. 16)
   convergence.png     best fitness per generation of every GA and CMA-ES run
   summary.json        acceptance figures (GA vs grid, batch time, evaluations/s, quarter/facing checks)
+                      and the certificate: the chosen pose, and the GA's best against the dense
+                      grid + zoom reference (ga_certified; a multistart search certifies nothing)
 For an arm scene (docking/preset=bravo7, bravo7_tables) best_pose.json (IK solution and w per
 target) and docked_top_view.png replace the w_max files.
 

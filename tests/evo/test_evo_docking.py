@@ -41,6 +41,11 @@ def test_tiny_run_writes_every_file(tmp_path):
              "wmax_ill_placed.png", "convergence.png", "summary.json"}
     assert names <= {p.name for p in tmp_path.iterdir()}
     assert json.loads((tmp_path / "summary.json").read_text())["ga_fitness"] == summary["ga_fitness"]
+    # A dense grid (one polish start) is a reference: the GA's best against it certifies.
+    c = summary["certificate"]
+    assert c["reference"]["fitness"] == run.refined_grid.fitness and c["reference"]["search"] == "dense grid + zoom"
+    assert c["ga_best_ratio"] == pytest.approx(float(run.fitness.max()) / run.refined_grid.fitness)
+    assert c["ga_certified"] == (c["ga_best_ratio"] >= s.accept_ratio)
 
 
 def test_multistart_search_and_the_runs_best_pose():
@@ -57,3 +62,4 @@ def test_multistart_search_and_the_runs_best_pose():
     assert best.fitness == pytest.approx(max(run.refined_grid.fitness, float(run.fitness.max())))
     assert best.source == ("grid search" if run.refined_grid.fitness > run.fitness.max() else "analytic GA")
     assert float(evo.evaluate(run.problem, best.pose[None]).fitness[0]) == pytest.approx(best.fitness, rel=1e-5)
+    assert evo.docking_summary(run)["certificate"]["ga_certified"] is None  # a multistart search is no reference
