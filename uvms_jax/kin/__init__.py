@@ -37,6 +37,8 @@ from uvms_jax.kin._fk import spatial_jacobian
 from uvms_jax.kin._fk import spatial_jacobian_rows
 from uvms_jax.kin._ik import IKSolutions
 from uvms_jax.kin._ik import dls_ik
+from uvms_jax.kin._ik import dls_step
+from uvms_jax.kin._ik import spd_solve
 from uvms_jax.kin._ik import elbow_branches
 from uvms_jax.kin._ik import elbow_ik
 from uvms_jax.kin._ik import numeric_ik

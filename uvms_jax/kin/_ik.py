@@ -149,6 +149,32 @@ def elbow_ik(chain: Chain, T_base_tool) -> IKSolutions:
 LIMITS = ("clip", "wrap")
 
 
+def spd_solve(A: Array, b: Array) -> Array:
+    """``x (..., m)`` with ``A x = b`` for small symmetric positive-definite ``A (..., m, m)``
+    (m ≤ 6 here: the DLS system ``J Jᵀ + λ² I``), by a Cholesky factorisation written out entry
+    by entry.
+
+    Why not ``jnp.linalg.solve``: batched over a population's poses, seeds and targets, the
+    library's LU runs as one small factorisation per matrix (a batched cuBLAS/LAPACK call inside
+    every DLS iteration), while the written-out form is elementwise arithmetic on ``(...)``
+    arrays that XLA fuses with the kinematics around it. Backward stable for SPD matrices; the
+    damping keeps ``A``'s smallest eigenvalue ≥ λ² > 0.
+    """
+    m = A.shape[-1]
+    L = [[None] * m for _ in range(m)]
+    for j in range(m):
+        L[j][j] = jnp.sqrt(A[..., j, j] - sum(L[j][k] * L[j][k] for k in range(j)))
+        for i in range(j + 1, m):
+            L[i][j] = (A[..., i, j] - sum(L[i][k] * L[j][k] for k in range(j))) / L[j][j]
+    y = []
+    for i in range(m):  # L y = b
+        y.append((b[..., i] - sum(L[i][k] * y[k] for k in range(i))) / L[i][i])
+    x = [None] * m
+    for i in reversed(range(m)):  # Lᵀ x = y
+        x[i] = (y[i] - sum(L[k][i] * x[k] for k in range(i + 1, m))) / L[i][i]
+    return jnp.stack(x, axis=-1)
+
+
 def dls_ik(chain: Chain, T_base_tool: Array, q0: Array, iterations: int, damping=1.0, *, limits: str = "clip") -> Array:
     """Damped least squares from seeds ``q0 (..., n)`` towards ``T_base_tool (..., 4, 4)``
     (leading axes broadcast together), a fixed number of iterations, no checks, no ``jit``
@@ -170,19 +196,22 @@ def dls_ik(chain: Chain, T_base_tool: Array, q0: Array, iterations: int, damping
     if limits not in LIMITS:
         raise ValueError(f"limits must be one of {LIMITS}, got {limits!r}")
     shape = jnp.broadcast_shapes(T_base_tool.shape[:-2], q0.shape[:-1])
-    eye = jnp.eye(6, dtype=q0.dtype)
+    q = _keep(chain, jnp.broadcast_to(q0, shape + q0.shape[-1:]), limits)
+    return jax.lax.fori_loop(0, iterations, lambda _, q: dls_step(chain, T_base_tool, q, damping, limits), q)
 
-    def keep(q):
-        return jnp.clip(q, chain.lower, chain.upper) if limits == "clip" else wrap_into_limits(chain, q)[0]
 
-    def step(_, q):
-        T_q, J = pose_and_jacobian_of(chain, q)
-        e = pose_error(T_base_tool, T_q)
-        lam2 = damping**2 * (jnp.sum(e * e, axis=-1) + 1e-6)
-        y = jnp.linalg.solve(matmul(J, jnp.swapaxes(J, -1, -2)) + lam2[..., None, None] * eye, e[..., None])[..., 0]
-        return keep(q + matvec(jnp.swapaxes(J, -1, -2), y))
+def _keep(chain: Chain, q: Array, limits: str) -> Array:
+    return jnp.clip(q, chain.lower, chain.upper) if limits == "clip" else wrap_into_limits(chain, q)[0]
 
-    return jax.lax.fori_loop(0, iterations, step, keep(jnp.broadcast_to(q0, shape + q0.shape[-1:])))
+
+def dls_step(chain: Chain, T_base_tool: Array, q: Array, damping=1.0, limits: str = "clip") -> Array:
+    """One iteration of :func:`dls_ik` from ``q (..., n)``: the solve of ``(J Jᵀ + λ² I) y = e``
+    (:func:`spd_solve`) and the step ``Jᵀ y``, kept by ``limits``."""
+    T_q, J = pose_and_jacobian_of(chain, q)
+    e = pose_error(T_base_tool, T_q)
+    lam2 = damping**2 * (jnp.sum(e * e, axis=-1) + 1e-6)
+    y = spd_solve(matmul(J, jnp.swapaxes(J, -1, -2)) + lam2[..., None, None] * jnp.eye(6, dtype=q.dtype), e)
+    return _keep(chain, q + matvec(jnp.swapaxes(J, -1, -2), y), limits)
 
 
 def _numeric_ik_one(key, chain, T, n_seeds, iterations, damping):

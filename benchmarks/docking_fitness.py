@@ -1,0 +1,84 @@
+"""The demo's docking fitness on a batch of vehicle poses: poses/s and XLA's flop count per
+pose, with the DLS step's 6 × 6 solve written out (Cholesky, ``kin.spd_solve``, the library's)
+beside the library's LU (``jnp.linalg.solve``) in the same process; prints one JSON object.
+
+    JAX_PLATFORMS=cpu python benchmarks/docking_fitness.py --batches 256 1024
+    python benchmarks/docking_fitness.py --batches 16384 131072          # GPU
+
+The fitness is the demo's (``make demo``'s docking stage: 16 tool poses, 8 IK seeds × 25 DLS
+iterations each, collisions), on poses drawn uniformly in its pose box. Compilation is timed
+apart; the best of ``--repeat`` calls is reported. ``flops_per_pose`` is XLA's cost analysis of
+the compiled call over the batch; with the device's peak it bounds the rate from above.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import sys
+import time
+
+import jax
+import jax.numpy as jnp
+
+from uvms_jax.kin import _ik
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from docking_search import demo_problem, demo_settings  # noqa: E402  (the demo's problem, built as the pipeline does)
+
+
+def _lu(A, b):
+    return jnp.linalg.solve(A, b[..., None])[..., 0]
+
+
+def measure(problem, n: int, repeat: int) -> dict:
+    poses = jax.random.uniform(jax.random.key(0), (n, 4), jnp.float32, problem.pose_low, problem.pose_high)
+    fitness = jax.jit(lambda p, x: p.fitness(x))
+    t0 = time.perf_counter()
+    compiled = fitness.lower(problem, poses).compile()
+    compile_s = time.perf_counter() - t0
+    times = []
+    for _ in range(repeat + 1):  # the first call warms up
+        t0 = time.perf_counter()
+        f = jax.block_until_ready(compiled(problem, poses))
+        times.append(time.perf_counter() - t0)
+    best = min(times[1:])
+    return {"batch": n, "compile_s": compile_s, "best_s": best, "poses_per_s": n / best,
+            "fitness_sum": float(jnp.nansum(f))}
+
+
+def dls_iteration_flops(problem) -> float:
+    """Flops of one DLS iteration (``kin.dls_step``) of one IK problem, XLA's count."""
+    chain, T = problem.chain, problem.T_world_tool[0]
+    q = jnp.zeros((chain.n_joints,), jnp.float32)
+    cost = jax.jit(_ik.dls_step).lower(chain, T, q).compile().cost_analysis()
+    return float((cost[0] if isinstance(cost, (list, tuple)) else cost)["flops"])
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--batches", type=int, nargs="+", default=[256, 1024])
+    ap.add_argument("--repeat", type=int, default=3)
+    args = ap.parse_args()
+    _, _, problem = demo_problem(demo_settings([]))
+    library = _ik.spd_solve
+    settings = demo_settings([]).docking.scene
+    solves_per_pose = len(problem.T_world_tool) * settings.ik_seeds * settings.ik_iterations
+    rows = {}
+    for name, solve in (("cholesky", library), ("lu", _lu)):
+        _ik.spd_solve = solve  # dls_ik reads it at trace time: each variant compiles anew
+        per_pose = dls_iteration_flops(problem) * solves_per_pose
+        rows[name] = [{**m, "dls_flops_per_pose": per_pose, "achieved_flops_per_s": per_pose * m["poses_per_s"]}
+                      for m in (measure(problem, n, args.repeat) for n in args.batches)]
+    _ik.spd_solve = library
+    print(json.dumps({
+        "command": " ".join(["python benchmarks/docking_fitness.py", *sys.argv[1:]]),
+        "device": jax.devices()[0].device_kind, "platform": jax.devices()[0].platform, "jax": jax.__version__,
+        "machine": platform.machine(), "cpus": os.cpu_count(), "fitness": "demo (16 tool poses, 8 seeds x 25 DLS iterations)",
+        "variants": rows}, indent=1))
+
+
+if __name__ == "__main__":
+    main()
