@@ -1,4 +1,5 @@
-"""The quoted figures of README.md and BENCHMARKS.md, generated from benchmarks/results/.
+"""The quoted figures of README.md, BENCHMARKS.md and docs/theory.md, generated from
+benchmarks/results/ and docs/reproduction.json.
 
 Each generated block sits between ``<!-- report:NAME -->`` and ``<!-- /report:NAME -->`` in one
 of :data:`DOCUMENTS`, and is written by the function of that name below from the JSON files
@@ -21,7 +22,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 RESULTS = ROOT / "benchmarks" / "results"
-DOCUMENTS = (ROOT / "README.md", ROOT / "BENCHMARKS.md")
+DOCUMENTS = (ROOT / "README.md", ROOT / "BENCHMARKS.md", ROOT / "docs" / "theory.md")
 BLOCK = re.compile(r"(<!-- report:(?P<name>[a-z0-9_]+) -->\n)(?P<body>.*?)(<!-- /report:(?P=name) -->)", re.S)
 
 
@@ -221,6 +222,80 @@ def hover_robustness() -> str:
                      rows) + "\n")
 
 
+def _reproduction() -> dict:
+    """The record of ``make papers`` (docs/reproduction.json)."""
+    return json.loads((ROOT / "docs" / "reproduction.json").read_text(encoding="utf-8"))
+
+
+def surrogate_networks() -> str:
+    """The networks ``make papers`` designed and timed, both Jacobian forms, from its record."""
+    from uvms_jax.papers import D16_NETWORKS
+
+    rec = _reproduction()
+    dx, foot = rec["sections"]["surrogate"], rec["footer"]
+    batches = list(dx["networks"]["geometric"]["ffbn_w"]["per_s"])
+    label = {"ffbn_w": "FFBN-w", "ffbn_kci": "FFBN-KCI", "rbfn_w": "RBFN-w", "rbfn_kci": "RBFN-KCI"}
+    forms = {"geometric": "geometric J (ours)", "spatial": "spatial J (paper eq. 6)"}
+    rows = []
+    for form, form_label in forms.items():
+        for name, n in dx["networks"][form].items():
+            size = str(n["units"]) + ("" if n["spread"] is None else f", spread {n['spread']:.1f}")
+            error = f"{100 * n['max_rel_test_error']:.2f} %" + ("" if n["met_goal"] else " (goal not met)")
+            rows.append([label[name], form_label, size, error, str(n["operation_count"]),
+                         f"{n['xla_flops_per_sample']:.0f}"]
+                        + [f"{_rate(n['per_s'][b])} ({n['speedup'][b]:.1f}×)" for b in batches])
+        for index, a in dx["analytic"][form].items():
+            rows.append([f"analytic {'w' if index == 'w' else 'KCI'}", form_label, "–", "–", f"paper: {D16_NETWORKS[f'analytic_{index}']['operation_count']}",
+                         f"{a['xla_flops_per_sample']:.0f}"] + [_rate(a["per_s"][b]) for b in batches])
+    ranges = dx["index_ranges"]
+    paper = (f"FFBN-w {D16_NETWORKS['ffbn_w']['hidden_units']}, FFBN-KCI {D16_NETWORKS['ffbn_kci']['hidden_units']}, "
+             f"RBFN-w {D16_NETWORKS['rbfn_w']['hidden_units']} units, RBFN-KCI spread "
+             f"{D16_NETWORKS['rbfn_kci']['spread']}, {D16_NETWORKS['rbfn_kci']['hidden_units']} units")
+    where = f"{dx['cpu_count']}-core CPU" if foot["platform"] == "cpu" else foot["device_kind"]
+    return (f"`make papers` (`python experiments/papers.py`, preset \"{foot['preset']}\"; {where}), "
+            f"recorded in docs/reproduction.json; its §2 has the "
+            f"design parameters. Evaluations/s at {' and '.join(_batch(int(b)) for b in batches)} inputs, speed-up "
+            "over the analytic index of the same quantity and form in brackets; XLA flops per sample from XLA's cost "
+            "analysis of each jitted function on the CPU:\n\n"
+            + _table(["network", "Jacobian", "units", "max rel. test error", "ops (paper convention)",
+                      "XLA flops/sample"] + [f"{_batch(int(b))} inputs/s" for b in batches], rows)
+            + f"\n\n(Paper: {paper}.) Over the sampled window w ∈ [{ranges['geometric']['w'][0]:.2f}, "
+              f"{ranges['geometric']['w'][1]:.2f}] in both forms; KCI ∈ [{ranges['geometric']['kci'][0]:.3f}, "
+              f"{ranges['geometric']['kci'][1]:.3f}] with the geometric J and [{ranges['spatial']['kci'][0]:.3f}, "
+              f"{ranges['spatial']['kci'][1]:.3f}] with the spatial J.\n")
+
+
+def surrogate_sizes() -> str:
+    """FFBN-KCI per Jacobian form (docs/theory.md): ``make papers``' run and the size search at the
+    paper's data size (its result file, quoted through docs/reproduction.json)."""
+    rec = _reproduction()
+    dx, preset = rec["sections"]["surrogate"], rec["footer"]["preset"]
+    geo, kci = dx["networks"]["geometric"]["ffbn_kci"], dx["index_ranges"]["geometric"]["kci"]
+    return (f"`make papers` (preset \"{preset}\"): with the geometric Jacobian KCI spans {kci[0]:.2f}–{kci[1]:.2f} and "
+            f"FFBN-KCI {'meets' if geo['met_goal'] else 'misses'} the 2 % goal with {geo['units']} units "
+            f"({100 * geo['max_rel_test_error']:.2f} %); with the spatial form it {dx['ffbn_kci']}. At the paper's data "
+            f"size ({dx['sizes_n_train']} training samples, `{dx['sizes_file']}`) the paper's loop on the spatial form "
+            f"{dx['sizes_result']}.\n")
+
+
+def surrogate_paper_sizes_cpu() -> str:
+    """Networks of the paper's sizes with random weights against the analytic index, CPU."""
+    d = _load("surrogate_paper_sizes_cpu.json")
+    names = ("analytic_w", "ffbn_w", "rbfn_w", "analytic_kci", "ffbn_kci", "rbfn_kci")
+    rows = [[_batch(int(b))] + [_rate(r[n]["per_second"]) + (f" ({r[n]['speedup_vs_analytic']:.1f}×)"
+                                                            if "speedup_vs_analytic" in r[n] else "") for n in names]
+            for b, r in d["results"].items()]
+    g, u = d["grid"], d["hidden_units"]
+    return (f"`{d['command']}` (2-core CPU, jax {d['jax']}; {d['networks']}: FFBN-w {u['ffbn_w']}, FFBN-KCI "
+            f"{u['ffbn_kci']}, RBFN-w {u['rbfn_w']}, RBFN-KCI {u['rbfn_kci']} units; the cost of a network does not "
+            "depend on its weights), evaluations/s:\n\n"
+            + _table(["batch", "analytic w", "FFBN-w", "RBFN-w", "analytic KCI", "FFBN-KCI", "RBFN-KCI"], rows)
+            + f"\n\nGrid of {_batch(g['points'])} points, same run: analytic w {_rate(g['analytic_w_stored']['per_second'])}/s; "
+              f"FFBN-w stored {_rate(g['ffbn_w_stored']['per_second'])}/s ({g['ffbn_w_stored']['speedup_vs_analytic']:.1f}×), "
+              f"from grid index {_rate(g['ffbn_w_from_grid_index']['per_second'])}/s "
+              f"({g['ffbn_w_from_grid_index']['speedup_vs_analytic']:.1f}×).\n")
+
+
 def kin_summary() -> str:
     """The kinematics line of README.md's results, from the indices benchmark's files."""
     cpu = next(r for r in _load("kin_indices_uvms12_cpu.json")["results"] if r["batch"] == 100000)
@@ -243,7 +318,7 @@ def papers() -> str:
     """The papers' summary of README.md, from the record of ``make papers`` (docs/reproduction.json)."""
     from uvms_jax.papers import D16_NETWORKS, T22_TABLES
 
-    rec = json.loads((ROOT / "docs" / "reproduction.json").read_text(encoding="utf-8"))["sections"]
+    rec = _reproduction()["sections"]
     dk, dx, th = rec["docking"], rec["surrogate"], rec["thesis"]
     nets = dx["networks"]["geometric"]
     big = max(nets["ffbn_w"]["speedup"], key=int)
@@ -271,11 +346,13 @@ def papers() -> str:
         f"FFBN-KCI\n  {net('ffbn_kci')}; RBFN-w {net('rbfn_w')} (paper: {D16_NETWORKS['ffbn_w']['hidden_units']}, "
         f"{D16_NETWORKS['ffbn_kci']['hidden_units']}, {D16_NETWORKS['rbfn_w']['hidden_units']} units; all < 2 %); "
         f"against the project's fastest\n  analytic path (the fused `indices.manipulability_of` / `kci_of` kernel, "
-        f"same run) the FFBN is {nets['ffbn_w']['speedup'][big]:.0f}× faster\n  for w and "
+        f"same run,\n  preset \"{_reproduction()['footer']['preset']}\") the FFBN is "
+        f"{nets['ffbn_w']['speedup'][big]:.0f}× faster for w and "
         f"{nets['ffbn_kci']['speedup'][big]:.0f}× for KCI at {_batch(int(big))} inputs on the CPU, RBFN-w "
-        f"{nets['rbfn_w']['speedup'][big]:.1f}× and RBFN-KCI {nets['rbfn_kci']['speedup'][big]:.1f}× (the paper's "
-        "124–128× were\n  against Matlab LU/SVD on the symbolic Jacobian). With the paper's own Jacobian (spatial "
-        f"form, eq. 6) FFBN-KCI\n  {dx['ffbn_kci']} (paper: {D16_NETWORKS['ffbn_kci']['hidden_units']}).\n"
+        f"{nets['rbfn_w']['speedup'][big]:.1f}× and RBFN-KCI {nets['rbfn_kci']['speedup'][big]:.1f}×\n  (the paper's "
+        "124–128× were against Matlab LU/SVD on the symbolic Jacobian). With the paper's own Jacobian (spatial "
+        f"form, eq. 6) FFBN-KCI\n  {dx['ffbn_kci']} in that run; at the paper's data size ({dx['sizes_n_train']} "
+        f"samples,\n  `{dx['sizes_file']}`) it {dx['sizes_result']}.\n"
         f"- **Scheduling** ([theory §5](docs/theory.md#5-pick-and-place-scheduling), thesis Table 5.5, eq. 4.1): greedy "
         f"gives the\n  thesis's schedule {eq['greedy']['path']} / {eq['greedy']['cost']:.4f} in "
         f"{eq['greedy']['ms']:.3g} ms (thesis {t55['Dijkstra'][5]:g} ms on its own instance); GRASP\n  (1000 "
@@ -286,8 +363,8 @@ def papers() -> str:
 
 
 BLOCKS = {f.__name__: f for f in (kin_indices_cpu, kin_indices_accuracy, kin_indices_gpu, demo, docking_search,
-                                                  kin_summary, papers, hover_mjx,
-                                                  hover_robustness)}
+                                   kin_summary, papers, hover_mjx, hover_robustness, surrogate_networks,
+                                   surrogate_paper_sizes_cpu, surrogate_sizes)}
 
 
 def render(text: str) -> str:
@@ -295,7 +372,7 @@ def render(text: str) -> str:
     def block(m: re.Match) -> str:
         name = m.group("name")
         if name not in BLOCKS:
-            raise KeyError(f"BENCHMARKS.md has a block {name!r} that benchmarks/report.py does not write")
+            raise KeyError(f"a document has a block {name!r} that benchmarks/report.py does not write")
         return m.group(1) + BLOCKS[name]() + m.group(4)
     return BLOCK.sub(block, text)
 

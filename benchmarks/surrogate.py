@@ -31,6 +31,7 @@ import argparse
 import json
 import os
 import platform
+import sys
 from pathlib import Path
 
 
@@ -100,7 +101,8 @@ def main() -> None:
             else _time_grid(int(args.grid), base, fns["analytic_w"], nets["ffbn_w"], args.repeats))
     sizes = {name: (net.hidden if name.startswith("ffbn") else net.n_centres) for name, net in nets.items()}
     print(json.dumps({
-        "benchmark": "surrogate", "device": jax.devices()[0].device_kind, "platform": jax.devices()[0].platform,
+        "benchmark": "surrogate", "command": " ".join(["python benchmarks/surrogate.py", *sys.argv[1:]]),
+        "device": jax.devices()[0].device_kind, "platform": jax.devices()[0].platform,
         "python": platform.python_version(), "jax": jax.__version__, "dtype": "float32", "networks": source,
         "hidden_units": sizes, "chunk": chunk, "jacobian": args.jacobian,
         "analytic": "fused kernel (indices.manipulability_of / kci_of, or the same on spatial rows)", "results": results,

@@ -44,6 +44,9 @@ log = logging.getLogger("papers")
 ROOT = Path(__file__).resolve().parents[1]
 TEMPLATES = Path(__file__).resolve().parent / "papers_templates"
 SECTIONS = ("docking", "surrogate", "thesis")
+#: The FFBN-KCI size search at the paper's data size that the [D16] section quotes
+#: (`benchmarks/surrogate_sizes.py`; too slow for a CPU run of this script).
+SIZE_SEARCH = ROOT / "benchmarks" / "results" / "surrogate_ffbn_kci_sizes_h100.json"
 
 
 def render(name: str, **fields) -> str:
@@ -61,8 +64,17 @@ def fields_of(name: str, preset, img: Path, edges: Path | None) -> dict:
     if name == "docking":
         return docking.docking_fields(preset, img)
     if name == "surrogate":
-        return dexterity.dexterity_fields(preset, img)
+        return {**dexterity.dexterity_fields(preset, img), **size_search_fields()}
     return thesis.thesis_fields(preset, img, edges, ROOT / "configs")
+
+
+def size_search_fields() -> dict:
+    """The [D16] section's fields of :data:`SIZE_SEARCH`, read now (tests/papers compares them
+    with the record, so the document follows the file)."""
+    from uvms_jax.papers import dexterity
+
+    record = json.loads(SIZE_SEARCH.read_text(encoding="utf-8"))
+    return dexterity.size_search_fields(record, SIZE_SEARCH.relative_to(ROOT).as_posix())
 
 
 def document(record: dict) -> str:

@@ -3,6 +3,7 @@ the thesis helpers, and the entry point experiments/papers.py with its templates
 
 from __future__ import annotations
 
+import json
 import math
 import string
 import subprocess
@@ -132,16 +133,48 @@ def test_templates_and_entry_point():
     assert "--preset" in out.stdout and "tiny" in out.stdout
 
 
-def test_reproduction_is_the_record_of_its_run():
-    """docs/reproduction.md is exactly its templates filled from docs/reproduction.json, the
-    fields `make papers` computed and recorded: every number the document quotes has that file
-    (and the command in its footer) behind it, and an edit by hand fails here."""
+def _entry():
+    """experiments/papers.py as a module."""
     import importlib.util
-    import json
 
     spec = importlib.util.spec_from_file_location("papers_entry", ROOT / "experiments" / "papers.py")
     entry = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(entry)
-    record = json.loads((ROOT / "docs" / "reproduction.json").read_text(encoding="utf-8"))
+    return entry
+
+
+def _record() -> dict:
+    return json.loads((ROOT / "docs" / "reproduction.json").read_text(encoding="utf-8"))
+
+
+def test_reproduction_is_the_record_of_its_run():
+    """docs/reproduction.md is exactly its templates filled from docs/reproduction.json, the
+    fields `make papers` computed and recorded: every number the document quotes has that file
+    (and the command in its footer) behind it, and an edit by hand fails here."""
+    entry, record = _entry(), _record()
     assert list(record["sections"]) == list(entry.SECTIONS)
     assert entry.document(record) == (ROOT / "docs" / "reproduction.md").read_text(encoding="utf-8")
+
+
+def test_size_search_is_quoted_from_its_result_file():
+    """The [D16] size search the document quotes is what its result file (benchmarks/results/)
+    gives now: a new search there fails here until `make papers` runs again."""
+    entry = _entry()
+    fields, recorded = entry.size_search_fields(), _record()["sections"]["surrogate"]
+    assert {k: recorded.get(k) for k in fields} == fields
+
+
+def test_size_search_sentence():
+    """Met, not met, stopped early: the sentence names the size and the errors it should."""
+    from uvms_jax.papers import dexterity
+
+    steps = [{"size": s, "test_error": e, "loop": "design loop"} for s, e in ((1, 0.1), (2, 0.03), (3, 0.019))]
+    rec = {"error_goal": 0.02, "met_goal": True, "smallest_size_meeting_goal": 3, "steps": steps,
+           "error_at_paper_units": 0.05, "paper_units": 25, "command": "c", "device": "d", "jacobian": "spatial",
+           "n_train": 6000, "n_test": 1000}
+    assert dexterity.size_search_fields(rec, "f")["sizes_result"] == (
+        "reached 2 % first at 3 neurons (1.90 %), 5.00 % at the paper's 25")
+    rec |= {"met_goal": False, "largest_size_tried": 2, "max_hidden": 100, "finished": False, "best_size": 2,
+            "best_error": 0.03, "error_at_paper_units": None}
+    assert dexterity.size_search_fields(rec, "f")["sizes_result"] == (
+        "did not reach 2 % within 2 neurons (the run was stopped there, short of L_iter = 100); best 3.00 % at 2 neurons")

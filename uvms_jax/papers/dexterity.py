@@ -110,6 +110,16 @@ def _design_table(s) -> str:
                       f"— / {s.data.n_train[n.split('_')[1]]}"] for n in D16_TABLE3])
 
 
+def _network_summary(n: dict) -> dict:
+    """A network's entry of the record: size, test error, operation counts, and per batch size its
+    evaluations/s and speed-up over the analytic index."""
+    return {"units": n["hidden_units"], "spread": n["spread"], "met_goal": n["met_goal"],
+            "max_rel_test_error": n["max_rel_test_error"], "operation_count": n["operation_count"],
+            "xla_flops_per_sample": n["xla_flops_per_sample"],
+            "speedup": {b: t["speedup"] for b, t in n["timing"].items()},
+            "per_s": {b: t["network_per_s"] for b, t in n["timing"].items()}}
+
+
 def _results_table(runs: dict) -> str:
     """The networks designed per form: units (and spread) and max test error."""
     rows = []
@@ -157,9 +167,62 @@ def _timing_table(runs: dict, batches: list[str]) -> str:
                      f"ours, geometric: {' / '.join(batches)} inputs (speed-up)"], rows)
 
 
+def _ratios(run, name: str, batches: list[str]) -> str:
+    """``"0.4× / 0.1×"``: a network's speed over the analytic index's, per batch size."""
+    return " / ".join(f"{run.networks[name]['timing'][b]['speedup']:.1f}×" for b in batches)
+
+
+def _rbfn_speed(runs: dict, batches: list[str]) -> str:
+    """One sentence per RBFN: its speed as a multiple of the analytic index's at each batch size
+    of Table 5, both forms, and where that is slower (< 1×) or faster."""
+    sentences = []
+    for name in ("rbfn_w", "rbfn_kci"):
+        index = "w" if name.endswith("_w") else "KCI"
+        ratio = {(f, b): runs[f].networks[name]["timing"][b]["speedup"] for f in FORMS for b in batches}
+        slower = [b for b in batches if all(ratio[f, b] < 1 for f in FORMS)]
+        faster = [b for b in batches if all(ratio[f, b] >= 1 for f in FORMS)]
+        if len(slower) == len(batches):
+            verdict = "slower than the analytic index at every batch size"
+        elif len(faster) == len(batches):
+            verdict = "faster than the analytic index at every batch size"
+        else:
+            verdict = "; ".join(part for part in (
+                f"slower than the analytic index at {' and '.join(slower)} inputs" if slower else "",
+                f"faster at {' and '.join(faster)}" if faster else "",
+                "between the forms elsewhere" if len(slower) + len(faster) < len(batches) else "") if part)
+        sentences.append(f"{_label(name)} is {verdict}: it runs at {_ratios(runs['spatial'], name, batches)} "
+                         f"the analytic {index}'s speed at {' / '.join(batches)} inputs with the spatial form "
+                         f"and {_ratios(runs['geometric'], name, batches)} with the geometric form.")
+    return " ".join(sentences)
+
+
+def size_search_fields(record: dict, name: str) -> dict:
+    """The FFBN-KCI size search at the paper's data size, as the template quotes it, from the
+    record of ``benchmarks/surrogate_sizes.py`` (``record``, the JSON it prints) saved as
+    ``name`` (a path relative to the repository)."""
+    goal = 100 * record["error_goal"]
+    if record["met_goal"]:
+        size = record["smallest_size_meeting_goal"]
+        error = next(st["test_error"] for st in record["steps"] if st["size"] == size)
+        result = f"reached {goal:g} % first at {size} neurons ({100 * error:.2f} %)"
+    else:
+        tried, limit = record["largest_size_tried"], record["max_hidden"]
+        stopped = ("" if record["finished"] or tried >= limit
+                   else f" (the run was stopped there, short of L_iter = {limit})")
+        result = (f"did not reach {goal:g} % within {tried} neurons{stopped}; best {100 * record['best_error']:.2f} % "
+                  f"at {record['best_size']} neurons")
+    paper = record["error_at_paper_units"]
+    if paper is not None:
+        result += f", {100 * paper:.2f} % at the paper's {record['paper_units']}"
+    return {"sizes_file": name, "sizes_command": record["command"], "sizes_device": record["device"],
+            "sizes_jacobian": record["jacobian"], "sizes_n_train": record["n_train"], "sizes_n_test": record["n_test"],
+            "sizes_result": result}
+
+
 def dexterity_fields(p: Preset, img: Path) -> dict:
-    """The [D16] section's tables, figures and numbers: the fields of its template
-    (experiments/papers_templates/dexterity.md)."""
+    """The [D16] section's tables, figures and numbers computed in this run: the fields of its
+    template (experiments/papers_templates/dexterity.md) but the size search's
+    (:func:`size_search_fields`)."""
     t0 = time.perf_counter()
     runs = surrogate_runs(p)
     seconds = time.perf_counter() - t0
@@ -181,9 +244,11 @@ def dexterity_fields(p: Preset, img: Path) -> dict:
         kci_geometric_min=ranges["geometric"]["y_min"], kci_geometric_max=ranges["geometric"]["y_max"],
         ffbn_kci=ffbn_kci, fig_designs=fig_d, fig_training=fig_t, t4=_operations_table(runs),
         t5=_timing_table(runs, [str(b) for b in s.timing.batches]),
-        # The same numbers as data, for the summaries quoted elsewhere (README.md).
-        networks={form: {name: {"units": r.networks[name]["hidden_units"], "met_goal": r.networks[name]["met_goal"],
-                                "max_rel_test_error": r.networks[name]["max_rel_test_error"],
-                                "speedup": {b: r.networks[name]["timing"][b]["speedup"]
-                                            for b in r.networks[name]["timing"]}}
-                         for name in NETWORKS} for form, r in runs.items()})
+        rbfn_speed=_rbfn_speed(runs, [str(b) for b in s.timing.batches]),
+        # The same numbers as data, for the summaries quoted elsewhere (README.md, BENCHMARKS.md).
+        networks={form: {name: _network_summary(r.networks[name]) for name in NETWORKS} for form, r in runs.items()},
+        analytic={form: {index: {"xla_flops_per_sample": a["xla_flops_per_sample"],
+                                 "per_s": {b: t["per_second"] for b, t in a["timing"].items()}}
+                         for index, a in r.analytic.items()} for form, r in runs.items()},
+        index_ranges={form: {index: [d["y_min"], d["y_max"]] for index, d in r.datasets.items()}
+                      for form, r in runs.items()})
