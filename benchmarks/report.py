@@ -362,7 +362,26 @@ def papers() -> str:
         f"{eq['grasp/thesis']['optimal_of_20']} of 20 runs.\n")
 
 
-BLOCKS = {f.__name__: f for f in (kin_indices_cpu, kin_indices_accuracy, kin_indices_gpu, demo, docking_search,
+def docking_fitness() -> str:
+    rows = []
+    for name in ("docking_fitness_cpu.json", "docking_fitness_h100.json"):
+        d = _load(name)
+        for chol, lu in zip(d["variants"]["cholesky"], d["variants"]["lu"]):
+            rows.append([d["device"] if d["platform"] == "gpu" else f"{d['cpus']}-core CPU", str(chol["batch"]),
+                         _sci(lu["poses_per_s"]), _sci(chol["poses_per_s"]), f"{chol['poses_per_s'] / lu['poses_per_s']:.2f}×",
+                         f"{chol['dls_flops_per_pose'] / 1e6:.2f}", f"{chol['achieved_flops_per_s'] / 1e12:.3f}",
+                         f"{chol['compile_s']:.1f}"])
+    commands = " and ".join(f"`{_load(n)['command']}`" for n in ("docking_fitness_cpu.json", "docking_fitness_h100.json"))
+    gpu = _load("docking_fitness_h100.json")["variants"]["cholesky"][-1]
+    need = 5e5 * gpu["dls_flops_per_pose"]
+    return (f"{commands} (jax {_load('docking_fitness_h100.json')['jax']} on the GPU). At the largest batch the GPU "
+            f"achieves {gpu['achieved_flops_per_s'] / 1e12:.2f} TFLOP/s of IK arithmetic; 5e5 poses/s would need "
+            f"{need / 1e12:.1f} TFLOP/s.\n\n"
+            + _table(["device", "batch", "poses/s, LU solve", "poses/s, written-out Cholesky (the library's)", "speed-up",
+                      "DLS Mflop per pose (XLA's count on that backend)", "achieved TFLOP/s", "compile [s]"], rows) + "\n")
+
+
+BLOCKS = {f.__name__: f for f in (kin_indices_cpu, kin_indices_accuracy, kin_indices_gpu, demo, docking_search, docking_fitness,
                                    kin_summary, papers, hover_mjx, hover_robustness, surrogate_networks,
                                    surrogate_paper_sizes_cpu, surrogate_sizes)}
 
