@@ -185,6 +185,7 @@ def main() -> None:
     a = p.parse_args()
     res = {
         "benchmark": "hw",
+        "command": " ".join(["python benchmarks/hw.py", *sys.argv[1:]]),
         "device": f"{platform.machine()} CPU, Python {platform.python_version()}",
         "codec": codec(a.packets),
         "round_trip": round_trip(a.n),

@@ -383,7 +383,45 @@ def docking_fitness() -> str:
                       "DLS Mflop per pose (XLA's count on that backend)", "achieved TFLOP/s", "compile [s]"], rows) + "\n")
 
 
-BLOCKS = {f.__name__: f for f in (kin_indices_cpu, kin_indices_accuracy, kin_indices_gpu, demo, docking_search, docking_fitness,
+def hw_runner() -> str:
+    d = _load("hw_cpu.json")
+    c, r, st = d["codec"], d["round_trip"], d["stream"]
+    rows = [
+        ["encode POSITION packets [packets/s]", f"{c['encode_packets_per_s']:,} (table CRC-8 from the `crc` library + `cobs`)",
+         f"{c['peer_encode_packets_per_s']:,} (`crc.Calculator.checksum` per packet + `cobs`)", f"{c['encode_ratio']}×"],
+        ["decode stream, MTU-sized chunks [packets/s]", f"{c['decode_packets_per_s']:,} (`PacketReader.feed`)",
+         f"{c['peer_decode_packets_per_s']:,} (split + `cobs.decode` + `Calculator.checksum`)", f"{c['decode_ratio']}×"],
+        ["REQUEST POSITION+VELOCITY → 14 answers (14 datagrams, one packet each), simulator in its own process "
+         "(`uvms-hw sim`), UDP loopback", f"p50 {r['bravo7_sim_process']['p50_ms']} ms, p99 {r['bravo7_sim_process']['p99_ms']} ms",
+         f"bare UDP echo thread: p50 {r['peer_udp_echo']['p50_ms']} ms, p99 {r['peer_udp_echo']['p99_ms']} ms",
+         f"{r['p50_ratio']}× (p50)"],
+        ["same, simulator as a thread of the client process (as `uvms-hw run --sim`)",
+         f"p50 {r['bravo7_sim_thread']['p50_ms']} ms, p99 {r['bravo7_sim_thread']['p99_ms']} ms", "", ""],
+        [f"state stream at {st['stream_hz']} Hz from `uvms-hw sim` (heartbeat, `Bravo7.stream_state`)",
+         f"{st['streamed']['states_per_s']} states/s, {st['streamed']['packets_sent_per_state']} packets sent per state",
+         f"polling (`read_state`) as fast as it goes: {st['polled']['states_per_s']} states/s, "
+         f"{st['polled']['packets_sent_per_state']} request per state", ""],
+    ]
+    return (f"`{d['command']}` ({d['device']}; `benchmarks/results/hw_cpu.json`):\n\n"
+            + _table(["what", "project", "peer", "ratio"], rows) + "\n")
+
+
+def hw_acceptance() -> str:
+    d = _load("hw_acceptance_cpu.json")
+
+    def run(r):
+        res, sim = r["result"], r["result"].get("sim") or {}
+        return (f"{res['status']}, {res['gates']} gates, max gate error {res['max_gate_error_rad']:.5f} rad / "
+                f"{res['max_gate_error_mm']:.2f} mm, {res['duration_s']:.1f} s, {res['rejected_states']} rejected states"
+                + (f", {sim['dropped']} datagrams dropped and {sim['corrupted']} corrupted by the simulator, "
+                   f"{res['link_timeouts']} tick timeouts, {sim['limit_violations']} demands outside the limits"
+                   if sim.get("dropped") else ""))
+    clean, lossy = d["runs"]
+    return (f"`{clean['command']}` and `{lossy['command']}` (real time, the two runs side by side on the 2-core CPU; "
+            f"`benchmarks/results/hw_acceptance_cpu.json`): {run(clean)}; with loss and corruption: {run(lossy)}.\n")
+
+
+BLOCKS = {f.__name__: f for f in (hw_runner, hw_acceptance, kin_indices_cpu, kin_indices_accuracy, kin_indices_gpu, demo, docking_search, docking_fitness,
                                    kin_summary, papers, hover_mjx, hover_robustness, surrogate_networks,
                                    surrogate_paper_sizes_cpu, surrogate_sizes)}
 
