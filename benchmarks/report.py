@@ -421,7 +421,42 @@ def hw_acceptance() -> str:
             f"`benchmarks/results/hw_acceptance_cpu.json`): {run(clean)}; with loss and corruption: {run(lossy)}.\n")
 
 
-BLOCKS = {f.__name__: f for f in (hw_runner, hw_acceptance, kin_indices_cpu, kin_indices_accuracy, kin_indices_gpu, demo, docking_search, docking_fitness,
+def sched_benchmark() -> str:
+    d = _load("sched_cpu.json")
+    t, sc, lg = d["thesis_instance"], d["scoring"], d["large"]
+    rows = [["greedy (\"Dijkstra\")", f"{t['greedy']['cost']:.4f} (`{t['greedy']['path']}`)", f"{t['greedy']['median_ms']:.3g}",
+             f"{t['greedy']['thesis_ms']}"],
+            ["GRASP, 1000 iterations, one jitted call", f"{t['grasp_1000']['cost']:.4f} (optimum in "
+             f"{t['grasp_1000']['optimum_found_fraction']:.0%} of the runs)", f"{t['grasp_1000']['median_ms']:.3g}",
+             f"{t['grasp_1000']['thesis_ms']}"],
+            ["A* (thesis heuristic)", f"{t['astar']['cost']:.4f}", f"{t['astar']['median_ms']:.3g}", f"{t['astar']['thesis_ms']}"],
+            ["exact DP", f"{t['exact']['cost']:.4f}", f"{t['exact']['median_ms']:.3g}", "—"],
+            ["OR-Tools, first solution", f"{t['ortools_first_solution']['cost']:.4f}",
+             f"{t['ortools_first_solution']['time_ms']:.3g}", "—"],
+            ["OR-Tools, guided local search 1 s", f"{t['ortools_gls_1s']['cost']:.4f}", f"{t['ortools_gls_1s']['time_ms']:.4g}", "—"]]
+    big = []
+    for key, label in (("10x10_1to3_bases", "1–3 allowed bases per object"), ("10x10_all_bases", "every base allowed")):
+        g = lg[key]
+
+        def ort(name):
+            return f"{g[name]['time_ms']:.4g} ms, gap {g[name]['gap']:.1%}"
+        big.append([label, f"{g['exact']['median_ms']:.3g} ms ({g['exact']['states']:,} states)",
+                    f"{g['grasp_1000']['median_ms']:.3g} ms, {g['grasp_1000']['gap_mean']:.1%} / {g['grasp_1000']['gap_best']:.1%}",
+                    ort("ortools_first_solution"), ort("ortools_gls_1s"), ort("ortools_gls_5s")])
+    return (f"`{d['command']}` ({d['device']}; `benchmarks/results/sched_cpu.json`; medians over repeats after a "
+            f"warm-up, GRASP's one-off compile of {t['grasp_compile_s']:.1f} s excluded).\n\n"
+            "Thesis instance (eq. 4.1, 10 nodes):\n\n"
+            + _table(["solver", "cost", "time [ms]", "thesis (Table 5.5) [ms]"], rows)
+            + f"\n\nBatch scoring (`score`, {sc['batch']:,} schedules of 13 nodes, about half of them shuffled and "
+            f"invalid): {_sci(sc['schedules_per_s'])} schedules/s (best run {_sci(sc['schedules_per_s_best'])}); the "
+            f"same checks in NumPy: {_sci(sc['peer_numpy_schedules_per_s'])}/s "
+            f"({sc['schedules_per_s'] / sc['peer_numpy_schedules_per_s']:.1f}×).\n\n"
+            "10 objects / 10 bases (random costs; gaps to the exact optimum):\n\n"
+            + _table(["instance", "exact DP", "GRASP 1000 it (gap mean / best of 5)", "OR-Tools first solution",
+                      "OR-Tools GLS 1 s", "OR-Tools GLS 5 s"], big) + "\n")
+
+
+BLOCKS = {f.__name__: f for f in (sched_benchmark, hw_runner, hw_acceptance, kin_indices_cpu, kin_indices_accuracy, kin_indices_gpu, demo, docking_search, docking_fitness,
                                    kin_summary, papers, hover_mjx, hover_robustness, surrogate_networks,
                                    surrogate_paper_sizes_cpu, surrogate_sizes)}
 

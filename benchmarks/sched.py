@@ -227,6 +227,7 @@ def main() -> None:
     sc = scoring(sched.thesis_problem(), args.batch, args.repeats // 5 or 1)
     lg = large(args.repeats)
     out = {
+        "command": " ".join(["python benchmarks/sched.py", *sys.argv[1:]]),
         "device": f"{platform.machine()}, {len(__import__('os').sched_getaffinity(0))} CPUs, Python {platform.python_version()}, jax {jax.__version__}",
         "thesis_instance": t,
         "scoring": sc,
