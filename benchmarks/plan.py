@@ -23,6 +23,7 @@ import collections
 import contextlib
 import functools
 import json
+import sys
 import platform
 import time
 from pathlib import Path
@@ -149,8 +150,11 @@ def main() -> None:
             per_checker[name]["samples_checked"] = fast.n_states - n0[1]
             per_checker[name]["rejections_confirmed_by_mujoco"] = fast.n_confirmed - n0[2]
     print(json.dumps({
+        "command": " ".join(["python benchmarks/plan.py", *sys.argv[1:]]),
         "device": f"{platform.machine()} CPU, Python {platform.python_version()}",
         "planner_params": settings.planner_params,
+        "straight_shortcut": settings.straight_shortcut,
+        "budget_s": settings.budget_s,
         "ik_targets_s_incl_compile": round(ik_s, 2),
         "numba_compile_or_cache_load_s": round(numba_s, 2),
         "warmup_s": round(warmup_s, 2),

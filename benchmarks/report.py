@@ -456,7 +456,35 @@ def sched_benchmark() -> str:
                       "OR-Tools GLS 1 s", "OR-Tools GLS 5 s"], big) + "\n")
 
 
-BLOCKS = {f.__name__: f for f in (sched_benchmark, hw_runner, hw_acceptance, kin_indices_cpu, kin_indices_accuracy, kin_indices_gpu, demo, docking_search, docking_fitness,
+def plan_benchmark() -> str:
+    d = _load("plan_cpu.json")
+    rows = []
+    for checker, c in d["checkers"].items():
+        for planner, p in c["planners"].items():
+            rows.append([checker, planner, f"{p['success']}/{p['edges']}", f"{p['revalidated']}/{p['edges']}",
+                         f"{p['median_ms']:.1f}", f"{p['mean_ms']:.1f}", f"{p['max_ms']:.1f}", f"{p['graph_wall_s']:.2f}"])
+    v = d["validity_checks"]
+    checks = [["MuJoCo `is_valid(q)` (argument checks)", f"{v['mujoco_single_is_valid_per_s']:,.0f}"],
+              ["MuJoCo OMPL callback (`state_validator`)", f"{v['mujoco_ompl_callback_per_s']:,.0f}"],
+              ["MuJoCo `is_valid_batch(Q)`", f"{v['mujoco_batched_is_valid_per_s']:,.0f}"],
+              ["sphere checker, one call over all states", f"{v['spheres_one_call_per_state_per_s']:,.0f}"]]
+    sp, mj = d["checkers"]["spheres"], d["checkers"].get("mujoco")
+    steps = sp["planners"]["RRTConnect"]["steps_s"]
+    return (f"`{d['command']}` ({d['device']}; `benchmarks/results/plan_cpu.json`): {d['budget_s']:g} s per-edge budget, "
+            f"the straight-segment shortcut {'on' if d['straight_shortcut'] else 'off (each planner its own path, simplified)'}."
+            f"\n\n" + _table(["checker", "planner", "planned", "re-checked OK", "median [ms]", "mean [ms]", "max [ms]",
+                                "whole graph [s]"], rows)
+            + f"\n\nWhole task graph with all three planners: {sp['graph_all_planners_wall_s']:.2f} s with the sphere checker"
+            + (f" against {mj['graph_all_planners_wall_s']:.2f} s with MuJoCo state by state" if mj else "")
+            + f". Where RRTConnect's graph time goes (spheres, `steps_s`): "
+            + ", ".join(f"{k.replace('_', ' ')} {t:.3f} s" for k, t in steps.items())
+            + f". IK targets (one batched `kin.numeric_ik` call, compilation included, warm cache) "
+            f"{d['ik_targets_s_incl_compile']:.1f} s; the sphere checker's Numba compile or cache load "
+            f"{d['numba_compile_or_cache_load_s']:.2f} s.\n\nValidity checks (uniform random configurations, "
+            f"{v['valid_fraction_uniform']:.0%} valid):\n\n" + _table(["call", "checks/s"], checks) + "\n")
+
+
+BLOCKS = {f.__name__: f for f in (plan_benchmark, sched_benchmark, hw_runner, hw_acceptance, kin_indices_cpu, kin_indices_accuracy, kin_indices_gpu, demo, docking_search, docking_fitness,
                                    kin_summary, papers, hover_mjx, hover_robustness, surrogate_networks,
                                    surrogate_paper_sizes_cpu, surrogate_sizes)}
 
