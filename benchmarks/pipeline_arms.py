@@ -73,7 +73,8 @@ def main() -> None:
     args = p.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         runs = [run_arm(arm, args.tiny, args.capsules, Path(tmp)) for arm in args.arms]
-    print(json.dumps({"benchmark": "pipeline_arms", "preset": "tiny" if args.tiny else "demo", "stages": STAGES,
+    print(json.dumps({"benchmark": "pipeline_arms", "command": " ".join(["python benchmarks/pipeline_arms.py", *sys.argv[1:]]),
+                      "preset": "tiny" if args.tiny else "demo", "stages": STAGES,
                       "collision": "capsules" if args.capsules else "description",
                       "machine": {"cpus": os.cpu_count(), "processor": platform.processor() or platform.machine()},
                       "runs": runs}, indent=1))

@@ -472,11 +472,11 @@ def plan_benchmark() -> str:
     steps = sp["planners"]["RRTConnect"]["steps_s"]
     return (f"`{d['command']}` ({d['device']}; `benchmarks/results/plan_cpu.json`): {d['budget_s']:g} s per-edge budget, "
             f"the straight-segment shortcut {'on' if d['straight_shortcut'] else 'off (each planner its own path, simplified)'}."
-            f"\n\n" + _table(["checker", "planner", "planned", "re-checked OK", "median [ms]", "mean [ms]", "max [ms]",
+            "\n\n" + _table(["checker", "planner", "planned", "re-checked OK", "median [ms]", "mean [ms]", "max [ms]",
                                 "whole graph [s]"], rows)
             + f"\n\nWhole task graph with all three planners: {sp['graph_all_planners_wall_s']:.2f} s with the sphere checker"
             + (f" against {mj['graph_all_planners_wall_s']:.2f} s with MuJoCo state by state" if mj else "")
-            + f". Where RRTConnect's graph time goes (spheres, `steps_s`): "
+            + ". Where RRTConnect's graph time goes (spheres, `steps_s`): "
             + ", ".join(f"{k.replace('_', ' ')} {t:.3f} s" for k, t in steps.items())
             + f". IK targets (one batched `kin.numeric_ik` call, compilation included, warm cache) "
             f"{d['ik_targets_s_incl_compile']:.1f} s; the sphere checker's Numba compile or cache load "
@@ -484,7 +484,24 @@ def plan_benchmark() -> str:
             f"{v['valid_fraction_uniform']:.0%} valid):\n\n" + _table(["call", "checks/s"], checks) + "\n")
 
 
-BLOCKS = {f.__name__: f for f in (plan_benchmark, sched_benchmark, hw_runner, hw_acceptance, kin_indices_cpu, kin_indices_accuracy, kin_indices_gpu, demo, docking_search, docking_fitness,
+def pipeline_arms() -> str:
+    d = _load("pipeline_arms_cpu.json")
+    rows = []
+    for r in d["runs"]:
+        if "error" in r:
+            rows.append([r["arm"], "", "", "", "", "", "", f"{r['process_wall_s']:.1f}", "—", "—", f"stopped: {r['error']}"])
+            continue
+        t = r["stage_wall_s"]
+        rows.append([r["arm"], str(r["dof"]), *(f"{t[k]:.1f}" for k in ("docking", "plan", "schedule", "hw")),
+                     f"{r['stages_wall_s']:.1f}", f"{r['process_wall_s']:.1f}", f"{r['edges_planned']}/34", r["schedule"],
+                     f"{r['run']}, {r['gates']} gates, {r['executed_s']:.1f} s"])
+    return (f"`{d['command']}` ({d['machine']['cpus']}-core CPU; `benchmarks/results/pipeline_arms_cpu.json`; preset "
+            f"{d['preset']}, collision geometry from the {d['collision']}):\n\n"
+            + _table(["arm", "joints", "docking [s]", "plan [s]", "schedule [s]", "hw [s]", "stages [s]", "process [s]",
+                      "edges planned", "schedule", "executed (simulated)"], rows) + "\n")
+
+
+BLOCKS = {f.__name__: f for f in (pipeline_arms, plan_benchmark, sched_benchmark, hw_runner, hw_acceptance, kin_indices_cpu, kin_indices_accuracy, kin_indices_gpu, demo, docking_search, docking_fitness,
                                    kin_summary, papers, hover_mjx, hover_robustness, surrogate_networks,
                                    surrogate_paper_sizes_cpu, surrogate_sizes)}
 
