@@ -280,13 +280,22 @@ def surrogate_sizes() -> str:
 
 def surrogate_paper_sizes_cpu() -> str:
     """Networks of the paper's sizes with random weights against the analytic index, CPU."""
-    d = _load("surrogate_paper_sizes_cpu.json")
+    return _surrogate_paper_sizes("surrogate_paper_sizes_cpu.json", "2-core CPU")
+
+
+def surrogate_paper_sizes_h100() -> str:
+    """The same on the GPU (the analytic index there is the Pallas kernel of ``indices``)."""
+    return _surrogate_paper_sizes("surrogate_paper_sizes_h100.json", _load("surrogate_paper_sizes_h100.json")["device"])
+
+
+def _surrogate_paper_sizes(name: str, device: str) -> str:
+    d = _load(name)
     names = ("analytic_w", "ffbn_w", "rbfn_w", "analytic_kci", "ffbn_kci", "rbfn_kci")
     rows = [[_batch(int(b))] + [_rate(r[n]["per_second"]) + (f" ({r[n]['speedup_vs_analytic']:.1f}×)"
                                                             if "speedup_vs_analytic" in r[n] else "") for n in names]
             for b, r in d["results"].items()]
     g, u = d["grid"], d["hidden_units"]
-    return (f"`{d['command']}` (2-core CPU, jax {d['jax']}; {d['networks']}: FFBN-w {u['ffbn_w']}, FFBN-KCI "
+    return (f"`{d['command']}` ({device}, jax {d['jax']}; `benchmarks/results/{name}`; {d['networks']}: FFBN-w {u['ffbn_w']}, FFBN-KCI "
             f"{u['ffbn_kci']}, RBFN-w {u['rbfn_w']}, RBFN-KCI {u['rbfn_kci']} units; the cost of a network does not "
             "depend on its weights), evaluations/s:\n\n"
             + _table(["batch", "analytic w", "FFBN-w", "RBFN-w", "analytic KCI", "FFBN-KCI", "RBFN-KCI"], rows)
@@ -503,7 +512,7 @@ def pipeline_arms() -> str:
 
 BLOCKS = {f.__name__: f for f in (pipeline_arms, plan_benchmark, sched_benchmark, hw_runner, hw_acceptance, kin_indices_cpu, kin_indices_accuracy, kin_indices_gpu, demo, docking_search, docking_fitness,
                                    kin_summary, papers, hover_mjx, hover_robustness, surrogate_networks,
-                                   surrogate_paper_sizes_cpu, surrogate_sizes)}
+                                   surrogate_paper_sizes_cpu, surrogate_paper_sizes_h100, surrogate_sizes)}
 
 
 def render(text: str) -> str:
