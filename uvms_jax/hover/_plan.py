@@ -68,9 +68,19 @@ def docked_tool(robot: Robot, vehicle: VehicleSettings, pose, q) -> np.ndarray:
     """``(..., 3)`` where the arm holds its tool [m, world] at joint angles ``q (..., n)`` with the
     vehicle docked at ``pose = [x, y, z, ψ]`` (its base on ``vehicle``'s mount): the reference
     a hovering run is measured against."""
-    pose = np.asarray(pose, dtype=float)
-    T = frames.pose(frames.rot_z(pose[3]), pose[:3]) @ frames.rpy_pose(vehicle.mount_xyz, vehicle.mount_rpy)
+    T = _docked_base(vehicle, pose)
     return np.asarray(kin.fk(robot.chain, np.asarray(q)))[..., :3, 3] @ T[:3, :3].T + T[:3, 3]
+
+
+def _vehicle_pose(pose) -> np.ndarray:
+    """``(4, 4)`` the vehicle frame V in the world for a docking pose ``[x, y, z, ψ]`` [m, rad]."""
+    pose = np.asarray(pose, dtype=float)
+    return frames.pose(frames.rot_z(pose[3]), pose[:3])
+
+
+def _docked_base(vehicle: VehicleSettings, pose) -> np.ndarray:
+    """``(4, 4)`` the arm's base in the world with the vehicle docked at ``pose``, on its mount."""
+    return _vehicle_pose(pose) @ frames.rpy_pose(vehicle.mount_xyz, vehicle.mount_rpy)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -254,8 +264,7 @@ def follow_tool_path(robot: Robot, vehicle: VehicleSettings, q_docked, docked_po
       the tool pose within the IK tolerances.
     """
     chain = robot.chain
-    mount = frames.rpy_pose(vehicle.mount_xyz, vehicle.mount_rpy)
-    base = [frames.pose(frames.rot_z(p[3]), p[:3]) @ mount for p in np.asarray([docked_pose, pose], dtype=float)]
+    base = [_docked_base(vehicle, p) for p in (docked_pose, pose)]
     T_tool = np.linalg.solve(base[1], base[0]) @ np.asarray(kin.fk(chain, np.asarray(q_docked)), dtype=float)
     key = jax.random.key(0) if key is None else key
     # Every IK branch of the first row is followed (one per converged seed, and the docked
@@ -319,7 +328,7 @@ def _coordinated(sim: HoverSim, robot: Robot, vehicle: VehicleSettings, pose: np
     damped least squares, damping [m]), accumulated with ``gain`` and kept within the joint
     limits."""
     chain = vehicle_arm_chain(robot, vehicle)
-    T_dock = frames.pose(frames.rot_z(pose[3]), pose[:3])
+    T_dock = _vehicle_pose(pose)
     m, d = sim.model, sim.data
     site = m.site(TOOL_SITE).id
     qadr = np.array([m.jnt_qposadr[m.joint(j).id] for j in robot.joint_names])
