@@ -11,6 +11,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 import yaml
 
 from uvms_jax import evo, kin, papers
@@ -178,3 +179,21 @@ def test_size_search_sentence():
             "best_error": 0.03, "error_at_paper_units": None}
     assert dexterity.size_search_fields(rec, "f")["sizes_result"] == (
         "did not reach 2 % within 2 neurons (the run was stopped there, short of L_iter = 100); best 3.00 % at 2 neurons")
+
+
+def test_only_recomputes_the_sections_named(tmp_path, monkeypatch):
+    """``--only`` replaces the sections it computes, with their own command and device, and keeps
+    the others as recorded; a section neither computed nor recorded is refused."""
+    entry, record = _entry(), _record()
+    recomputed = {k: v for k, v in record["sections"]["docking"].items() if k not in ("command", "device")}
+    monkeypatch.setattr(entry, "fields_of", lambda name, *a: dict(recomputed, seconds=1.0))
+    monkeypatch.setattr(entry.jax.config, "update", lambda *a: None)  # keep this process's float32 default
+    with pytest.raises(SystemExit):  # nothing recorded yet: the other two sections would be lost
+        entry.main(["--only", "docking", "--out", str(tmp_path)])
+    (tmp_path / "reproduction.json").write_text(json.dumps(record), encoding="utf-8")
+    assert entry.main(["--only", "docking", "--preset", "tiny", "--out", str(tmp_path)]) == 0
+    written = json.loads((tmp_path / "reproduction.json").read_text(encoding="utf-8"))["sections"]
+    assert written["surrogate"] == record["sections"]["surrogate"] and written["thesis"] == record["sections"]["thesis"]
+    assert written["docking"]["command"].endswith("--only docking --preset tiny --out " + str(tmp_path))
+    assert written["docking"]["seconds"] == 1.0 and written["docking"]["device"]
+    assert "Computed by `python experiments/papers.py --only docking" in (tmp_path / "reproduction.md").read_text()

@@ -238,7 +238,7 @@ def dexterity_fields(p: Preset, img: Path) -> dict:
     sizes = ("uses the paper's sizes (configs/surrogate.yaml)" if not p.surrogate else
              f"shrinks the run (overrides of configs/surrogate.yaml: `{p.surrogate}`)")
     return dict(
-        seconds=seconds, cpu_count=next(iter(runs.values())).device["cpu_count"], preset=p.name, sizes=sizes,
+        seconds=seconds, preset=p.name, sizes=sizes,
         t3=_design_table(s), results=_results_table(runs),
         kci_spatial_min=ranges["spatial"]["y_min"], kci_spatial_max=ranges["spatial"]["y_max"],
         kci_geometric_min=ranges["geometric"]["y_min"], kci_geometric_max=ranges["geometric"]["y_max"],
