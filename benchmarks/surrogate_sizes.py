@@ -3,7 +3,7 @@ test error per size, on the paper's Jacobian form (spatial, eq. 6) by default.
 
 Prints one JSON object (``--out`` also rewrites it as a file after every size, so a run stopped
 early keeps the sizes it finished). The datasets and the initialisations are the ones
-``experiments/surrogate.py surrogate=spatial`` (paper sizes: 6000 training and 1000 test
+``experiments/surrogate.py`` (paper sizes: 6000 training and 1000 test
 samples) draws from the same seed: the KCI dataset from the run key's second split, FFBN-KCI's
 key folded in at its place in the settings' network list. The loop is the paper's (Fig. 6a,
 ``surrogate.design_ffbn``): sizes 1, 2, … up to L_iter, stopping at the first network whose
