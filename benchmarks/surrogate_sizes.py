@@ -12,9 +12,12 @@ units, or ``--max-hidden`` is below 25, the paper's size is trained on its own a
 initialisation from the key of that size), so the record always holds the error at 25 units.
 
     python benchmarks/surrogate_sizes.py --device gpu > benchmarks/results/surrogate_ffbn_kci_sizes_h100.json
+    # a run stopped early, continued in coarser steps (its record keeps the sizes it had):
+    python benchmarks/surrogate_sizes.py --device gpu --resume FILE --step 5 --out FILE
 
 Usage: python benchmarks/surrogate_sizes.py [--device cpu|gpu] [--jacobian spatial|geometric]
                                             [--max-hidden N] [--n-train N] [--out FILE]
+                                            [--resume FILE] [--step N]
 """
 
 from __future__ import annotations
@@ -38,6 +41,9 @@ def main() -> None:
     ap.add_argument("--max-hidden", type=int, default=None, help="L_iter (default: the settings', 100)")
     ap.add_argument("--n-train", type=int, default=None, help="training samples (default: the paper's, 6000)")
     ap.add_argument("--out", type=Path, default=None, help="also write the record here after every size")
+    ap.add_argument("--resume", type=Path, default=None,
+                    help="a record of an earlier run (same settings) to continue after its largest size")
+    ap.add_argument("--step", type=int, default=None, help="size step of the loop (default: the settings', 1)")
     args = ap.parse_args()
     os.environ["JAX_PLATFORMS"] = {"gpu": "cuda"}.get(args.device, args.device)
 
@@ -72,6 +78,8 @@ def main() -> None:
     train, test = data.split(n_train)
     data_seconds = time.perf_counter() - t0
     device = jax.devices()[0]
+    earlier = json.loads(args.resume.read_text()) if args.resume is not None else None
+    step = args.step if args.step is not None else f.hidden_step
     record = {
         "benchmark": "surrogate_sizes", "network": NETWORK,
         "command": " ".join(["python benchmarks/surrogate_sizes.py", *sys.argv[1:]]),
@@ -80,8 +88,22 @@ def main() -> None:
         "n_train": n_train, "n_test": n_test, "kci_min": float(data.y.min()), "kci_max": float(data.y.max()),
         "error_goal": f.error_goal, "max_hidden": f.max_hidden.kci, "trainer": f.trainer,
         "target_mse": f.target_mse.kci, "max_epochs": f.max_epochs, "paper_units": paper_units,
-        "data_seconds": data_seconds, "steps": [], "finished": False,
+        "data_seconds": data_seconds, "steps": [], "finished": False, "hidden_step": step,
     }
+    start, k_loop = 1, k_net
+    if earlier is not None:
+        same = ("jacobian", "n_train", "n_test", "error_goal", "trainer", "target_mse", "max_epochs")
+        if any(earlier[k] != record[k] for k in same):
+            raise SystemExit(f"--resume {args.resume}: its settings differ from this run's in "
+                             f"{[k for k in same if earlier[k] != record[k]]}")
+        # Which sizes each part of the loop tried, and in what steps, stays in the record.
+        record["steps"], record["command"] = earlier["steps"], earlier["command"] + " ; " + record["command"]
+        record["parts"] = earlier.get("parts", [{"from": 1, "step": earlier.get("hidden_step", 1)}])
+        start = earlier["largest_size_tried"] + step
+        # The step-1 loop's key of size `start` (design_ffbn splits its key once per size).
+        for _ in range(start - 1):
+            k_loop, _ = jax.random.split(k_loop)
+        record["parts"].append({"from": start, "step": step})
 
     def save(step=None, loop="design loop"):
         if step is not None:
@@ -91,7 +113,7 @@ def main() -> None:
             args.out.write_text(json.dumps(_summary(record), indent=1) + "\n")
 
     design = surrogate.design_ffbn(
-        k_net, train, test, error_goal=f.error_goal, max_hidden=f.max_hidden.kci, hidden_step=f.hidden_step,
+        k_loop, train, test, error_goal=f.error_goal, max_hidden=f.max_hidden.kci, hidden_start=start, hidden_step=step,
         trainer=f.trainer, target_mse=f.target_mse.kci, max_epochs=f.max_epochs, adam_steps=f.adam.steps,
         adam_learning_rate=f.adam.learning_rate, callback=save)
     if not any(st["size"] == paper_units for st in record["steps"]):
@@ -104,7 +126,7 @@ def main() -> None:
             trainer=f.trainer, target_mse=f.target_mse.kci, max_epochs=f.max_epochs)
         save(alone.steps[0], loop="paper size alone")
     record["finished"] = True
-    record["design_seconds"] = design.seconds
+    record["design_seconds"] = design.seconds + (earlier.get("design_seconds") or 0.0 if earlier else 0.0)
     save()
     print(json.dumps(_summary(record), indent=1))
 

@@ -124,7 +124,10 @@ def main(argv=None) -> int:
     logging.getLogger("jax").setLevel(logging.WARNING)
     jax.config.update("jax_enable_x64", True)  # float64 datasets and training of the surrogates
     p, img = PRESETS[args.preset], args.out / "img" / "papers"
-    command = " ".join(["python experiments/papers.py", *(argv if argv is not None else sys.argv[1:])])
+    # What was computed, and how; not where it was written.
+    command = " ".join(["python experiments/papers.py", f"--preset {p.name}",
+                        *([f"--only {' '.join(args.only)}"] if tuple(args.only) != SECTIONS else []),
+                        *([f"--edges {args.edges}"] if args.edges is not None else [])])
     # Sections not computed now keep their recorded run; a section missing from both is an error.
     sections = recorded_sections(args.out / "reproduction.json")
     missing = [n for n in SECTIONS if n not in args.only and n not in sections]
