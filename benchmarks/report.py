@@ -232,7 +232,7 @@ def surrogate_networks() -> str:
     from uvms_jax.papers import D16_NETWORKS
 
     rec = _reproduction()
-    dx, foot = rec["sections"]["surrogate"], rec["footer"]
+    dx = rec["sections"]["surrogate"]
     batches = list(dx["networks"]["geometric"]["ffbn_w"]["per_s"])
     label = {"ffbn_w": "FFBN-w", "ffbn_kci": "FFBN-KCI", "rbfn_w": "RBFN-w", "rbfn_kci": "RBFN-KCI"}
     forms = {"geometric": "geometric J (ours)", "spatial": "spatial J (paper eq. 6)"}
@@ -251,8 +251,7 @@ def surrogate_networks() -> str:
     paper = (f"FFBN-w {D16_NETWORKS['ffbn_w']['hidden_units']}, FFBN-KCI {D16_NETWORKS['ffbn_kci']['hidden_units']}, "
              f"RBFN-w {D16_NETWORKS['rbfn_w']['hidden_units']} units, RBFN-KCI spread "
              f"{D16_NETWORKS['rbfn_kci']['spread']}, {D16_NETWORKS['rbfn_kci']['hidden_units']} units")
-    where = f"{dx['cpu_count']}-core CPU" if foot["platform"] == "cpu" else foot["device_kind"]
-    return (f"`make papers` (`python experiments/papers.py`, preset \"{foot['preset']}\"; {where}), "
+    return (f"`make papers` (`{dx['command']}`; {dx['device']}), "
             f"recorded in docs/reproduction.json; its §2 has the "
             f"design parameters. Evaluations/s at {' and '.join(_batch(int(b)) for b in batches)} inputs, speed-up "
             "over the analytic index of the same quantity and form in brackets; XLA flops per sample from XLA's cost "
@@ -269,7 +268,8 @@ def surrogate_sizes() -> str:
     """FFBN-KCI per Jacobian form (docs/theory.md): ``make papers``' run and the size search at the
     paper's data size (its result file, quoted through docs/reproduction.json)."""
     rec = _reproduction()
-    dx, preset = rec["sections"]["surrogate"], rec["footer"]["preset"]
+    dx = rec["sections"]["surrogate"]
+    preset = dx["preset"]
     geo, kci = dx["networks"]["geometric"]["ffbn_kci"], dx["index_ranges"]["geometric"]["kci"]
     return (f"`make papers` (preset \"{preset}\"): with the geometric Jacobian KCI spans {kci[0]:.2f}–{kci[1]:.2f} and "
             f"FFBN-KCI {'meets' if geo['met_goal'] else 'misses'} the 2 % goal with {geo['units']} units "
@@ -357,7 +357,7 @@ def papers() -> str:
         f"FFBN-KCI {net('ffbn_kci')}; RBFN-w {net('rbfn_w')} (paper: {D16_NETWORKS['ffbn_w']['hidden_units']}, "
         f"{D16_NETWORKS['ffbn_kci']['hidden_units']}, {D16_NETWORKS['rbfn_w']['hidden_units']} units; all < 2 %); "
         f"against the project's fastest\n  analytic path (the fused `indices.manipulability_of` / `kci_of` kernel, "
-        f"same run,\n  preset \"{_reproduction()['footer']['preset']}\") the FFBN is "
+        f"same run,\n  preset \"{dx['preset']}\") the FFBN is "
         f"{nets['ffbn_w']['speedup'][big]:.0f}× faster for w and "
         f"{nets['ffbn_kci']['speedup'][big]:.0f}× for KCI at {_batch(int(big))} inputs on the CPU, RBFN-w "
         f"{nets['rbfn_w']['speedup'][big]:.1f}× and RBFN-KCI {nets['rbfn_kci']['speedup'][big]:.1f}×\n  (the paper's "

@@ -11,7 +11,7 @@ maximum relative test error (eq. 21) is below E = 2 %. Where it stops before the
 units, or ``--max-hidden`` is below 25, the paper's size is trained on its own as well (a fresh
 initialisation from the key of that size), so the record always holds the error at 25 units.
 
-    python benchmarks/surrogate_sizes.py --device gpu > benchmarks/results/surrogate_ffbn_kci_sizes_h100.json
+    python benchmarks/surrogate_sizes.py --device gpu > benchmarks/results/surrogate_ffbn_kci_sizes_gpu.json
     # a run stopped early, continued in coarser steps (its record keeps the sizes it had):
     python benchmarks/surrogate_sizes.py --device gpu --resume FILE --step 5 --out FILE
 
@@ -91,6 +91,7 @@ def main() -> None:
         "data_seconds": data_seconds, "steps": [], "finished": False, "hidden_step": step,
     }
     start, k_loop = 1, k_net
+    record["parts"] = [{"from": 1, "step": step, "device": device.device_kind}]
     if earlier is not None:
         same = ("jacobian", "n_train", "n_test", "error_goal", "trainer", "target_mse", "max_epochs")
         if any(earlier[k] != record[k] for k in same):
@@ -98,12 +99,13 @@ def main() -> None:
                              f"{[k for k in same if earlier[k] != record[k]]}")
         # Which sizes each part of the loop tried, and in what steps, stays in the record.
         record["steps"], record["command"] = earlier["steps"], earlier["command"] + " ; " + record["command"]
-        record["parts"] = earlier.get("parts", [{"from": 1, "step": earlier.get("hidden_step", 1)}])
+        record["parts"] = earlier.get("parts", [{"from": 1, "step": earlier.get("hidden_step", 1),
+                                                 "device": earlier["device"]}])
         start = earlier["largest_size_tried"] + step
         # The step-1 loop's key of size `start` (design_ffbn splits its key once per size).
         for _ in range(start - 1):
             k_loop, _ = jax.random.split(k_loop)
-        record["parts"].append({"from": start, "step": step})
+        record["parts"].append({"from": start, "step": step, "device": device.device_kind})
 
     def save(step=None, loop="design loop"):
         if step is not None:

@@ -49,7 +49,7 @@ TEMPLATES = Path(__file__).resolve().parent / "papers_templates"
 SECTIONS = ("docking", "surrogate", "thesis")
 #: The FFBN-KCI size search at the paper's data size that the [D16] section quotes
 #: (`benchmarks/surrogate_sizes.py`; too slow for a CPU run of this script).
-SIZE_SEARCH = ROOT / "benchmarks" / "results" / "surrogate_ffbn_kci_sizes_h100.json"
+SIZE_SEARCH = ROOT / "benchmarks" / "results" / "surrogate_ffbn_kci_sizes_gpu.json"
 
 
 def render(name: str, **fields) -> str:

@@ -119,7 +119,7 @@ def test_instances_from_an_edges_csv(tmp_path):
 def test_returns_to_the_start():
     assert thesis._returns("0-4-8-0-3-7-0-1-5-0-2-6-9") == 3
     assert thesis._returns("0-4-8-3-7-2-6-1-5-9") == 0
-    assert thesis._and(["a"]) == "a" and thesis._and(["a", "b", "c"]) == "a, b and c" and thesis._and([]) == ""
+    assert papers.join_and(["a"]) == "a" and papers.join_and(["a", "b", "c"]) == "a, b and c" and papers.join_and([]) == ""
 
 
 def test_templates_and_entry_point():

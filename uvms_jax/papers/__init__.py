@@ -30,3 +30,4 @@ from uvms_jax.papers._data import T22_SCENARIO_TABLES
 from uvms_jax.papers._data import T22_TABLES
 from uvms_jax.papers._preset import PRESETS
 from uvms_jax.papers._preset import Preset
+from uvms_jax.papers._preset import join_and

@@ -54,6 +54,11 @@ PRESETS = {
 }
 
 
+def join_and(words: list[str]) -> str:
+    """``a``, ``a and b``, ``a, b and c`` (the document's lists in prose)."""
+    return " and ".join([", ".join(words[:-1]), words[-1]]) if len(words) > 1 else "".join(words)
+
+
 def save_figure(fig, img: Path, name: str) -> str:
     """Save a figure as a small PNG ``img/name``; returns its path relative to docs/ (the
     document links ``img/papers/<name>``)."""

@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import logging
+import math
 import time
 from pathlib import Path
 
@@ -209,14 +210,29 @@ def size_search_fields(record: dict, name: str) -> dict:
         tried, limit = record["largest_size_tried"], record["max_hidden"]
         stopped = ("" if record["finished"] or tried >= limit
                    else f" (the run was stopped there, short of L_iter = {limit})")
-        result = (f"did not reach {goal:g} % within {tried} neurons{stopped}; best {100 * record['best_error']:.2f} % "
-                  f"at {record['best_size']} neurons")
+        result = (f"did not reach {goal:g} % within {tried} neurons{stopped}{_parts(record)}; "
+                  f"best {100 * record['best_error']:.2f} % at {record['best_size']} neurons")
     paper = record["error_at_paper_units"]
     if paper is not None:
         result += f", {100 * paper:.2f} % at the paper's {record['paper_units']}"
-    return {"sizes_file": name, "sizes_command": record["command"], "sizes_device": record["device"],
+    devices = list(dict.fromkeys(part["device"] for part in record.get("parts", [record])))
+    return {"sizes_file": name, "sizes_command": record["command"], "sizes_device": ", then ".join(devices),
             "sizes_jacobian": record["jacobian"], "sizes_n_train": record["n_train"], "sizes_n_test": record["n_test"],
             "sizes_result": result}
+
+
+def _parts(record: dict) -> str:
+    """Which sizes a search resumed in coarser steps tried, e.g. " (sizes 1–49, then 54–99 in
+    steps of 5)"; "" for one loop in steps of 1."""
+    parts = record.get("parts")
+    if not parts or len(parts) == 1 and parts[0]["step"] == 1:
+        return ""
+    loop = [st["size"] for st in record["steps"] if st["loop"] == "design loop"]
+    spans = []
+    for part, end in zip(parts, [p["from"] for p in parts[1:]] + [math.inf]):
+        last = max(s for s in loop if part["from"] <= s < end)
+        spans.append(f"{part['from']}–{last}" + (f" in steps of {part['step']}" if part["step"] > 1 else ""))
+    return " (sizes " + ", then ".join(spans) + ")"
 
 
 def dexterity_fields(p: Preset, img: Path) -> dict:

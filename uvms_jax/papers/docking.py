@@ -21,7 +21,7 @@ import numpy as np
 from uvms_jax import evo, indices, kin, progress
 from uvms_jax.papers._data import D11_ARM_LENGTHS, D11_BLOCK_SIZE, D11_ILL_PLACED_POSE, D11_P_BP, D11_P_INIT
 from uvms_jax.papers._data import D11_TABLE3, D11_TABLE4, D11_TASK_SIZE
-from uvms_jax.papers._preset import Preset, save_figure
+from uvms_jax.papers._preset import Preset, join_and, save_figure
 from uvms_jax.pipeline import md_table
 from uvms_jax.plotting import pyplot
 
@@ -53,6 +53,8 @@ READINGS = (
     Reading("links l1 = l2 = 0.5 m, 6 × 6", lengths=(0.1, 0.5, 0.5)),
     Reading("task area 0.2 m, 6 × 6", task_size=0.2),
 )
+#: A reading gives M_a "of the paper's size" from this share of the paper's smallest M_a (Table 3) up.
+PAPER_SIZED = 0.75
 
 #: Corner of the task area each Table 4 configuration reaches (nearest corner of its wrist
 #: centre when θ2, θ3, θ5 are mirrored, see the section): index into ``control_points(…, 2)``,
@@ -292,11 +294,12 @@ def docking_fields(p: Preset, img: Path) -> dict:
 
     # The bound and the readings.
     bound, q_bound = w_bound(p)
-    r_rows = []
+    r_rows, paper_sized = [], []
     for r in progress.bar(READINGS, desc="docking readings", unit="reading"):
-        at_paper = area_m(r, D11_TABLE3[:, :4])
-        r_rows.append([r.label, f"{at_paper[0]:.4f}", f"{at_paper.min():.3f}–{at_paper.max():.3f}",
-                       f"{float(area_m(r, ours[None])[0]):.4f}"])
+        at_paper, at_ours = area_m(r, D11_TABLE3[:, :4]), float(area_m(r, ours[None])[0])
+        r_rows.append([r.label, f"{at_paper[0]:.4f}", f"{at_paper.min():.3f}–{at_paper.max():.3f}", f"{at_ours:.4f}"])
+        if max(at_paper.max(), at_ours) >= PAPER_SIZED * D11_TABLE3[:, 5].min():
+            paper_sized.append(f"{r.label} ({at_ours:.3f} at our pose, {at_paper.max():.3f} at the paper's)")
     readings = md_table(["reading", "M_a at paper run 1", "M_a at paper runs 1–7", "M_a at our pose"], r_rows)
 
     fig, zero = plot_wmax_maps(p, {"paper run 1 (Fig. 9)": D11_TABLE3[0, :4],
@@ -319,4 +322,5 @@ def docking_fields(p: Preset, img: Path) -> dict:
         table4=table4, m_above=facts["p"][("as given", "M")][2] - shoulder_z,
         m_below=abs(facts["p"][("θ2, θ3, θ5 negated", "M")][2] - shoulder_z),
         sum235_m=facts["sum235"][2], sum235_n=facts["sum235"][3], lm=facts["LM"], mn=facts["MN"],
-        readings=readings, fig=fig, map_n=p.map_n, zero_run1=100 * z1, zero_ill=100 * zill, zero_ours=100 * zours)
+        readings=readings, paper_sized=join_and(paper_sized) or "no reading",
+        paper_sized_min=PAPER_SIZED * D11_TABLE3[:, 5].min(), fig=fig, map_n=p.map_n, zero_run1=100 * z1, zero_ill=100 * zill, zero_ours=100 * zours)

@@ -18,7 +18,7 @@ import numpy as np
 
 from uvms_jax import progress
 from uvms_jax.papers._data import T22_PLANNER_TABLES, T22_SCENARIO_TABLES, T22_TABLES
-from uvms_jax.papers._preset import Preset, save_figure
+from uvms_jax.papers._preset import Preset, join_and, save_figure
 from uvms_jax.pipeline import md_table
 from uvms_jax.plotting import pyplot
 
@@ -190,11 +190,6 @@ def thesis_table(table: str, runs: dict, normalised=None) -> str:
     return md_table(head, rows)
 
 
-def _and(words: list[str]) -> str:
-    """``a``, ``a and b``, ``a, b and c``."""
-    return " and ".join([", ".join(words[:-1]), words[-1]]) if len(words) > 1 else "".join(words)
-
-
 def _returns(path: str) -> int:
     """How often a schedule goes back to the start node 0 between deliveries."""
     return path.split("-")[1:-1].count("0")
@@ -333,7 +328,7 @@ def why_fields(instances: dict[str, Instance], runs: dict) -> dict:
         why_levels=md_table(["metric", "ours: median N over all moves",
                              f"ours: mean N along our optimum ({len(best) - 1} moves)",
                              f"thesis: mean N along its A* path (Table 5.2, {a_star_moves} moves)"], rows),
-        why_dear=_and(dear) or "no metric",
+        why_dear=join_and(dear) or "no metric",
         why_thesis_best=min(r[4] for r in T22_TABLES[table]),
     )
 
