@@ -21,6 +21,7 @@ import json
 import os
 import platform
 import statistics
+import sys
 import time
 from pathlib import Path
 
@@ -80,6 +81,8 @@ def main() -> None:
     # IK targets per evaluation: control points (closed form), or tool poses × seeds (numerical).
     n_points = int(problem.T_world_tool.shape[0] * problem.seeds.shape[0]) if arm else int(problem.p_control.shape[0])
     report = {
+        "benchmark": "docking",
+        "command": " ".join(["python benchmarks/docking.py", *sys.argv[1:]]),
         "device": str(jax.devices()[0]),
         "device_kind": jax.devices()[0].device_kind,
         "platform": platform.machine(),
