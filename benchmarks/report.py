@@ -1,4 +1,4 @@
-"""The quoted figures of README.md, BENCHMARKS.md and docs/theory.md, generated from
+"""The quoted figures of README.md, BENCHMARKS.md, docs/theory.md and docs/docking.md, generated from
 benchmarks/results/ and docs/reproduction.json.
 
 Each generated block sits between ``<!-- report:NAME -->`` and ``<!-- /report:NAME -->`` in one
@@ -16,13 +16,14 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import re
 import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 RESULTS = ROOT / "benchmarks" / "results"
-DOCUMENTS = (ROOT / "README.md", ROOT / "BENCHMARKS.md", ROOT / "docs" / "theory.md")
+DOCUMENTS = (ROOT / "README.md", ROOT / "BENCHMARKS.md", ROOT / "docs" / "theory.md", ROOT / "docs" / "docking.md")
 BLOCK = re.compile(r"(<!-- report:(?P<name>[a-z0-9_]+) -->\n)(?P<body>.*?)(<!-- /report:(?P=name) -->)", re.S)
 
 
@@ -392,6 +393,86 @@ def docking_fitness() -> str:
                       "DLS Mflop per pose (XLA's count on that backend)", "achieved TFLOP/s", "compile [s]"], rows) + "\n")
 
 
+def _int(n: float) -> str:
+    """``2 430 252``: a whole number with spaces between thousands."""
+    return f"{round(n):,}".replace(",", " ")
+
+
+def _range(values, fmt: str = ".4f") -> str:
+    lo, hi = min(values), max(values)
+    return f"{lo:{fmt}}" if f"{lo:{fmt}}" == f"{hi:{fmt}}" else f"{lo:{fmt}}–{hi:{fmt}}"
+
+
+def docking_ga() -> str:
+    """The paper's docking problem: the GA batch, the dense grid and CMA-ES (evosax) on the CPU and
+    on a GPU, from ``benchmarks/docking.py``'s result files."""
+    cpu, gpu = _load("docking_cpu.json"), _load("docking_h200.json")
+
+    def ga_row(d):
+        g = d["ga"]
+        return (f"GA, {g['runs']} run{'s' * (g['runs'] > 1)} × {_int(g['population'])} in one call "
+                f"({_range(g['generations'], 'd')} generations; {_int(sum(g['evaluations']))} evaluations"
+                + (f", fitness cache of {g['eval_chunk']}" if g["eval_chunk"] else ", no cache") + ")")
+
+    def t(part):
+        return f"{part['best_s']:.3g} s ({part['median_s']:.3g} s)" if "median_s" in part else f"{part['best_s']:.3g} s"
+
+    def grid_row(d):
+        g = d["grid"]
+        return (f"grid search, {_int(g['candidates'])} candidates ({' × '.join(map(str, g['counts']))}), "
+                f"chunks of {_int(g['chunk'])}")
+
+    def cma_row(d):
+        c = d["cmaes"]
+        return f"CMA-ES (evosax), {c['runs']} runs × {_int(c['population'])} × {c['generations']} generations"
+
+    rows = []
+    for d, label in ((cpu, "2-core CPU"), (gpu, gpu["device_kind"])):
+        g, gr, c = d["ga"], d["grid"], d["cmaes"]
+        rows += [[label, ga_row(d), t(g), f"{_rate(g['evaluations_per_s'])} evaluations/s", f"{g['compile_and_first_s']:.0f} s"],
+                 [label, grid_row(d), t(gr), f"{_rate(gr['candidates_per_s'])} candidates/s",
+                  f"{gr['compile_and_tiny_grid_s']:.0f} s"],
+                 [label, cma_row(d), t(c), f"{_rate(c['evaluations_per_s'])} evaluations/s", f"{c['compile_and_first_s']:.0f} s"]]
+    ratios = [f / cpu["grid"]["best_fitness"] for f in cpu["ga"]["best_fitness"]]
+    return (f"Commands: `{cpu['command']}` (2-core {cpu['platform']} CPU, jax {cpu['jax']}, load average "
+            f"{cpu['load_average_start'][0]:.1f} at the start) and `{gpu['command']}` ({gpu['device_kind']}, jax {gpu['jax']}); "
+            f"files `benchmarks/results/docking_cpu.json`, `docking_h200.json`. Times after compilation, best of the "
+            "repeats (median in brackets).\n\n"
+            + _table(["device", "what", "time", "rate", "compile + first call"], rows)
+            + f"\n\nGA against CMA-ES, evaluations/s: {cpu['ga_over_cmaes_evaluations_per_s']:.2f}× on the CPU, "
+              f"{gpu['ga_over_cmaes_evaluations_per_s']:.2f}× on the GPU. On the CPU the {cpu['ga']['runs']} GA runs reach "
+              f"{_range(ratios, '.3f')} of the {_int(cpu['grid']['candidates'])}-candidate grid's optimum "
+              f"{cpu['grid']['best_fitness']:.4f} ({sum(r >= 0.99 for r in ratios)} of {len(ratios)} ≥ 0.99); "
+              f"CMA-ES's best {max(cpu['cmaes']['best_fitness']):.4f}. The paper's 1e8-candidate grid takes "
+              f"{gpu['grid']['best_s']:.2f} s on the {gpu['device_kind']}.\n")
+
+
+def docking_panel() -> str:
+    """The Bravo 7 docked beside a panel (numerical IK), from ``experiments/docking.py
+    docking/preset=bravo7``'s outputs on a GPU."""
+    d = _load("docking_panel_h200.json")
+    s, g = d["summary"], d["grid_optimum"]
+    b = d["best_pose"]
+    p = b["pose"]
+    w = [t["w"] for t in b["targets"] if t["reached"]]
+    return (f"{d['device_kind']}, jax {d['jax']}, float32, `{d['command']}` (`benchmarks/results/docking_panel_h200.json`): "
+            f"the 7 GA runs in one call {s['ga_batch_seconds']:.1f} s after compilation "
+            f"({s['ga_compile_and_first_batch_seconds']:.0f} s with it), {_range(s['ga_generations'], 'd')} generations, "
+            f"{_int(sum(s['ga_evaluations']))} evaluations, **{_int(s['ga_evaluations_per_s'])} evaluations/s**; the grid's "
+            f"{_int(g['candidates'])} candidates ({' × '.join(map(str, g['counts']))}) {g['seconds']:.0f} s "
+            f"({_int(s['grid_candidates_per_s'])} candidates/s), its {len(g['refined']['stages'])} zoom stages "
+            f"({_int(g['refined']['candidates'])} candidates) {g['refined']['seconds']:.0f} s.\n\n"
+            + _table(["reference", "fitness", "GA / reference, 7 runs", "runs ≥ 0.99"],
+                     [[f"grid {' × '.join(map(str, g['counts']))}", f"{g['fitness']:.4f}",
+                       ", ".join(f"{r:.3f}" for r in s["ga_ratio_to_grid"]), str(s["ga_runs_within_0.99_of_grid"])],
+                      [f"grid + {len(g['refined']['stages'])} zoom stages", f"{g['refined']['fitness']:.4f}",
+                       ", ".join(f"{r:.3f}" for r in s["ga_ratio_to_refined_grid"]),
+                       str(s["ga_runs_within_0.99_of_refined_grid"])]])
+            + f"\n\nThe chosen pose ({b['source']}), x = {p['x']:.3f} m, y = {p['y']:.3f} m, z = {p['z']:.3f} m, "
+              f"ψ = {math.degrees(p['psi']):.1f}°, reaches {len(w)} of {len(b['targets'])} panel poses with w "
+              f"{min(w):.4f}–{max(w):.4f} (M_a = {b['Ma']:.4f}).\n")
+
+
 def hw_runner() -> str:
     d = _load("hw_cpu.json")
     c, r, st = d["codec"], d["round_trip"], d["stream"]
@@ -510,7 +591,7 @@ def pipeline_arms() -> str:
                       "edges planned", "schedule", "executed (simulated)"], rows) + "\n")
 
 
-BLOCKS = {f.__name__: f for f in (pipeline_arms, plan_benchmark, sched_benchmark, hw_runner, hw_acceptance, kin_indices_cpu, kin_indices_accuracy, kin_indices_gpu, demo, docking_search, docking_fitness,
+BLOCKS = {f.__name__: f for f in (docking_ga, docking_panel, pipeline_arms, plan_benchmark, sched_benchmark, hw_runner, hw_acceptance, kin_indices_cpu, kin_indices_accuracy, kin_indices_gpu, demo, docking_search, docking_fitness,
                                    kin_summary, papers, hover_mjx, hover_robustness, surrogate_networks,
                                    surrogate_paper_sizes_cpu, surrogate_paper_sizes_h100, surrogate_sizes)}
 

@@ -1,4 +1,4 @@
-"""README.md and BENCHMARKS.md quote their generated figures as written from benchmarks/results/
+"""README.md, BENCHMARKS.md and docs/ quote their generated figures as written from benchmarks/results/
 (benchmarks/report.py)."""
 
 import importlib.util
