@@ -306,6 +306,31 @@ def _surrogate_paper_sizes(name: str, device: str) -> str:
               f"({g['ffbn_w_from_grid_index']['speedup_vs_analytic']:.1f}×).\n")
 
 
+#: The H100 SXM's memory bandwidth, its datasheet figure [B/s].
+H100_BANDWIDTH = 3.35e12
+
+
+def surrogate_roofline() -> str:
+    """Where FFBN-w and the analytic w sit against the H100's memory bandwidth, from the
+    paper-size run on it (``surrogate_paper_sizes_h100.json``)."""
+    d = _load("surrogate_paper_sizes_h100.json")
+    g = d["grid"]
+    stored, analytic, index = (g[k]["per_second"] for k in ("ffbn_w_stored", "analytic_w_stored", "ffbn_w_from_grid_index"))
+    # A stored sample is a row of 12 float32 joints in and one float32 out; from a grid index, an
+    # int32 index in and the float32 out.
+    row, from_index = 12 * 4 + 4, 4 + 4
+    return (f"Reading (roofline, the same run): from a stored batch of {_batch(g['points'])} FFBN-w reaches "
+            f"{_rate(stored)}/s, {stored / analytic:.1f}× the analytic w: each sample moves a {row - 4}-byte row of "
+            f"joints in and 4 bytes out, {stored * row / 1e12:.1f} TB/s, {100 * stored * row / H100_BANDWIDTH:.0f} % of "
+            f"the H100's {H100_BANDWIDTH / 1e12:.2f} TB/s. That is near the ceiling for any evaluator of a stored "
+            f"12-joint float32 batch, and the analytic kernel, which keeps its few thousand operations per sample in "
+            f"registers and is compute-bound at {_rate(analytic)}/s, sits {stored / analytic:.1f}× below it: on stored "
+            f"configurations no network gets much further. With the configuration made in the program "
+            f"({from_index} bytes per sample, {index * from_index / 1e12:.1f} TB/s at {_rate(index)}/s) the bound is the "
+            f"network's own arithmetic, which grows with its units: the paper's {d['hidden_units']['ffbn_w']} units "
+            f"reach {index / analytic:.1f}× the analytic w.\n")
+
+
 def kin_summary() -> str:
     """The kinematics line of README.md's results, from the indices benchmark's files."""
     cpu = next(r for r in _load("kin_indices_uvms12_cpu.json")["results"] if r["batch"] == 100000)
@@ -591,7 +616,7 @@ def pipeline_arms() -> str:
                       "edges planned", "schedule", "executed (simulated)"], rows) + "\n")
 
 
-BLOCKS = {f.__name__: f for f in (docking_ga, docking_panel, pipeline_arms, plan_benchmark, sched_benchmark, hw_runner, hw_acceptance, kin_indices_cpu, kin_indices_accuracy, kin_indices_gpu, demo, docking_search, docking_fitness,
+BLOCKS = {f.__name__: f for f in (surrogate_roofline, docking_ga, docking_panel, pipeline_arms, plan_benchmark, sched_benchmark, hw_runner, hw_acceptance, kin_indices_cpu, kin_indices_accuracy, kin_indices_gpu, demo, docking_search, docking_fitness,
                                    kin_summary, papers, hover_mjx, hover_robustness, surrogate_networks,
                                    surrogate_paper_sizes_cpu, surrogate_paper_sizes_h100, surrogate_sizes)}
 
