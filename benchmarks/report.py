@@ -331,6 +331,22 @@ def surrogate_roofline() -> str:
             f"reach {index / analytic:.1f}× the analytic w.\n")
 
 
+def scale_out() -> str:
+    """The docking grid on one device against all local devices (``benchmarks/shard.py``), one
+    row per result file ``shard_*.json``."""
+    rows = []
+    for f in sorted(RESULTS.glob("shard_*.json")):
+        d = json.loads(f.read_text())
+        n = len(d["devices"])
+        where = (f"{n} fake devices of a 2-core CPU (API check only)" if d["device_kind"] == "cpu"
+                 else f"{n}× {d['device_kind']} (one host)")
+        rows.append([f"{where}, jax {d['jax']}", f"`{d['command']}`", _batch(d["candidates"]),
+                     f"{d['single_s']:.3g} s ({_rate(d['single_per_s'])}/s)",
+                     f"{d['sharded_s']:.3g} s ({_rate(d['sharded_per_s'])}/s)", f"{d['speedup']:.2f}×",
+                     "yes" if d["same_optimum"] else "**no**"])
+    return _table(["devices", "command", "candidates", "single device", "sharded", "speed-up", "same optimum"], rows) + "\n"
+
+
 def kin_summary() -> str:
     """The kinematics line of README.md's results, from the indices benchmark's files."""
     cpu = next(r for r in _load("kin_indices_uvms12_cpu.json")["results"] if r["batch"] == 100000)
@@ -616,7 +632,7 @@ def pipeline_arms() -> str:
                       "edges planned", "schedule", "executed (simulated)"], rows) + "\n")
 
 
-BLOCKS = {f.__name__: f for f in (surrogate_roofline, docking_ga, docking_panel, pipeline_arms, plan_benchmark, sched_benchmark, hw_runner, hw_acceptance, kin_indices_cpu, kin_indices_accuracy, kin_indices_gpu, demo, docking_search, docking_fitness,
+BLOCKS = {f.__name__: f for f in (scale_out, surrogate_roofline, docking_ga, docking_panel, pipeline_arms, plan_benchmark, sched_benchmark, hw_runner, hw_acceptance, kin_indices_cpu, kin_indices_accuracy, kin_indices_gpu, demo, docking_search, docking_fitness,
                                    kin_summary, papers, hover_mjx, hover_robustness, surrogate_networks,
                                    surrogate_paper_sizes_cpu, surrogate_paper_sizes_h100, surrogate_sizes)}
 

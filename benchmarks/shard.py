@@ -4,12 +4,15 @@ Prints one JSON object: candidates, seconds and candidates/s for the single-devi
 sharded search, whether both found the same optimum, and the device list.
 
 Usage: python benchmarks/shard.py [--counts 64,64,16,64] [--chunk 1048576]
+       XLA_FLAGS=--xla_force_host_platform_device_count=2 python benchmarks/shard.py --counts 8,8,4,8   # CPU API check
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
+import sys
 import time
 from pathlib import Path
 
@@ -45,7 +48,10 @@ def main() -> None:
     n = single.n_candidates
     print(json.dumps({
         "benchmark": "shard_grid",
+        "command": " ".join([*(["XLA_FLAGS=" + os.environ["XLA_FLAGS"]] if "XLA_FLAGS" in os.environ else []),
+                             "python benchmarks/shard.py", *sys.argv[1:]]),
         "devices": [str(d) for d in jax.local_devices()],
+        "device_kind": jax.local_devices()[0].device_kind, "jax": jax.__version__, "chunk": args.chunk,
         "candidates": n,
         "single_s": t_single, "single_per_s": n / t_single,
         "sharded_s": t_sharded, "sharded_per_s": n / t_sharded,
