@@ -347,6 +347,33 @@ def scale_out() -> str:
     return _table(["devices", "command", "candidates", "single device", "sharded", "speed-up", "same optimum"], rows) + "\n"
 
 
+#: The H100 and H200 issue 132 SMs × 128 FP32 lanes at 1.98 GHz (datasheet boost clock) [instructions/s].
+HOPPER_FP32 = 132 * 128 * 1.98e9
+#: The H200's memory bandwidth, its datasheet figure [B/s].
+H200_BANDWIDTH = 4.8e12
+
+
+def kin_roofline() -> str:
+    """Where the GPU kernel of w sits against the H200's ceilings: the expression's operation
+    count (``kin_operations_uvms12.json``) and the kernel's rate (``kin_indices_uvms12_h200.json``)."""
+    ops = _load("kin_operations_uvms12.json")["indices"]["w"]["arithmetic"]
+    big = max(_load("kin_indices_uvms12_h200.json")["results"], key=lambda r: r["batch"])
+    rate = big["uvms_jax_w_per_s"]
+    adds = ops["add"] + ops["sub"]
+    # A multiply-add fuses into one instruction, so the expression needs at least as many FP32
+    # instructions as its larger kind; sin, cos and square roots cost more and are left out.
+    instructions = max(ops["mul"], adds)
+    compute, memory = HOPPER_FP32 / instructions, H200_BANDWIDTH / (12 * 4 + 4)
+    return (f"Roofline (w, UVMS-12, float32; `benchmarks/results/kin_operations_uvms12.json`, written by "
+            f"`python benchmarks/kin_operations.py`): the traced expression has {ops['mul']} multiplies, {adds} adds "
+            f"and subtractions, {ops['sin']} sin + {ops['cos']} cos, {ops['sqrt']} square roots and {ops['div']} "
+            f"divisions, so at least {instructions} FP32 instructions once multiply-adds fuse. The H200 issues "
+            f"132 SMs × 128 lanes × 1.98 GHz = {_rate(HOPPER_FP32)} FP32 instructions/s: a compute ceiling near "
+            f"**{_rate(compute)} w/s**; memory moves 52 B per evaluation (12 joint values in, w out), a bandwidth "
+            f"ceiling near **{_rate(memory)} w/s** at its {H200_BANDWIDTH / 1e12:.1f} TB/s. At {_batch(big['batch'])} the "
+            f"kernel's {_rate(rate)} w/s is {100 * rate / compute:.0f} % of the compute ceiling, so it is compute-bound.\n")
+
+
 def kin_summary() -> str:
     """The kinematics line of README.md's results, from the indices benchmark's files."""
     cpu = next(r for r in _load("kin_indices_uvms12_cpu.json")["results"] if r["batch"] == 100000)
@@ -632,7 +659,7 @@ def pipeline_arms() -> str:
                       "edges planned", "schedule", "executed (simulated)"], rows) + "\n")
 
 
-BLOCKS = {f.__name__: f for f in (scale_out, surrogate_roofline, docking_ga, docking_panel, pipeline_arms, plan_benchmark, sched_benchmark, hw_runner, hw_acceptance, kin_indices_cpu, kin_indices_accuracy, kin_indices_gpu, demo, docking_search, docking_fitness,
+BLOCKS = {f.__name__: f for f in (kin_roofline, scale_out, surrogate_roofline, docking_ga, docking_panel, pipeline_arms, plan_benchmark, sched_benchmark, hw_runner, hw_acceptance, kin_indices_cpu, kin_indices_accuracy, kin_indices_gpu, demo, docking_search, docking_fitness,
                                    kin_summary, papers, hover_mjx, hover_robustness, surrogate_networks,
                                    surrogate_paper_sizes_cpu, surrogate_paper_sizes_h100, surrogate_sizes)}
 
