@@ -1,4 +1,4 @@
-"""The quoted figures of README.md, BENCHMARKS.md, docs/theory.md and docs/docking.md, generated from
+"""The quoted figures of README.md, BENCHMARKS.md and docs/ (theory, docking, hover), generated from
 benchmarks/results/ and docs/reproduction.json.
 
 Each generated block sits between ``<!-- report:NAME -->`` and ``<!-- /report:NAME -->`` in one
@@ -23,7 +23,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 RESULTS = ROOT / "benchmarks" / "results"
-DOCUMENTS = (ROOT / "README.md", ROOT / "BENCHMARKS.md", ROOT / "docs" / "theory.md", ROOT / "docs" / "docking.md")
+DOCUMENTS = (ROOT / "README.md", ROOT / "BENCHMARKS.md", ROOT / "docs" / "theory.md", ROOT / "docs" / "docking.md",
+             ROOT / "docs" / "hover.md")
 BLOCK = re.compile(r"(<!-- report:(?P<name>[a-z0-9_]+) -->\n)(?P<body>.*?)(<!-- /report:(?P=name) -->)", re.S)
 
 
@@ -374,6 +375,35 @@ def kin_roofline() -> str:
             f"kernel's {_rate(rate)} w/s is {100 * rate / compute:.0f} % of the compute ceiling, so it is compute-bound.\n")
 
 
+def hover_vehicle() -> str:
+    """The hovering vehicle's derived figures (docs/hover.md), from ``benchmarks/hover_vehicle.py``."""
+    d = _load("hover_vehicle.json")
+    e, v, p = d["largest_effort"], d["steady_speed_m_s"], d["poles_rad_s"]
+
+    def poles(roots):
+        out = []
+        for re_, im in roots:
+            if im < 0:
+                continue
+            out.append(f"{re_:.2g} ± {im:.2g}j" if im > 0 else f"{re_:.2g}")
+        return ", ".join(out).replace("-", "−")
+
+    limits = sorted(set(d["thrust_limit_n"]))
+    return (f"`{d['command']}` (`benchmarks/results/hover_vehicle.json`):\n\n"
+            + _table(["figure", "value"], [
+                ["thrust configuration matrix", f"rank {d['thrust_matrix_rank']}, {d['thrusters']} thrusters of "
+                                                f"±{'/'.join(f'{x:g}' for x in limits)} N"],
+                ["largest pure effort", f"surge {e['surge']:.0f} N, sway {e['sway']:.0f} N, heave {e['heave']:.0f} N, "
+                                        f"yaw {e['yaw']:.0f} N·m"],
+                ["steady speed at that effort against the hull's own drag",
+                 f"surge {v['surge']:.2f} m/s, sway {v['sway']:.2f} m/s, heave {v['heave']:.2f} m/s"],
+                ["hydrostatic restoring moment of the hull", f"{d['restoring_moment_nm_per_rad']:.0f} N·m per radian of roll or pitch"],
+                [f"rigid vehicle, the {d['arm'].replace('bravo7', 'Bravo 7')} held at mid-range",
+                 f"{d['mass_kg']:.1f} kg, {d['yaw_inertia_kg_m2']:.1f} kg·m² about z"],
+                ["station-keeping poles, no drag", f"{poles(p['translation'])} rad/s in each translation; "
+                                                   f"{poles(p['yaw'])} rad/s in yaw"]]) + "\n")
+
+
 def kin_summary() -> str:
     """The kinematics line of README.md's results, from the indices benchmark's files."""
     cpu = next(r for r in _load("kin_indices_uvms12_cpu.json")["results"] if r["batch"] == 100000)
@@ -659,7 +689,7 @@ def pipeline_arms() -> str:
                       "edges planned", "schedule", "executed (simulated)"], rows) + "\n")
 
 
-BLOCKS = {f.__name__: f for f in (kin_roofline, scale_out, surrogate_roofline, docking_ga, docking_panel, pipeline_arms, plan_benchmark, sched_benchmark, hw_runner, hw_acceptance, kin_indices_cpu, kin_indices_accuracy, kin_indices_gpu, demo, docking_search, docking_fitness,
+BLOCKS = {f.__name__: f for f in (hover_vehicle, kin_roofline, scale_out, surrogate_roofline, docking_ga, docking_panel, pipeline_arms, plan_benchmark, sched_benchmark, hw_runner, hw_acceptance, kin_indices_cpu, kin_indices_accuracy, kin_indices_gpu, demo, docking_search, docking_fitness,
                                    kin_summary, papers, hover_mjx, hover_robustness, surrogate_networks,
                                    surrogate_paper_sizes_cpu, surrogate_paper_sizes_h100, surrogate_sizes)}
 
