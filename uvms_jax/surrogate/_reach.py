@@ -283,7 +283,8 @@ class ReachMapRun:
       train_seconds: Adam training, compilation included [s].
       history: ``(steps + 1,)`` training mse (normalised units).
       test: errors on the held-out tool poses: ``rmse_w``, ``max_abs_error_w``, ``w_range``
-        (the largest w sampled), ``reached_fraction`` (share with w > 0), ``n_samples``.
+        (the largest w sampled), ``w_std`` (the held-out w's spread: the rmse of predicting
+        their mean), ``reached_fraction`` (share of all samples with w > 0), ``n_samples``.
     """
 
     reach: ReachMap
@@ -310,7 +311,8 @@ def run_reach_map(problem: evo.ArmDockingProblem, settings: ReachMapSettings = R
     train_seconds = time.perf_counter() - t0
     err = np.asarray(jax.jit(reach.__call__)(jnp.asarray(test.T_base_tool))) - test.w
     metrics = {"rmse_w": float(np.sqrt(np.mean(err**2))), "max_abs_error_w": float(np.max(np.abs(err))),
-               "w_range": float(np.max(data.w)), "reached_fraction": float(np.mean(data.w > 0)),
+               "w_range": float(np.max(data.w)), "w_std": float(np.std(test.w)),
+               "reached_fraction": float(np.mean(data.w > 0)),
                "n_samples": int(err.size)}
     return ReachMapRun(reach, s, s.n_samples - n_test, n_test, data.seconds, train_seconds, history, metrics)
 
