@@ -179,9 +179,8 @@ def docking(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
             f"current pose, then one analytic evaluation) refine the best to {md.fitness:.3f}, against the analytic "
             f"optimisers' {best_fitness:.3f} ({source}): a loss of optimum of **{100 * loss:.2f} %** with "
             f"**{md.analytic_evaluations}** analytic evaluations against their {analytic_n} (**{ratio:.0f}× fewer**; "
-            f"{md.seconds:.1f} s against {run.ga_batch_seconds + run.grid.seconds + run.refined_grid.seconds:.0f} s, "
-            "compilation excluded). The map itself (surrogate stage) is per arm and vehicle, not per task, and is not "
-            "counted here.")
+            f"{md.seconds:.1f} s, the compilation of its analytic calls included). The map itself (surrogate stage) "
+            "is the arm's on its vehicle, not the task's, and is not counted in the ratio.")
         if md.fitness > best_fitness and s.docking_fitness == "analytic":
             notes.append("The map's route found a better pose than the analytic optimisers (scored analytically); "
                          "`docking_fitness=surrogate` sends it on.")

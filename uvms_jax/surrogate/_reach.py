@@ -329,7 +329,8 @@ class MapDocking:
       refine_fitness: ``(refine_iterations + 1,)`` analytic best before and after each step.
       map_evaluations: vehicle poses the GA runs scored on the map.
       analytic_evaluations: vehicle poses scored analytically (candidates + refinement).
-      seconds: GA on the map, candidates and refinement, compilation excluded [s].
+      seconds: GA on the map (compiled before), candidates and refinement (their compilation
+        included) [s].
       eval_seconds: time per vehicle pose of the map's fitness on a batch, compilation excluded [s].
     """
 
