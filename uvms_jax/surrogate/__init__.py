@@ -12,7 +12,8 @@ The whole design run is one stage: ``run_surrogates(key, chain, settings) -> Sur
 
 For an arm on a vehicle, :func:`run_reach_map` learns the arm's best manipulability at a tool
 pose seen from its base (:class:`ReachMap`), the inner part of the docking fitness, and
-:class:`SurrogateDockingProblem` / :func:`dock_with_map` let the docking GA run on it.
+:class:`SurrogateDockingProblem` / :func:`dock_with_map` dock with it: the GA on the map
+proposes, the analytic fitness confirms and refines.
 
 Error metric of the index surrogates: the maximum relative test error ``max |(T − S)/T|`` (paper eq. 21).
 """

@@ -1,19 +1,28 @@
-"""A learned dexterity map of an arm on its vehicle, and the docking fitness built on it.
+"""A learned dexterity map of an arm on its vehicle, and docking that keeps the optimum with it.
 
 The analytic docking fitness of an arm (:class:`uvms_jax.evo.ArmDockingProblem`) spends
 nearly all its time in multi-seed numerical IK: for every vehicle pose and demanded tool pose,
 ``S`` seeds × a fixed number of DLS iterations. What it extracts per tool pose is the best
 manipulability ``w`` over the valid solutions (reached, within the limits, clear of the
-vehicle), and that depends only on the tool pose seen from the arm's base: the arm's reach,
-its limits and its own vehicle move with it. That function — the index of this arm on this
-vehicle over the space of tool poses — is what :class:`ReachMap` learns (an FFBN: tanh hidden
-layer, linear output, trained by Adam on normalised data) from the analytic evaluations of
-random vehicle poses.
+vehicle), and without the scene's obstacles that depends only on the tool pose seen from the
+arm's base: the arm's reach, its limits and its own vehicle move with it. That function is
+what :class:`ReachMap` learns (an FFBN: tanh hidden layer, linear output, trained by Adam on
+normalised data), from tool poses sampled in the arm's base frame (:func:`reach_dataset`):
+positions the arm reaches (forward kinematics of random joint angles, jittered), approaches
+within a cone about the world's downward vertical (grasps from above; the vehicle only yaws,
+so that cone is fixed in the base frame). The samples use the arm, its mount, the vehicle's
+body and the IK settings, never the task or the scene: one map serves every task of the arm
+on that vehicle.
 
-:class:`SurrogateDockingProblem` is then the docking fitness (eq. 15) with ``M_a`` = min over
-targets of max over their alternatives of the map, and ``D`` and Wd analytic: a drop-in
-problem for the GA (``fitness(pose)``). The scene's obstacles (tables) are not in the map, so
-a pose the surrogate chooses is scored again by the analytic fitness, which has them.
+:func:`dock_with_map` then docks in three steps, only the last two of which evaluate the
+analytic fitness: the GA runs on :class:`SurrogateDockingProblem` (eq. 15 with ``M_a`` from
+the map, ``D`` and Wd analytic) and proposes; the best distinct poses of its final populations
+are scored analytically (the scene's obstacles, which the map does not know, included); from
+the best of them a trust-region refinement alternates a search on the map corrected to the
+analytic w of the current pose (tool pose by tool pose) with one analytic evaluation of what
+that search finds. The map's error is largest exactly where its optimum lies (the apex where
+the targets' w meet, which a min over targets turns into the map's worst error); corrected at
+the current pose, it is right there and keeps its slope around it.
 """
 
 from __future__ import annotations
@@ -27,7 +36,7 @@ import numpy as np
 from flax import struct
 from jax import Array
 
-from uvms_jax import evo
+from uvms_jax import evo, kin
 from uvms_jax.surrogate._adam import fit_adam
 from uvms_jax.surrogate._ffbn import MLP, mlp_apply
 from uvms_jax.surrogate._scaler import Scaler, fit_scaler
@@ -36,44 +45,72 @@ from uvms_jax.surrogate._timing import time_index_fn
 __all__ = ["MapDocking", "ReachData", "ReachMap", "ReachMapRun", "ReachMapSettings", "SurrogateDockingProblem",
            "dock_with_map", "fit_reach_map", "reach_dataset", "reach_features", "run_reach_map"]
 
+REFINE_COUNTS = (3, 3, 3, 3)  # a zoom stage on the corrected map: the 3^4 points of a box about its best
+
 
 @dataclasses.dataclass(frozen=True)
 class ReachMapSettings:
-    """Learning the map (``pipeline.surrogate`` in ``configs/pipeline.yaml``).
+    """Learning the map and docking with it (``reach`` in ``configs/pipeline.yaml``).
 
     Attributes:
-      n_poses: random vehicle poses in the docking box, scored analytically; each gives one
-        sample per demanded tool pose.
-      test_fraction: share of those poses held out to measure the map's error.
+      n_samples: tool poses sampled in the arm's base frame, each scored analytically once.
+      approach_cone_deg: largest angle of a sampled tool z axis (the approach) from the
+        world's downward vertical [deg]; a task whose targets lie outside is refused.
+      position_noise_m: std of the jitter added to the reached positions [m] (the map also
+        learns where the reach ends).
+      test_fraction: share of the samples held out to measure the map's error.
       hidden: tanh units of the FFBN.
       steps, learning_rate: full-batch Adam.
-      chunk: vehicle poses per jitted analytic call (bounds memory).
+      chunk: tool poses per jitted analytic call (bounds memory).
       seed: sampling and initialisation.
-      rounds, infill: docking on the map (:func:`dock_with_map`): GA rounds, and the poses
-        scored analytically between rounds to refine the map.
+      candidates: best distinct poses of the GA on the map scored analytically.
+      refine_iterations: trust-region steps from the best of them, one analytic evaluation
+        each at most.
+      refine_stages: zoom stages of each step's search on the corrected map (81 poses each).
+      refine_width: the trust region as a fraction of the pose box; halved after a step that
+        does not improve the analytic fitness.
     """
 
-    n_poses: int = 1000
-    test_fraction: float = 0.2
-    hidden: int = 32
-    steps: int = 3000
+    n_samples: int = 32768
+    approach_cone_deg: float = 30.0
+    position_noise_m: float = 0.03
+    test_fraction: float = 0.1
+    hidden: int = 128
+    steps: int = 6000
     learning_rate: float = 1e-2
-    chunk: int = 128
+    chunk: int = 256
     seed: int = 0
-    rounds: int = 4
-    infill: int = 128
+    candidates: int = 16
+    refine_iterations: int = 24
+    refine_stages: int = 6
+    refine_width: float = 0.25
 
     def __post_init__(self):
-        if self.n_poses < 10 or not 0 < self.test_fraction < 1 or self.hidden < 1 or self.steps < 1 \
-                or not self.learning_rate > 0 or self.chunk < 1 or self.rounds < 1 or self.infill < 1:
-            raise ValueError(f"need n_poses >= 10, 0 < test_fraction < 1, hidden >= 1, steps >= 1, "
-                             f"learning_rate > 0, chunk >= 1, rounds >= 1, infill >= 1; got {self}")
+        if self.n_samples < 10 or not 0 < self.approach_cone_deg <= 180 or self.position_noise_m < 0 \
+                or not 0 < self.test_fraction < 1 or self.hidden < 1 or self.steps < 1 \
+                or not self.learning_rate > 0 or self.chunk < 1 or self.candidates < 1 or self.refine_iterations < 0 \
+                or self.refine_stages < 1 or not 0 < self.refine_width <= 1:
+            raise ValueError(f"need n_samples >= 10, 0 < approach_cone_deg <= 180, position_noise_m >= 0, "
+                             f"0 < test_fraction < 1, hidden >= 1, steps >= 1, learning_rate > 0, chunk >= 1, "
+                             f"candidates >= 1, refine_iterations >= 0, refine_stages >= 1, 0 < refine_width <= 1; got {self}")
 
 
 def reach_features(T_base_tool: Array) -> Array:
-    """``(..., 9)`` inputs of the map from tool poses ``(..., 4, 4)`` in the arm's base frame:
-    the position [m] and the tool's x and z axes (its approach), which fix the rotation."""
-    return jnp.concatenate([T_base_tool[..., :3, 3], T_base_tool[..., :3, 0], T_base_tool[..., :3, 2]], axis=-1)
+    """``(..., 10)`` inputs of the map from tool poses ``(..., 4, 4)`` in the arm's base frame:
+    the distance from the base's z axis and the height [m], the azimuth's cosine and sine, and
+    the tool's x and z axes turned by minus the azimuth. The first joint turns the arm about
+    that axis, so w hardly depends on the azimuth but for the vehicle's body: the features
+    make the function smooth where raw coordinates would make it wind."""
+    p = T_base_tool[..., :3, 3]
+    r = jnp.hypot(p[..., 0], p[..., 1])
+    azimuth = jnp.arctan2(p[..., 1], p[..., 0])
+    c, s = jnp.cos(azimuth), jnp.sin(azimuth)
+
+    def unturn(v):  # the axis seen from the vertical plane through the tool's position
+        return jnp.stack([c * v[..., 0] + s * v[..., 1], c * v[..., 1] - s * v[..., 0], v[..., 2]], axis=-1)
+
+    return jnp.concatenate([jnp.stack([r, p[..., 2], c, s], axis=-1), unturn(T_base_tool[..., :3, 0]),
+                            unturn(T_base_tool[..., :3, 2])], axis=-1)
 
 
 @struct.dataclass
@@ -82,7 +119,7 @@ class ReachMap:
 
     Attributes:
       params: flax parameters of :class:`uvms_jax.surrogate.MLP` on normalised data.
-      x_norm: scaler of the 9 features (:func:`reach_features`).
+      x_norm: scaler of the 10 features (:func:`reach_features`).
       y_norm: scaler of w.
     """
 
@@ -99,10 +136,18 @@ class ReachMap:
 @struct.dataclass
 class SurrogateDockingProblem:
     """The docking problem with the IK part replaced by a :class:`ReachMap` (module docstring);
-    for the GA, a problem like any other (``fitness``, ``pose_low``, ``pose_high``)."""
+    for the GA, a problem like any other (``fitness``, ``pose_low``, ``pose_high``).
+
+    Attributes:
+      problem: the analytic problem (task, D, Wd).
+      reach: the map.
+      shift: ``(k,)`` added to the map's w of each demanded tool pose: 0 for the map alone, the
+        analytic w minus the map's at a pose for the map corrected there.
+    """
 
     problem: evo.ArmDockingProblem
     reach: ReachMap
+    shift: Array
 
     @property
     def pose_low(self) -> Array:
@@ -115,7 +160,7 @@ class SurrogateDockingProblem:
     def terms(self, pose: Array) -> evo.DockingEval:
         """Objective terms (eq. 1, 3, 14, 15) of vehicle poses ``(..., 4)`` [m, rad]."""
         T_base_tool = evo.arm_tool_poses(self.problem, pose)[2]
-        return evo.arm_terms(self.problem, pose, self.reach(T_base_tool)[..., None])
+        return evo.arm_terms(self.problem, pose, (self.reach(T_base_tool) + self.shift)[..., None])
 
     def fitness(self, pose: Array) -> Array:
         """Fitness of eq. 15 for ``(..., 4)`` vehicle poses (traceable)."""
@@ -126,94 +171,124 @@ class ReachData(struct.PyTreeNode):
     """Analytic samples of the map.
 
     Attributes:
-      poses: ``(N, 4)`` vehicle poses [m, rad].
-      T_base_tool: ``(N, k, 4, 4)`` the demanded tool poses seen from the arm's base.
-      w: ``(N, k)`` best w over the valid IK solutions without the scene's obstacles (0: none).
+      T_base_tool: ``(N, 4, 4)`` tool poses in the arm's base frame [m].
+      w: ``(N,)`` best w over the valid IK solutions, vehicle included, no scene (0: none).
       seconds: wall time of the analytic scoring (compilation excluded) [s].
     """
 
-    poses: Array
     T_base_tool: Array
     w: Array
     seconds: float = struct.field(pytree_node=False)
 
 
-def _without_scene(problem: evo.ArmDockingProblem) -> evo.ArmDockingProblem:
-    """The problem with no scene obstacles: what the arm on its vehicle can do anywhere."""
-    dtype = problem.T_world_box.dtype
-    return problem.replace(T_world_box=jnp.zeros((0, 4, 4), dtype), scene_half=jnp.zeros((0, 3), dtype))
+def _world_down_in_base(problem: evo.ArmDockingProblem) -> Array:
+    """``(3,)`` the world's downward vertical in the arm's base frame (the same at every vehicle
+    pose: the vehicle only yaws about the vertical)."""
+    return problem.T_vehicle_base[:3, :3].T @ jnp.asarray([0.0, 0.0, -1.0], problem.T_vehicle_base.dtype)
+
+
+def _sample_tool_poses(key: Array, problem: evo.ArmDockingProblem, n: int, cone_deg: float, noise: float) -> Array:
+    """``(n, 4, 4)`` tool poses in the base frame. Positions: half reached (FK of joint angles
+    uniform in the limits, jittered by ``noise`` m), half uniform in the ball of 1.25 × the
+    farthest of those about the base (without them the map extrapolates beyond the reach, and an
+    optimistic w there is what a min over targets picks). Tool z within ``cone_deg`` of the
+    world's downward vertical (uniform over the cap), roll about it uniform."""
+    k_q, k_n, k_b, k_u, k_p = jax.random.split(key, 5)
+    chain, dtype = problem.chain, problem.T_vehicle_base.dtype
+    q = jax.random.uniform(k_q, (n - n // 2, chain.n_joints), dtype, chain.lower, chain.upper)
+    reached = kin.kinematics(chain, q).T_base_tool[:, :3, 3]
+    reached = reached + noise * jax.random.normal(k_n, reached.shape, dtype)
+    k_d, k_r = jax.random.split(k_b)
+    d = jax.random.normal(k_d, (n // 2, 3), dtype)
+    radius = 1.25 * jnp.max(jnp.linalg.norm(reached, axis=-1)) * jax.random.uniform(k_r, (n // 2, 1), dtype) ** (1 / 3)
+    p = jnp.concatenate([reached, radius * d / jnp.linalg.norm(d, axis=-1, keepdims=True)])
+    p = jax.random.permutation(k_p, p)  # any slice (the held-out one) draws from both halves
+    u = jax.random.uniform(k_u, (n, 3), dtype)
+    cos_t = 1.0 - u[:, 0] * (1.0 - jnp.cos(jnp.radians(cone_deg)))
+    sin_t, phi, roll = jnp.sqrt(1.0 - cos_t**2), 2 * jnp.pi * u[:, 1], 2 * jnp.pi * u[:, 2]
+    down = _world_down_in_base(problem)
+    # An orthonormal frame (e1, e2, down) in the base frame; the tool's z axis in the cap about `down`.
+    helper = jnp.where(jnp.abs(down[0]) < 0.9, jnp.asarray([1.0, 0.0, 0.0], dtype), jnp.asarray([0.0, 1.0, 0.0], dtype))
+    e1 = jnp.cross(down, helper)
+    e1 = e1 / jnp.linalg.norm(e1)
+    e2 = jnp.cross(down, e1)
+    z = (sin_t * jnp.cos(phi))[:, None] * e1 + (sin_t * jnp.sin(phi))[:, None] * e2 + cos_t[:, None] * down
+    a = jnp.cos(roll)[:, None] * e1 + jnp.sin(roll)[:, None] * e2
+    x = a - jnp.sum(a * z, axis=-1, keepdims=True) * z
+    x = x / jnp.linalg.norm(x, axis=-1, keepdims=True)
+    R = jnp.stack([x, jnp.cross(z, x), z], axis=-1)
+    return jnp.concatenate([jnp.concatenate([R, p[:, :, None]], axis=-1),
+                            jnp.broadcast_to(jnp.asarray([0.0, 0.0, 0.0, 1.0], dtype), (n, 1, 4))], axis=-2)
 
 
 @jax.jit
-def _score(problem: evo.ArmDockingProblem, poses: Array) -> tuple[Array, Array]:
-    w = evo.arm_solutions(problem, poses)[2]  # (c, k, S)
-    return evo.arm_tool_poses(problem, poses)[2], jnp.max(w, axis=-1)
+def _best_w(problem: evo.ArmDockingProblem, T_base_tool: Array) -> Array:
+    """``(c,)`` best w of tool poses ``(c, 4, 4)`` in the base frame, by the analytic fitness's own
+    IK and checks: the poses are the task of the vehicle at the origin, with no scene."""
+    dtype = T_base_tool.dtype
+    at_origin = problem.replace(T_world_tool=kin.matmul(problem.T_vehicle_base, T_base_tool),
+                                group=jnp.arange(T_base_tool.shape[0], dtype=jnp.int32), n_groups=T_base_tool.shape[0],
+                                T_world_box=jnp.zeros((0, 4, 4), dtype), scene_half=jnp.zeros((0, 3), dtype))
+    return jnp.max(evo.arm_solutions(at_origin, jnp.zeros((4,), dtype))[2], axis=-1)
 
 
-def reach_dataset(key: Array, problem: evo.ArmDockingProblem, n_poses: int, chunk: int = 128) -> ReachData:
-    """Score ``n_poses`` vehicle poses drawn uniformly from the problem's box analytically.
+def reach_dataset(key: Array, problem: evo.ArmDockingProblem, n_samples: int, approach_cone_deg: float = 30.0,
+                  position_noise_m: float = 0.03, chunk: int = 256) -> ReachData:
+    """Sample ``n_samples`` tool poses in the arm's base frame (module docstring) and score each
+    analytically.
 
     Args:
       key: PRNG key.
-      problem: the analytic docking problem (its obstacles are left out here).
-      n_poses: number of vehicle poses; chunk: poses per jitted call.
+      problem: supplies the arm, its mount, the vehicle's body and the IK settings; its task and
+        scene are not used.
+      n_samples: tool poses; chunk: tool poses per jitted call.
+      approach_cone_deg, position_noise_m: see :class:`ReachMapSettings`.
 
     Returns:
       :class:`ReachData` (NumPy arrays).
     """
-    free = _without_scene(problem)
-    dtype = problem.pose_low.dtype
-    n = -(-n_poses // chunk) * chunk  # whole chunks: one compilation
-    poses = jax.random.uniform(key, (n, 4), dtype, problem.pose_low, problem.pose_high)
-    jax.block_until_ready(_score(free, poses[:chunk]))  # compile
+    n = -(-n_samples // chunk) * chunk  # whole chunks: one compilation
+    T = _sample_tool_poses(key, problem, n, approach_cone_deg, position_noise_m)
+    jax.block_until_ready(_best_w(problem, T[:chunk]))  # compile
     t0 = time.perf_counter()
-    parts = [jax.block_until_ready(_score(free, poses[i:i + chunk])) for i in range(0, n, chunk)]
+    w = np.concatenate([np.asarray(jax.block_until_ready(_best_w(problem, T[i:i + chunk]))) for i in range(0, n, chunk)])
     seconds = time.perf_counter() - t0
-    T, w = (np.concatenate([np.asarray(p[j]) for p in parts])[:n_poses] for j in (0, 1))
-    return ReachData(np.asarray(poses)[:n_poses], T, w, seconds * n_poses / n)
+    return ReachData(np.asarray(T)[:n_samples], w[:n_samples], seconds * n_samples / n)
 
 
-def fit_reach_map(key: Array, data: ReachData, hidden: int = 32, steps: int = 3000,
-                  learning_rate: float = 1e-2, start: ReachMap | None = None) -> tuple[ReachMap, Array]:
+def fit_reach_map(key: Array, data: ReachData, hidden: int = 128, steps: int = 6000,
+                  learning_rate: float = 1e-2) -> tuple[ReachMap, Array]:
     """Train a :class:`ReachMap` on every (tool pose, w) pair of ``data``.
-
-    Args:
-      start: go on training this map (its scalers kept) instead of a new one.
 
     Returns:
       ``(map, history)``: the map and the training mse (normalised units) per Adam step.
     """
-    x = reach_features(jnp.asarray(data.T_base_tool)).reshape(-1, 9)
-    y = jnp.asarray(data.w).reshape(-1)
-    if start is None:
-        x_norm, y_norm = fit_scaler(np.asarray(x)), fit_scaler(np.asarray(y), axis=None)
-        params = MLP(hidden).init(key, x_norm(x[:1]))["params"]
-    else:
-        x_norm, y_norm, params = start.x_norm, start.y_norm, start.params
+    x = reach_features(jnp.asarray(data.T_base_tool))
+    y = jnp.asarray(data.w)
+    x_norm, y_norm = fit_scaler(np.asarray(x)), fit_scaler(np.asarray(y), axis=None)
+    params = MLP(hidden).init(key, x_norm(x[:1]))["params"]
     params, history = fit_adam(mlp_apply, params, x_norm(x), y_norm(y), steps=steps, learning_rate=learning_rate)
     return ReachMap(params, x_norm, y_norm), history
 
 
 @dataclasses.dataclass(frozen=True)
 class ReachMapRun:
-    """A learned map and how well it stands for the analytic index.
+    """A learned map and how well it stands for the analytic w.
 
     Attributes:
       reach: the map.
       settings: how it was learned.
-      train: its training samples.
-      n_train, n_test: vehicle poses for training and held out (× k tool poses each).
-      analytic_seconds: analytic scoring of all poses (compilation excluded) [s].
+      n_train, n_test: tool poses for training and held out.
+      analytic_seconds: analytic scoring of all samples (compilation excluded) [s].
       train_seconds: Adam training, compilation included [s].
       history: ``(steps + 1,)`` training mse (normalised units).
-      test: errors on the held-out poses: ``rmse_w``, ``max_abs_error_w``, ``w_range``,
-        ``mae_M_a`` and ``corr_M_a`` (M_a = min over targets of max over alternatives, no
-        scene obstacles), and ``n_samples``.
+      test: errors on the held-out tool poses: ``rmse_w``, ``max_abs_error_w``, ``w_range``
+        (the largest w sampled), ``w_std`` (the held-out w's spread: the rmse of predicting
+        their mean), ``reached_fraction`` (share of all samples with w > 0), ``n_samples``.
     """
 
     reach: ReachMap
     settings: ReachMapSettings
-    train: ReachData
     n_train: int
     n_test: int
     analytic_seconds: float
@@ -222,114 +297,136 @@ class ReachMapRun:
     test: dict
 
 
-def _area_manipulability(problem: evo.ArmDockingProblem, w: Array) -> np.ndarray:
-    """``(N,)`` M_a from one w per tool pose ``(N, k)``."""
-    return np.asarray(jnp.min(evo.target_w(problem, jnp.asarray(w)[..., None]), axis=-1))
-
-
 def run_reach_map(problem: evo.ArmDockingProblem, settings: ReachMapSettings = ReachMapSettings()) -> ReachMapRun:
-    """Score random vehicle poses analytically, learn the map on most of them and measure it
-    on the rest (the surrogate stage of the end-to-end run)."""
+    """Sample and score tool poses in the arm's base frame, learn the map on most of them and
+    measure it on the rest (the surrogate stage of the end-to-end run)."""
     s = settings
     k_data, k_init = jax.random.split(jax.random.key(s.seed))
-    data = reach_dataset(k_data, problem, s.n_poses, s.chunk)
-    n_test = max(1, int(round(s.test_fraction * s.n_poses)))
+    data = reach_dataset(k_data, problem, s.n_samples, s.approach_cone_deg, s.position_noise_m, s.chunk)
+    n_test = max(1, int(round(s.test_fraction * s.n_samples)))
     train, test = (jax.tree_util.tree_map(lambda a: a[sl], data) for sl in (slice(n_test, None), slice(None, n_test)))
     t0 = time.perf_counter()
     reach, history = fit_reach_map(k_init, train, s.hidden, s.steps, s.learning_rate)
     history = np.asarray(jax.block_until_ready(history))
     train_seconds = time.perf_counter() - t0
-    w_hat = np.asarray(jax.jit(reach.__call__)(jnp.asarray(test.T_base_tool)))
-    err = w_hat - test.w
-    M_a, M_a_hat = _area_manipulability(problem, test.w), _area_manipulability(problem, w_hat)
-    corr = float(np.corrcoef(M_a, M_a_hat)[0, 1]) if np.std(M_a) > 0 and np.std(M_a_hat) > 0 else float("nan")
+    err = np.asarray(jax.jit(reach.__call__)(jnp.asarray(test.T_base_tool))) - test.w
     metrics = {"rmse_w": float(np.sqrt(np.mean(err**2))), "max_abs_error_w": float(np.max(np.abs(err))),
-               "w_range": float(np.max(data.w)), "mae_M_a": float(np.mean(np.abs(M_a_hat - M_a))),
-               "corr_M_a": corr, "n_samples": int(err.size)}
-    return ReachMapRun(reach, s, train, s.n_poses - n_test, n_test, data.seconds, train_seconds, history, metrics)
+               "w_range": float(np.max(data.w)), "w_std": float(np.std(test.w)),
+               "reached_fraction": float(np.mean(data.w > 0)),
+               "n_samples": int(err.size)}
+    return ReachMapRun(reach, s, s.n_samples - n_test, n_test, data.seconds, train_seconds, history, metrics)
 
 
 @dataclasses.dataclass(frozen=True)
 class MapDocking:
-    """GA runs on the learned fitness, each run's best pose scored again analytically.
+    """Docking with the map: the GA on it proposes, the analytic fitness confirms and refines.
 
     Attributes:
-      poses: ``(R, 4)`` best pose of each run [m, rad], after the last round.
-      map_fitness: ``(R,)`` their fitness on the map.
-      fitness, M_a: ``(R,)`` their analytic fitness (eq. 15) and M_a (eq. 1), obstacles included.
-      evaluations: ``(R,)`` map evaluations per run, all rounds.
-      analytic_evaluations: vehicle poses scored analytically to refine the map between rounds.
-      seconds: all rounds, compilation excluded (GA runs, analytic scoring, retraining) [s].
-      eval_seconds: time per vehicle pose of the map's fitness on a batch of poses,
-        compilation excluded [s].
+      candidates: ``(K, 4)`` the best distinct poses of the GA on the map [m, rad].
+      candidate_map_fitness, candidate_fitness: ``(K,)`` their fitness on the map and analytic.
+      pose: ``(4,)`` the refined best pose [m, rad]; fitness, M_a: its analytic eq. 15 and eq. 1
+        (the scene's obstacles included).
+      refine_fitness: ``(refine_iterations + 1,)`` analytic best before and after each step.
+      map_evaluations: vehicle poses the GA runs scored on the map.
+      analytic_evaluations: vehicle poses scored analytically (candidates + refinement).
+      seconds: GA on the map (compiled before), candidates and refinement (their compilation
+        included) [s].
+      eval_seconds: time per vehicle pose of the map's fitness on a batch, compilation excluded [s].
     """
 
-    poses: np.ndarray
-    map_fitness: np.ndarray
-    fitness: np.ndarray
-    M_a: np.ndarray
-    evaluations: np.ndarray
+    candidates: np.ndarray
+    candidate_map_fitness: np.ndarray
+    candidate_fitness: np.ndarray
+    pose: np.ndarray
+    fitness: float
+    M_a: float
+    refine_fitness: np.ndarray
+    map_evaluations: int
     analytic_evaluations: int
     seconds: float
     eval_seconds: float
 
-    @property
-    def best(self) -> int:
-        """Index of the run whose pose is best by the analytic fitness."""
-        return int(np.argmax(self.fitness))
+
+def _check_approaches(problem: evo.ArmDockingProblem, cone_deg: float) -> None:
+    """Refuse a task with a demanded approach outside the cone the map was sampled in."""
+    z = np.asarray(problem.T_world_tool[:, :3, 2], dtype=np.float64)
+    angle = np.degrees(np.arccos(np.clip(-z[:, 2], -1.0, 1.0)))
+    if np.any(angle > cone_deg + 1e-6):
+        i = int(np.argmax(angle))
+        raise ValueError(f"demanded tool pose {i} approaches {angle[i]:.1f}° from the downward vertical, outside the "
+                         f"map's sampled cone of {cone_deg}°: raise reach.approach_cone_deg")
 
 
-def _best_of_populations(learned: SurrogateDockingProblem, codec, res, m: int) -> Array:
-    """``(m, 4)`` the best distinct poses by map fitness of all runs' final populations (the
-    best repeated if there are fewer than ``m``: one shape, one compilation)."""
-    poses = jax.vmap(codec.decode)(res.state.population.reshape(-1, res.state.population.shape[-1]))
-    fit = np.asarray(learned.fitness(poses))
-    _, first = np.unique(np.asarray(poses), axis=0, return_index=True)
-    order = first[np.argsort(-fit[first])][:m]
-    return poses[np.resize(order, m)]
+@jax.jit
+def _map_w(learned: SurrogateDockingProblem, pose: Array) -> Array:
+    """``(..., k)`` the map's w (without shift) of the demanded tool poses at vehicle poses ``(..., 4)``."""
+    return learned.reach(evo.arm_tool_poses(learned.problem, pose)[2])
+
+
+def _refine(problem: evo.ArmDockingProblem, reach: ReachMap, x: np.ndarray, report: evo.ArmReport,
+            s: ReachMapSettings) -> tuple[np.ndarray, evo.ArmReport, np.ndarray, int]:
+    """Trust-region refinement from pose ``x (4,)`` with its analytic ``report`` (fields of shape
+    ``(1, ...)``): correct the map to the analytic w at ``x``, zoom on the corrected map inside
+    the trust region, score its best analytically; keep it if better, else halve the region.
+    Returns the best pose, its report, the analytic best per step and the analytic evaluations."""
+    width = np.asarray(problem.pose_high - problem.pose_low) * s.refine_width
+    periodic = evo.grid_periodicity(problem)
+    learned = SurrogateDockingProblem(problem, reach, jnp.zeros_like(problem.group, dtype=problem.pose_low.dtype))
+    history, evaluations = [float(report.terms.fitness[0])], 0
+    for _ in range(s.refine_iterations):
+        corrected = learned.replace(shift=jnp.asarray(report.w[0]) - _map_w(learned, jnp.asarray(x)))
+        # The corrected map equals the analytic fitness at x: its search moves only to a pose it predicts better.
+        zoom = evo.zoom_from(corrected, x[None], report.terms.fitness, problem.pose_low, problem.pose_high,
+                             REFINE_COUNTS, s.refine_stages, 0.5, periodic, width=width,
+                             chunk_size=int(np.prod(REFINE_COUNTS)))
+        if np.array_equal(zoom.x[0], x):
+            width = width / 2
+        else:
+            trial = evo.arm_report(problem, zoom.x)
+            evaluations += 1
+            if trial.terms.fitness[0] > report.terms.fitness[0]:
+                x, report = zoom.x[0], trial
+            else:
+                width = width / 2
+        history.append(float(report.terms.fitness[0]))
+    return x, report, np.asarray(history), evaluations
 
 
 def dock_with_map(problem: evo.ArmDockingProblem, run: ReachMapRun, ga: evo.GASettings, n_runs: int, seed: int,
-                  rounds: int = 4, infill: int = 128, timing_batch: int = 128) -> MapDocking:
-    """Dock on the learned fitness, refining the map where the GA looks.
+                  timing_batch: int = 128) -> MapDocking:
+    """The map proposes, the analytic fitness confirms (module docstring).
 
-    Each round runs the GA ``n_runs`` times on :class:`SurrogateDockingProblem` (the same GA
-    settings as the analytic runs); before the next round, the ``infill`` best distinct poses of
-    the final populations are scored analytically, join the training samples and the map trains
-    on (the map is least reliable exactly where its optimum lies). Each run's final best pose is
-    scored analytically; the map's fitness is timed on ``timing_batch`` random poses.
+    ``n_runs`` GA runs on :class:`SurrogateDockingProblem` (the analytic runs' GA settings);
+    the ``run.settings.candidates`` best poses of their final populations by map fitness, no
+    two closer than a sixteenth of the pose box along every variable, are scored analytically;
+    ``refine_iterations`` trust-region steps refine the best of them (:func:`_refine`). The
+    map's fitness is timed on ``timing_batch`` random poses.
+
+    Raises:
+      ValueError: a target's approach outside the map's sampled cone.
     """
-    if rounds < 1 or infill < 1:
-        raise ValueError(f"need rounds >= 1 and infill >= 1, got {rounds}, {infill}")
     s = run.settings
-    free = _without_scene(problem)
-    reach, data = run.reach, run.train
-    learned = SurrogateDockingProblem(problem, reach)
+    _check_approaches(problem, s.approach_cone_deg)
+    learned = SurrogateDockingProblem(problem, run.reach, jnp.zeros_like(problem.group, dtype=problem.pose_low.dtype))
     codec, ga_, params = evo.make_ga(ga, learned)
     keys = jax.random.split(jax.random.key(seed), n_runs)
     ga_run = evo.ga_batch_compiled(keys, learned, codec, ga_, params)
-    evaluations, n_infill, seconds = 0, 0, 0.0
-    for r in range(rounds):
-        t0 = time.perf_counter()
-        res = jax.block_until_ready(ga_run(keys, learned, codec, params))
-        evaluations = evaluations + np.asarray(res.evaluations)
-        seconds += time.perf_counter() - t0
-        if r == rounds - 1:
-            break
-        t0 = time.perf_counter()
-        poses = _best_of_populations(learned, codec, res, infill)
-        T, w = (np.asarray(a) for a in _score(free, poses))
-        n_infill += len(poses)
-        data = ReachData(np.concatenate([data.poses, np.asarray(poses)]), np.concatenate([data.T_base_tool, T]),
-                         np.concatenate([data.w, w]), data.seconds)
-        reach, _ = fit_reach_map(jax.random.key(seed), data, steps=max(1, s.steps // 3),
-                                 learning_rate=s.learning_rate, start=reach)
-        learned = SurrogateDockingProblem(problem, reach)
-        keys = jax.random.split(keys[0], n_runs)
-        seconds += time.perf_counter() - t0
-    poses = np.asarray(res.best_x)
-    terms = evo.arm_report(problem, poses).terms
-    sample = jax.random.uniform(jax.random.key(seed + 1), (timing_batch, 4), problem.pose_low.dtype, problem.pose_low, problem.pose_high)
+    t0 = time.perf_counter()
+    res = jax.block_until_ready(ga_run(keys, learned, codec, params))
+    poses = np.asarray(jax.vmap(codec.decode)(res.state.population.reshape(-1, res.state.population.shape[-1])))
+    poses = np.concatenate([poses, np.asarray(res.best_x)])
+    map_fit = np.asarray(jax.jit(learned.fitness)(poses))
+    pick = evo.distinct_best(poses, map_fit, s.candidates, np.asarray(problem.pose_high - problem.pose_low) / 16)
+    # One batch shape for the analytic scoring (the best repeated): one compilation.
+    candidates = poses[np.resize(pick, s.candidates)]
+    scored = evo.arm_report(problem, candidates)
+    best = int(np.argmax(scored.terms.fitness))
+    start = jax.tree_util.tree_map(lambda a: a[best:best + 1], scored)
+    pose, report, history, n_refine = _refine(problem, run.reach, candidates[best], start, s)
+    seconds = time.perf_counter() - t0
+    sample = jax.random.uniform(jax.random.key(seed + 1), (timing_batch, 4), problem.pose_low.dtype,
+                                problem.pose_low, problem.pose_high)
     eval_seconds = time_index_fn(learned.fitness, sample, repeats=3)["seconds"] / timing_batch
-    return MapDocking(poses, np.asarray(res.best_fitness), np.asarray(terms.fitness), np.asarray(terms.M_a),
-                      evaluations, n_infill, seconds, eval_seconds)
+    return MapDocking(candidates[:len(pick)], map_fit[pick], np.asarray(scored.terms.fitness)[:len(pick)], pose,
+                      float(report.terms.fitness[0]), float(report.terms.M_a[0]), history, int(np.sum(res.evaluations)),
+                      s.candidates + n_refine, seconds, eval_seconds)
