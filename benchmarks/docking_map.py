@@ -15,7 +15,7 @@ Prints one JSON object (``--out`` also rewrites it after every seed, so a stoppe
 seeds it finished).
 
     PYTHONPATH=. python benchmarks/docking_map.py --seeds 0 3 --out benchmarks/results/docking_map_cpu.json
-    PYTHONPATH=. python benchmarks/docking_map.py --device gpu --seeds 0 10 --out benchmarks/results/docking_map_h100.json
+    PYTHONPATH=. python benchmarks/docking_map.py --device gpu --seeds 0 10 --out benchmarks/results/docking_map_h200.json
 
 Usage: python benchmarks/docking_map.py [--device cpu|gpu] [--seeds FIRST COUNT] [--out FILE] [override ...]
 (overrides are the pipeline's, configs/pipeline.yaml, e.g. ``reach.refine_iterations=12``).
