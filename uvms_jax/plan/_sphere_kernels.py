@@ -15,14 +15,6 @@ from scipy.spatial import ConvexHull
 _FACE_ATOL = 1e-9  # coplanar triangles of a hull give one face equation up to round-off
 
 
-def _capsule_spheres(pos, R, radius: float, half_length: float, spacing: float) -> tuple[np.ndarray, np.ndarray]:
-    """Spheres containing a capsule (centre ``pos``, axis ``R[:, 2]``): centres ``(n, 3)``, radii ``(n,)``."""
-    n = max(2, int(np.ceil(2 * half_length / spacing)) + 1)
-    step = 2 * half_length / (n - 1)
-    centres = pos + np.linspace(-half_length, half_length, n)[:, None] * R[:, 2]
-    return centres, np.full(n, np.hypot(radius, step / 2))
-
-
 def _hull_faces(vertices: np.ndarray) -> np.ndarray:
     """Face equations ``(f, 4)`` of the convex hull of ``vertices (v, 3)``: ``n·x + d ≤ 0``
     inside, ``|n| = 1``."""

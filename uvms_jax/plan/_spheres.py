@@ -47,9 +47,10 @@ import mujoco
 import numpy as np
 
 from uvms_jax import frames
+from uvms_jax.robot import SPHERE_SPACING, capsule_spheres
 from uvms_jax.plan._collision import CollisionChecker
 from uvms_jax.plan._scene import Context
-from uvms_jax.plan._sphere_kernels import (_box_distance, _box_of, _capsule_spheres, _clearance_bounds,
+from uvms_jax.plan._sphere_kernels import (_box_distance, _box_of, _clearance_bounds,
                                           _first_collision, _hull_faces, _mesh_spheres, coarse_to_fine)
 
 __all__ = ["SphereChecker", "coarse_to_fine"]
@@ -92,7 +93,7 @@ class SphereChecker:
     reference checker).
     """
 
-    def __init__(self, reference: CollisionChecker, spacing: float = 0.03, cell: float = 0.03):
+    def __init__(self, reference: CollisionChecker, spacing: float = SPHERE_SPACING, cell: float = SPHERE_SPACING):
         if spacing <= 0 or cell <= 0:
             raise ValueError(f"spacing and cell must be > 0 [m], got {spacing}, {cell}")
         self.reference = reference
@@ -128,7 +129,7 @@ class SphereChecker:
             t = m.geom_type[g]
             seg, cap = np.zeros((2, 3)), 0.0
             if t == mujoco.mjtGeom.mjGEOM_CAPSULE:
-                c, r = _capsule_spheres(pos, R, m.geom_size[g, 0], m.geom_size[g, 1], spacing)
+                c, r = capsule_spheres(pos, R, m.geom_size[g, 0], m.geom_size[g, 1], spacing)
                 seg, cap = pos + np.outer([-1.0, 1.0], R[:, 2] * m.geom_size[g, 1]), float(m.geom_size[g, 0])
             elif t == mujoco.mjtGeom.mjGEOM_SPHERE:
                 c, r = pos[None], m.geom_size[g, :1].astype(float)
