@@ -141,7 +141,8 @@ class ReachData(struct.PyTreeNode):
 def _without_scene(problem: evo.ArmDockingProblem) -> evo.ArmDockingProblem:
     """The problem with no scene obstacles: what the arm on its vehicle can do anywhere."""
     dtype = problem.T_world_box.dtype
-    return problem.replace(T_world_box=jnp.zeros((0, 4, 4), dtype), scene_half=jnp.zeros((0, 3), dtype))
+    return problem.replace(T_world_box=jnp.zeros((0, 4, 4), dtype), scene_half=jnp.zeros((0, 3), dtype),
+                           world=problem.world.without_scene())
 
 
 @jax.jit
