@@ -47,7 +47,8 @@ def test_obstacles_in_base_frame_keep_their_distances():
     world = evo.make_sphere_world(
         {"body": np.zeros((1, 1), int), "centre": np.zeros((1, 1, 3)), "radius": np.full((1, 1), 0.01),
          "box_on": np.ones((1, 1, 1), bool), "face_on": np.ones((1, 1, 1), bool), "ball_on": np.ones((1, 1, 1), bool),
-         "pair": np.zeros((1, 0, 2), int), "pair_on": np.zeros((1, 0), bool), "cap_body": np.zeros((1, 0, 2), int),
+         "pair_a": np.zeros((1, 0), int), "pair_b": np.zeros((1, 0), int), "pair_on": np.zeros((1, 0, 0), bool),
+         "cap_body": np.zeros((1, 0, 2), int),
          "cap_ends": np.zeros((1, 0, 2, 2, 3)), "cap_reach": np.zeros((1, 0)), "cap_on": np.zeros((1, 0), bool)},
         {"c": T_box[None, :3, 3], "R": T_box[None, :3, :3], "half": [[0.1, 0.2, 0.05]], "vehicle": [False]},
         np.array([[[0.0, 0.6, 0.8, -0.3], [1.0, 0.0, 0.0, -0.2]]]), np.array([[0.1, 0.2, 0.3, 0.05]]), 0.0, 0, 0)

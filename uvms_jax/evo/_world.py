@@ -53,7 +53,8 @@ class WorldRows:
       radius: ``(r, N)`` radii [m].
       box_on, face_on, ball_on: ``(r, N, B)``, ``(r, N, P)``, ``(r, N, M)`` the sphere–box,
         sphere–polytope and sphere–fixed-sphere pairs tested (padding spheres: none).
-      pair: ``(r, Q, 2)`` indices (into the row's spheres) of sphere pairs; pair_on ``(r, Q)``.
+      pair_a, pair_b: ``(r, A)``, ``(r, A')`` indices (into the row's spheres) of the first and
+        the second spheres of pairs; pair_on ``(r, A, A')`` the pairs tested among them.
       cap_body: ``(r, C, 2)`` frame slots of capsule pairs; cap_ends ``(r, C, 2, 2, 3)`` their
         axes' end points in those frames [m]; cap_reach ``(r, C)`` the sum of their radii [m];
         cap_on ``(r, C)``.
@@ -65,7 +66,8 @@ class WorldRows:
     box_on: Array
     face_on: Array
     ball_on: Array
-    pair: Array
+    pair_a: Array
+    pair_b: Array
     pair_on: Array
     cap_body: Array
     cap_ends: Array
@@ -146,7 +148,7 @@ def make_sphere_world(rows: dict, boxes: dict, faces: np.ndarray, balls: np.ndar
     return SphereWorld(
         rows=WorldRows(body=ints(rows["body"]), centre=f(rows["centre"]), radius=f(rows["radius"]),
                        box_on=bools(rows["box_on"]), face_on=bools(rows["face_on"]), ball_on=bools(rows["ball_on"]),
-                       pair=ints(rows["pair"]), pair_on=bools(rows["pair_on"]), cap_body=ints(rows["cap_body"]),
+                       pair_a=ints(rows["pair_a"]), pair_b=ints(rows["pair_b"]), pair_on=bools(rows["pair_on"]), cap_body=ints(rows["cap_body"]),
                        cap_ends=f(rows["cap_ends"]), cap_reach=f(rows["cap_reach"]), cap_on=bools(rows["cap_on"])),
         box_c=f(np.reshape(boxes["c"], (B, 3))), box_R=f(np.reshape(boxes["R"], (B, 3, 3))),
         box_half=f(np.reshape(boxes["half"], (B, 3))), box_vehicle=bools(np.reshape(boxes["vehicle"], (B,))),
@@ -179,20 +181,23 @@ def _row_hits(row: WorldRows, frames: Array, box_c: Array, box_R: Array, box_hal
               balls: Array, margin: Array) -> Array:
     """Whether one configuration collides in one row (one target): ``frames (n + 1, 4, 4)``
     the base and body frames in B, the obstacles in B. Scalar bool."""
+    # Products written out as sums of broadcast terms (no dot products): XLA then fuses each
+    # test into one loop over spheres × obstacles instead of materialising its operands.
     R, p = frames[row.body, :3, :3], frames[row.body, :3, 3]
-    X = jnp.einsum("nij,nj->ni", R, row.centre, precision=_EXACT) + p  # (N, 3) sphere centres in B
+    X = p + sum(R[:, :, j] * row.centre[:, j, None] for j in range(3))  # (N, 3) sphere centres in B
     reach = row.radius + margin  # (N,)
-    local = jnp.einsum("bji,nbj->nbi", box_R, X[:, None, :] - box_c, precision=_EXACT)  # (N, B, 3)
+    d = X[:, None, :] - box_c  # (N, B, 3)
+    local = sum(d[..., j, None] * box_R[:, j, :] for j in range(3))  # Rᵀ (x − c) in the box's axes
     out = jnp.maximum(jnp.abs(local) - box_half, 0.0)
     hit = jnp.any((jnp.sum(out * out, axis=-1) <= (reach * reach)[:, None]) & row.box_on)
-    face = jnp.max(jnp.einsum("nk,pfk->npf", X, faces[..., :3], precision=_EXACT) + faces[..., 3], axis=-1)  # (N, P)
+    face = jnp.max(sum(X[:, None, None, j] * faces[..., j] for j in range(3)) + faces[..., 3], axis=-1)  # (N, P)
     hit |= jnp.any((face <= reach[:, None]) & row.face_on)
     gap = X[:, None, :] - balls[:, :3]  # (N, M, 3)
     both = reach[:, None] + balls[:, 3]
     hit |= jnp.any((jnp.sum(gap * gap, axis=-1) <= both * both) & row.ball_on)
-    a, b = row.pair[:, 0], row.pair[:, 1]
-    d = X[a] - X[b]
-    both = reach[a] + row.radius[b]
+    a, b = row.pair_a, row.pair_b  # a dense block of pairs: no gather per pair
+    d = X[a][:, None, :] - X[b]  # (A, B', 3)
+    both = reach[a][:, None] + row.radius[b]
     hit |= jnp.any((jnp.sum(d * d, axis=-1) <= both * both) & row.pair_on)
     F = frames[row.cap_body]  # (C, 2, 4, 4)
     ends = jnp.einsum("cgij,cgej->cgei", F[..., :3, :3], row.cap_ends, precision=_EXACT) + F[..., None, :3, 3]
@@ -296,7 +301,8 @@ def capsule_world(chain: kin.Chain, link_radius: float, T_vehicle_base, vehicle_
     tile = lambda x: np.broadcast_to(np.asarray(x), (n_rows,) + np.shape(x))  # noqa: E731
     rows = {"body": tile(body), "centre": tile(centre), "radius": tile(radius), "box_on": tile(box_on),
             "face_on": np.zeros((n_rows, N, 0), bool), "ball_on": np.zeros((n_rows, N, 0), bool),
-            "pair": np.zeros((n_rows, 0, 2), int), "pair_on": np.zeros((n_rows, 0), bool),
+            "pair_a": np.zeros((n_rows, 0), int), "pair_b": np.zeros((n_rows, 0), int),
+            "pair_on": np.zeros((n_rows, 0, 0), bool),
             "cap_body": np.zeros((n_rows, 0, 2), int), "cap_ends": np.zeros((n_rows, 0, 2, 2, 3)),
             "cap_reach": np.zeros((n_rows, 0)), "cap_on": np.zeros((n_rows, 0), bool)}
     boxes = {"c": T_all[:, :3, 3], "R": T_all[:, :3, :3], "half": np.concatenate([hv, hs]),

@@ -173,19 +173,25 @@ def _pad(built: list) -> dict:
     """The rows' lists as arrays padded to the longest row (padding tests nothing)."""
     r = len(built)
     N = max(len(b[2]) for b in built)
-    Q = max(len(b[6]) for b in built)
+    # Sphere pairs as a block: the spheres that come first in some pair × those that come second.
+    firsts = [sorted({a for a, _ in b[6]}) for b in built]
+    seconds = [sorted({c for _, c in b[6]}) for b in built]
+    A, A2 = max(map(len, firsts)), max(map(len, seconds))
     C = max(len(b[7]) for b in built)
     B, P, M = (built[0][i].shape[1] for i in (3, 4, 5))
     out = {"body": np.zeros((r, N), int), "centre": np.zeros((r, N, 3)), "radius": np.zeros((r, N)),
            "box_on": np.zeros((r, N, B), bool), "face_on": np.zeros((r, N, P), bool), "ball_on": np.zeros((r, N, M), bool),
-           "pair": np.zeros((r, Q, 2), int), "pair_on": np.zeros((r, Q), bool), "cap_body": np.zeros((r, C, 2), int),
+           "pair_a": np.zeros((r, A), int), "pair_b": np.zeros((r, A2), int), "pair_on": np.zeros((r, A, A2), bool),
+           "cap_body": np.zeros((r, C, 2), int),
            "cap_ends": np.zeros((r, C, 2, 2, 3)), "cap_reach": np.zeros((r, C)), "cap_on": np.zeros((r, C), bool)}
     for i, (body, cen, rad, box_on, face_on, ball_on, pairs, caps) in enumerate(built):
         n = len(rad)
         out["body"][i, :n], out["centre"][i, :n], out["radius"][i, :n] = body, np.reshape(cen, (-1, 3)), rad
         out["box_on"][i, :n], out["face_on"][i, :n], out["ball_on"][i, :n] = box_on, face_on, ball_on
-        if pairs:
-            out["pair"][i, :len(pairs)], out["pair_on"][i, :len(pairs)] = pairs, True
+        out["pair_a"][i, :len(firsts[i])], out["pair_b"][i, :len(seconds[i])] = firsts[i], seconds[i]
+        at_a, at_b = {a: j for j, a in enumerate(firsts[i])}, {c: j for j, c in enumerate(seconds[i])}
+        for a, c in pairs:
+            out["pair_on"][i, at_a[a], at_b[c]] = True
         for j, (ba, bb, sa, sb, reach) in enumerate(caps):
             out["cap_body"][i, j], out["cap_ends"][i, j], out["cap_reach"][i, j] = (ba, bb), (sa, sb), reach
             out["cap_on"][i, j] = True
