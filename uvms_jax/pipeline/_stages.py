@@ -86,7 +86,7 @@ def surrogates(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
                        run.analytic_seconds, r.hidden, run.train_seconds, t["rmse_w"], t["max_abs_error_w"],
                        t["w_range"], t["mae_M_a"]]])
     notes = ["The docking fitness spends its time in multi-seed numerical IK; what it keeps per tool pose is the best "
-             "w over the valid solutions (reached, within the limits, clear of the vehicle), a function of the tool "
+             "w over the valid solutions (reached, within the limits, clear of the vehicle and of the arm itself), a function of the tool "
              "pose seen from the arm's base alone. An FFBN learns it here (9 inputs: position and the tool's x and z "
              "axes; tanh hidden layer; Adam). The scene's obstacles are not in the map: poses chosen on it are scored "
              "again analytically (docking stage). The dexterity paper's surrogates of the 12-DOF UVMS are reproduced "

@@ -55,8 +55,8 @@ def _row(checker: SphereChecker, contexts, polys, static) -> tuple:
         checker.reference._enter(ctx)  # the model's bits in this context (rejects an unknown one)
         collides = _pair_filter(checker.reference._m)
         for i, g in enumerate(moving):
-            poly_on[i] |= [collides(g, o) for o in polys]
-            static_on[i] |= [collides(g, s) for s in static]
+            poly_on[i] |= np.array([collides(g, o) for o in polys], dtype=bool)
+            static_on[i] |= np.array([collides(g, s) for s in static], dtype=bool)
             for j in range(i + 1, G):
                 self_on[i, j] |= collides(g, moving[j])
     return poly_on, static_on, self_on
@@ -70,12 +70,12 @@ def sphere_world(checker: SphereChecker, rows: list[tuple[Context, ...]], attach
       checker: the scene's sphere checker (its margin is the world's).
       rows: per row, the contexts whose pairs it tests (their union).
       attached: geom ids of the static polytopes that move with the arm's base (the vehicle's
-        boxes, the mount): they go into the base frame, the rest stays in the world.
+        boxes, the mount; the base link's own are added): they go into the base frame, the rest
+        stays in the world.
       dtype: float dtype of the world.
 
     Raises:
-      ValueError: an arm body that is not the robot's link of that number, or a polytope
-        fixed to the base that is not a box.
+      ValueError: an arm body that is not the robot's link of that number.
     """
     scene = checker.reference.scene
     m = scene.model
@@ -88,6 +88,7 @@ def sphere_world(checker: SphereChecker, rows: list[tuple[Context, ...]], attach
     sph_body, centres, radii, g_start, g_end, g_body, _, _, g_seg, g_cap = checker._spheres
     polys, starts, ends, _, _, boxes, _ = checker._polytopes
     base_geoms = set(scene.base_geoms)
+    attached = set(attached) | base_geoms  # a base link of meshes: polytopes fixed to the base
     static = sorted(checker._static)
 
     # Obstacles: the base's first, then the world's (the order of the masks' columns).
@@ -95,8 +96,6 @@ def sphere_world(checker: SphereChecker, rows: list[tuple[Context, ...]], attach
     for k, g in enumerate(polys):
         side = "base" if g in attached else "world"
         (box_cols if boxes[k, 0, 0] > 0 else face_cols)[side].append(k)
-    if face_cols["base"]:
-        raise ValueError("obstacles fixed to the vehicle must be boxes")
     box_order, face_order = box_cols["base"] + box_cols["world"], face_cols["base"] + face_cols["world"]
     c, R, half, vehicle = [], [], [], []
     for j, k in enumerate(box_order):
@@ -114,6 +113,8 @@ def sphere_world(checker: SphereChecker, rows: list[tuple[Context, ...]], attach
     faces = np.zeros((len(face_order), F, 4))
     for j, k in enumerate(face_order):
         eq = checker._faces[starts[k]:ends[k]]
+        if polys[k] in attached:  # n·x + d with x = R y + p: (Rᵀ n)·y + (n·p + d), R, p of the base in W
+            eq = np.c_[eq[:, :3] @ R_bw.T, eq[:, 3] + eq[:, :3] @ scene.T_world_base[:3, 3]]
         faces[j] = np.concatenate([eq, np.repeat(eq[:1], F - len(eq), axis=0)])  # repeats leave the max alone
         col[k] = ("face", j)
     balls, ball_of = [], {}  # fixed spheres in the world (obstacles), by static geom
@@ -166,7 +167,8 @@ def sphere_world(checker: SphereChecker, rows: list[tuple[Context, ...]], attach
                     pairs += [(a, b) for a in spheres_of(i) for b in spheres_of(j)]
         built.append((body, cen, rad, box_on, face_on, ball_on, pairs, caps))
     return evo.make_sphere_world(_pad(built), {"c": c, "R": R, "half": half, "vehicle": vehicle}, faces,
-                                 np.reshape(balls, (-1, 4)), checker.margin, len(box_cols["base"]), 0, dtype)
+                                 np.reshape(balls, (-1, 4)), checker.margin, len(box_cols["base"]),
+                                 len(face_cols["base"]), dtype)
 
 
 def _pad(built: list) -> dict:
