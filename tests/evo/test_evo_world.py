@@ -91,3 +91,25 @@ def test_capsule_world_is_at_least_as_strict_as_the_link_capsules():
     assert capsule_hit.any() and (~capsule_hit).any()
     assert not np.any(capsule_hit & ~hit)  # conservative: spheres contain the capsules
     assert np.mean(hit == capsule_hit) > 0.95  # and they bulge out by 2.7 mm at most
+
+
+def test_chunked_poses_answer_as_one_call(monkeypatch):
+    """Vehicle poses in chunks (a world too large for one call's blocks) give the same answers
+    as one call: chunks of 1 and of 3 poses, 7 poses of 2 000 configurations each."""
+    chain = BRAVO7.chain
+    T_vb = frames.rpy_pose((0.35, 0.0, -0.2), (np.pi, 0.0, 0.0))
+    scene = (np.stack([frames.rpy_pose((0.6, 0.0, -0.6), (0.0, 0.3, 0.0))]), np.array([[0.05, 0.4, 0.3]]))
+    world = evo.capsule_world(chain, BRAVO7.link_radius, T_vb, (np.eye(4)[None], np.array([[0.45, 0.35, 0.2]])),
+                              scene, 1, 0.03, jnp.float32)
+    rng = np.random.default_rng(3)
+    K = kin.kinematics(chain, jnp.asarray(rng.uniform(BRAVO7.lower, BRAVO7.upper, (7, 1, 2000, chain.n_joints)),
+                                          jnp.float32))
+    T_world_base = jnp.asarray(np.stack([frames.rpy_pose((x, 0.0, 0.1 * x), (np.pi, 0.0, x)) @ T_vb
+                                         for x in np.linspace(-0.3, 0.3, 7)]), jnp.float32)
+    group = jnp.zeros(1, jnp.int32)
+    whole = np.asarray(evo.world_collides(world, group, T_world_base, K.T_base_joint))
+    assert whole.any() and (~whole).any()
+    per_config = world.rows.radius.shape[-1] * 2  # two boxes, no polytope, sphere or pair
+    for poses in (1, 3):
+        monkeypatch.setattr("uvms_jax.evo._world.TEST_BUDGET", poses * 2000 * per_config)
+        np.testing.assert_array_equal(np.asarray(evo.world_collides(world, group, T_world_base, K.T_base_joint)), whole)

@@ -226,6 +226,11 @@ def obstacles_in_base(world: SphereWorld, T_world_base: Array) -> tuple[Array, A
     return c, axes, world.box_half, faces, balls
 
 
+#: Elements of the tests' blocks (sphere × obstacle face or box, sphere pairs) one chunk of
+#: :func:`world_collides` may hold at once (about 1 GB of float32 per array).
+TEST_BUDGET = 2**28
+
+
 def world_collides(world: SphereWorld, group: Array, T_world_base: Array, T_base_joint: Array) -> Array:
     """Collision of arm configurations in the planner's world (traceable).
 
@@ -250,7 +255,20 @@ def world_collides(world: SphereWorld, group: Array, T_world_base: Array, T_base
     per_seed = jax.vmap(one, in_axes=(None, 0, None, None, None, None, None))
     per_target = jax.vmap(per_seed, in_axes=(0, 0, None, None, None, None, None))
     per_pose = jax.vmap(per_target, in_axes=(None, 0, 0, 0, None, 0, 0))
-    return per_pose(rows, frames, *obstacles).reshape(batch + (k, S))
+    c, R, half, faces, balls = obstacles
+    # XLA materialises each test's (spheres × obstacles) and (sphere pairs) block per
+    # configuration: a mesh arm's thousand spheres make megabytes each, so the vehicle poses go
+    # through in chunks that keep a call's blocks under TEST_BUDGET elements.
+    N = rows.radius.shape[-1]
+    per_config = N * (half.shape[0] + faces.shape[-3] * faces.shape[-2] + balls.shape[-2]) + rows.pair_on[0].size
+    chunk = max(1, TEST_BUDGET // (k * S * per_config))
+    if chunk >= frames.shape[0]:
+        hits = per_pose(rows, frames, c, R, half, faces, balls)
+    else:
+        # lax.map vmaps its function over each chunk: the function is one pose's.
+        hits = jax.lax.map(lambda a: per_target(rows, a[0], a[1], a[2], half, a[3], a[4]), (frames, c, R, faces, balls),
+                           batch_size=chunk)
+    return hits.reshape(batch + (k, S))
 
 
 def capsule_world(chain: kin.Chain, link_radius: float, T_vehicle_base, vehicle_boxes, scene_boxes, n_rows: int,
