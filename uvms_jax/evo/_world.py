@@ -3,7 +3,7 @@
 Docking tests its IK solutions in the same world the planner plans in. The planner's compiled
 checker (:class:`uvms_jax.plan.SphereChecker`) reads the arm's geoms from the scene's MuJoCo
 model as spheres fixed to its bodies (a capsule as spheres along its axis that together
-contain it, a mesh as the circumscribed spheres of grid cells that reach its hull), the scene
+contain it, a mesh as one sphere per grid cell fitted to the cell's piece of its hull), the scene
 as boxes, half-spaces and convex polytopes, and takes its pairs from MuJoCo's collision
 filters in each context. :func:`uvms_jax.plan.docking_world` turns that model into a
 :class:`SphereWorld`, and :func:`world_collides` answers the planner's question for whole

@@ -12,8 +12,8 @@ Everything is read from the scene's MuJoCo model, so both checkers see the same 
 
 * arm: each capsule of a moving body becomes spheres along its axis, ``s`` apart with radius
   ``sqrt(r² + (s/2)²)`` (together they contain the capsule); each mesh of a moving body (jaw
-  fingers, the held object) becomes the circumscribed spheres of a grid of cells over its
-  bounding box, kept where they reach the mesh's convex hull;
+  fingers, the held object) becomes one sphere per cell of a grid over its bounding box that
+  its convex hull enters, holding the cell's piece of the hull with the least bulge out of it;
 * scene: planes are half-spaces and meshes their convex hulls (face equations); capsules and
   spheres of fixed bodies (the base link) become spheres as above;
 * pairs: exactly the geom pairs MuJoCo tests in the query's :class:`Context` (the reference
