@@ -90,6 +90,8 @@ class SphereWorld:
       balls: ``(M, 4)`` fixed spheres in W: centre [m], radius [m].
       margin: the planner's safety distance [m]: a pair nearer than it is a collision.
       n_base_boxes, n_base_faces: obstacles fixed to the vehicle (static).
+      n_faces: ``(P,)`` the faces of each polytope before its padding (static): the test reads
+        only those (a mesh's hull of 200 faces beside a box's 6 would otherwise cost 200 each).
     """
 
     rows: WorldRows
@@ -102,6 +104,7 @@ class SphereWorld:
     margin: Array
     n_base_boxes: int = struct.field(pytree_node=False)
     n_base_faces: int = struct.field(pytree_node=False)
+    n_faces: tuple[int, ...] = struct.field(pytree_node=False)
 
     def without_scene(self) -> "SphereWorld":
         """The world with the scene's obstacles switched off (the vehicle, its mount and the
@@ -117,7 +120,7 @@ class SphereWorld:
 
 
 def make_sphere_world(rows: dict, boxes: dict, faces: np.ndarray, balls: np.ndarray, margin: float,
-                      n_base_boxes: int, n_base_faces: int, dtype=None) -> SphereWorld:
+                      n_base_boxes: int, n_base_faces: int, dtype=None, n_faces=None) -> SphereWorld:
     """A :class:`SphereWorld` from NumPy arrays (the fields' shapes; see its docstring).
 
     Args:
@@ -127,6 +130,7 @@ def make_sphere_world(rows: dict, boxes: dict, faces: np.ndarray, balls: np.ndar
       margin: safety distance [m], ≥ 0.
       n_base_boxes, n_base_faces: how many boxes and polytopes lead the lists in the base frame.
       dtype: float dtype (default: JAX's default float).
+      n_faces: ``(P,)`` faces of each polytope before its padding (default: all ``F``).
 
     Raises:
       ValueError: on inconsistent shapes or a negative margin.
@@ -140,6 +144,9 @@ def make_sphere_world(rows: dict, boxes: dict, faces: np.ndarray, balls: np.ndar
     for name, shape in want.items():
         if np.shape(rows[name]) != shape:
             raise ValueError(f"world rows: {name} must have shape {shape}, got {np.shape(rows[name])}")
+    n_faces = tuple(int(n) for n in (np.full(P, np.shape(faces)[1]) if n_faces is None else n_faces))
+    if len(n_faces) != P or any(not 1 <= n <= np.shape(faces)[1] for n in n_faces):
+        raise ValueError(f"n_faces must give 1 to {np.shape(faces)[1]} faces for each of {P} polytopes, got {n_faces}")
     if margin < 0 or not 0 <= n_base_boxes <= B or not 0 <= n_base_faces <= P:
         raise ValueError(f"need margin >= 0 and base obstacle counts within the lists, got {margin}, "
                          f"{n_base_boxes} of {B} boxes, {n_base_faces} of {P} polytopes")
@@ -153,7 +160,7 @@ def make_sphere_world(rows: dict, boxes: dict, faces: np.ndarray, balls: np.ndar
         box_c=f(np.reshape(boxes["c"], (B, 3))), box_R=f(np.reshape(boxes["R"], (B, 3, 3))),
         box_half=f(np.reshape(boxes["half"], (B, 3))), box_vehicle=bools(np.reshape(boxes["vehicle"], (B,))),
         faces=f(faces), balls=f(np.reshape(balls, (M, 4))), margin=f(margin),
-        n_base_boxes=int(n_base_boxes), n_base_faces=int(n_base_faces))
+        n_base_boxes=int(n_base_boxes), n_base_faces=int(n_base_faces), n_faces=n_faces)
 
 
 def _segment_distance(p1: Array, q1: Array, p2: Array, q2: Array) -> Array:
@@ -178,9 +185,10 @@ def _segment_distance(p1: Array, q1: Array, p2: Array, q2: Array) -> Array:
 
 
 def _row_hits(row: WorldRows, frames: Array, box_c: Array, box_R: Array, box_half: Array, faces: Array,
-              balls: Array, margin: Array) -> Array:
+              balls: Array, margin: Array, n_faces: tuple[int, ...]) -> Array:
     """Whether one configuration collides in one row (one target): ``frames (n + 1, 4, 4)``
-    the base and body frames in B, the obstacles in B. Scalar bool."""
+    the base and body frames in B, the obstacles in B, ``n_faces`` the polytopes' unpadded
+    face counts. Scalar bool."""
     # Products written out as sums of broadcast terms (no dot products): XLA then fuses each
     # test into one loop over spheres × obstacles instead of materialising its operands.
     R, p = frames[row.body, :3, :3], frames[row.body, :3, 3]
@@ -190,8 +198,10 @@ def _row_hits(row: WorldRows, frames: Array, box_c: Array, box_R: Array, box_hal
     local = sum(d[..., j, None] * box_R[:, j, :] for j in range(3))  # Rᵀ (x − c) in the box's axes
     out = jnp.maximum(jnp.abs(local) - box_half, 0.0)
     hit = jnp.any((jnp.sum(out * out, axis=-1) <= (reach * reach)[:, None]) & row.box_on)
-    face = jnp.max(sum(X[:, None, None, j] * faces[..., j] for j in range(3)) + faces[..., 3], axis=-1)  # (N, P)
-    hit |= jnp.any((face <= reach[:, None]) & row.face_on)
+    for p, n in enumerate(n_faces):  # each polytope's own faces only
+        f = faces[p, :n]
+        face = jnp.max(sum(X[:, None, j] * f[:, j] for j in range(3)) + f[:, 3], axis=-1)  # (N,)
+        hit |= jnp.any((face <= reach) & row.face_on[:, p])
     gap = X[:, None, :] - balls[:, :3]  # (N, M, 3)
     both = reach[:, None] + balls[:, 3]
     hit |= jnp.any((jnp.sum(gap * gap, axis=-1) <= both * both) & row.ball_on)
@@ -251,7 +261,7 @@ def world_collides(world: SphereWorld, group: Array, T_world_base: Array, T_base
     eye = jnp.broadcast_to(jnp.eye(4, dtype=T_base_joint.dtype), T_base_joint.shape[:-3] + (1, 4, 4))
     frames = jnp.concatenate([eye, T_base_joint], axis=-3).reshape((-1, k, S, n + 1, 4, 4))
     margin = world.margin + SLACK
-    one = lambda row, F, c, R, h, f, b: _row_hits(row, F, c, R, h, f, b, margin)  # noqa: E731
+    one = lambda row, F, c, R, h, f, b: _row_hits(row, F, c, R, h, f, b, margin, world.n_faces)  # noqa: E731
     per_seed = jax.vmap(one, in_axes=(None, 0, None, None, None, None, None))
     per_target = jax.vmap(per_seed, in_axes=(0, 0, None, None, None, None, None))
     per_pose = jax.vmap(per_target, in_axes=(None, 0, 0, 0, None, 0, 0))
@@ -260,7 +270,7 @@ def world_collides(world: SphereWorld, group: Array, T_world_base: Array, T_base
     # configuration: a mesh arm's thousand spheres make megabytes each, so the vehicle poses go
     # through in chunks that keep a call's blocks under TEST_BUDGET elements.
     N = rows.radius.shape[-1]
-    per_config = N * (half.shape[0] + faces.shape[-3] * faces.shape[-2] + balls.shape[-2]) + rows.pair_on[0].size
+    per_config = N * (half.shape[0] + sum(world.n_faces) + balls.shape[-2]) + rows.pair_on[0].size
     chunk = max(1, TEST_BUDGET // (k * S * per_config))
     if chunk >= frames.shape[0]:
         hits = per_pose(rows, frames, c, R, half, faces, balls)

@@ -168,7 +168,7 @@ def sphere_world(checker: SphereChecker, rows: list[tuple[Context, ...]], attach
         built.append((body, cen, rad, box_on, face_on, ball_on, pairs, caps))
     return evo.make_sphere_world(_pad(built), {"c": c, "R": R, "half": half, "vehicle": vehicle}, faces,
                                  np.reshape(balls, (-1, 4)), checker.margin, len(box_cols["base"]),
-                                 len(face_cols["base"]), dtype)
+                                 len(face_cols["base"]), dtype, [ends[k] - starts[k] for k in face_order])
 
 
 def _pad(built: list) -> dict:
