@@ -53,6 +53,12 @@ from uvms_jax.plan._scene import Context
 from uvms_jax.plan._sphere_kernels import (_box_distance, _box_of, _clearance_bounds,
                                           _first_collision, _hull_faces, _mesh_spheres, coarse_to_fine)
 
+# Grid cell of a mesh's spheres [m]. Docking tests every pair of them per IK solution: the
+# Panda's meshes give 1 381 spheres (589 k pairs per target) at 3 cm, 656 (133 k) at 4 cm, whose
+# free share of random configurations is 15.8 % against 17.0 % at 3 cm (MuJoCo: 21.5 %); 4.5 cm
+# cells, cut across its links less evenly, leave 11.9 %.
+MESH_CELL = 0.04
+
 __all__ = ["SphereChecker", "coarse_to_fine"]
 
 def _pair_filter(m: mujoco.MjModel):
@@ -93,7 +99,7 @@ class SphereChecker:
     reference checker).
     """
 
-    def __init__(self, reference: CollisionChecker, spacing: float = SPHERE_SPACING, cell: float = SPHERE_SPACING):
+    def __init__(self, reference: CollisionChecker, spacing: float = SPHERE_SPACING, cell: float = MESH_CELL):
         if spacing <= 0 or cell <= 0:
             raise ValueError(f"spacing and cell must be > 0 [m], got {spacing}, {cell}")
         self.reference = reference

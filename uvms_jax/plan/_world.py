@@ -22,7 +22,7 @@ from uvms_jax.plan._collision import CollisionChecker
 from uvms_jax.plan._scene import Context, Scene
 from uvms_jax.plan._settings import PlanSettings
 from uvms_jax.plan._spec import Obstacle
-from uvms_jax.plan._spheres import SphereChecker, _pair_filter
+from uvms_jax.plan._spheres import MESH_CELL, SphereChecker, _pair_filter
 from uvms_jax.plan._targets import node_contexts, tool_poses
 from uvms_jax.robot import SPHERE_SPACING
 
@@ -201,7 +201,7 @@ def _pad(built: list) -> dict:
 
 
 def docking_world(scene: Scene, T_vehicle_base, vehicle_boxes, margin: float, spacing: float = SPHERE_SPACING,
-                  cell: float = SPHERE_SPACING, dtype=None) -> evo.SphereWorld:
+                  cell: float = MESH_CELL, dtype=None) -> evo.SphereWorld:
     """The planner's world of a docking task (:func:`docking_task`'s targets, in its order).
 
     The scene's arm hangs from a vehicle through the mount ``T_vehicle_base (4, 4)`` [m]; the
