@@ -55,7 +55,7 @@ from uvms_jax.plan._sphere_kernels import (_box_distance, _box_of, _clearance_bo
 
 # Grid cell of a mesh's spheres [m]. Docking tests every pair of them per IK solution: the
 # Panda's meshes give 1 381 spheres (589 k pairs per target) at 3 cm, 656 (133 k) at 4 cm, whose
-# free share of random configurations is 15.8 % against 17.0 % at 3 cm (MuJoCo: 21.5 %); 4.5 cm
+# free share of random configurations is 15.6 % against 17.0 % at 3 cm (MuJoCo: 21.6 %); 4.5 cm
 # cells, cut across its links less evenly, leave 11.9 %.
 MESH_CELL = 0.04
 
