@@ -1,12 +1,14 @@
 """Docking's collision world (uvms_jax.evo._world): the segment distance of capsule pairs
 against dense sampling, the boxes and polytopes moved into the base frame against the
-distances computed in the world, and the capsule fallback at least as strict as the link
+distances computed in the world, polytopes of fewer faces than the padding by their own faces
+only, and the capsule fallback at least as strict as the link
 capsules it stands for. The planner's world is compared with the planner's checkers in
 tests/plan/test_plan_world.py."""
 
 import jax
 import jax.numpy as jnp
 import numpy as np
+import pytest
 
 from uvms_jax import evo, frames, kin
 from uvms_jax.evo._collide import capsules_hit_boxes, link_points
@@ -113,3 +115,34 @@ def test_chunked_poses_answer_as_one_call(monkeypatch):
     for poses in (1, 3):
         monkeypatch.setattr("uvms_jax.evo._world.TEST_BUDGET", poses * 2000 * per_config)
         np.testing.assert_array_equal(np.asarray(evo.world_collides(world, group, T_world_base, K.T_base_joint)), whole)
+
+
+def test_polytopes_of_few_faces_beside_a_padded_one():
+    """A cube and a half-space padded to the cube's 6 faces, read through ``n_faces``: a sphere
+    collides exactly where NumPy's largest signed face distance over the unpadded faces (in the
+    world) is within its radius, the padding (here a face that would cut the half-space in two)
+    unread; a face count beyond the padding is refused."""
+    rng = np.random.default_rng(3)
+    cube = np.array([[s * a[0], s * a[1], s * a[2], -0.2] for a in np.eye(3) for s in (1.0, -1.0)])  # |x|∞ ≤ 0.2
+    cube[:, 3] += cube[:, :3] @ [0.5, 0.0, 0.0]  # centred at x = 0.5
+    floor = np.array([[0.0, 0.0, 1.0, 0.4]])  # z ≤ -0.4 (a seabed below)
+    junk = np.array([[-1.0, 0.0, 0.0, 0.0]])  # x ≥ 0: read, it would free the half-space's x < 0
+    padded = np.stack([cube, np.concatenate([floor, np.repeat(junk, 5, axis=0)])])
+    n, r = 400, 0.05
+    centres = rng.uniform([-0.2, -0.5, -0.7], [0.9, 0.5, 0.4], (n, 3))  # in W
+    T_world_base = frames.rpy_pose((0.1, -0.2, 0.3), (0.2, -0.1, 0.8))
+    rows = {"body": np.zeros((n, 1), int), "centre": ((centres - T_world_base[:3, 3]) @ T_world_base[:3, :3])[:, None],
+            "radius": np.full((n, 1), r), "box_on": np.zeros((n, 1, 0), bool), "face_on": np.ones((n, 1, 2), bool),
+            "ball_on": np.zeros((n, 1, 0), bool), "pair_a": np.zeros((n, 0), int), "pair_b": np.zeros((n, 0), int),
+            "pair_on": np.zeros((n, 0, 0), bool), "cap_body": np.zeros((n, 0, 2), int),
+            "cap_ends": np.zeros((n, 0, 2, 2, 3)), "cap_reach": np.zeros((n, 0)), "cap_on": np.zeros((n, 0), bool)}
+    no_boxes = {"c": np.zeros((0, 3)), "R": np.zeros((0, 3, 3)), "half": np.zeros((0, 3)), "vehicle": np.zeros(0, bool)}
+    world = evo.make_sphere_world(rows, no_boxes, padded, np.zeros((0, 4)), 0.0, 0, 0, jnp.float32, n_faces=(6, 1))
+    eye = jnp.broadcast_to(jnp.eye(4, dtype=jnp.float32), (n, 1, 1, 4, 4))
+    got = np.asarray(evo.world_collides(world, jnp.arange(n), jnp.asarray(T_world_base, jnp.float32), eye))[:, 0]
+    depth = np.minimum(np.max(centres @ cube[:, :3].T + cube[:, 3], axis=1), centres @ floor[0, :3] + floor[0, 3])
+    clear = np.abs(depth - r) > 1e-3  # away from the float32 boundary and the slack
+    assert 50 < np.sum(got & clear) < np.sum(clear) - 50  # both answers occur
+    np.testing.assert_array_equal(got[clear], (depth <= r)[clear])
+    with pytest.raises(ValueError, match="n_faces"):
+        evo.make_sphere_world(rows, no_boxes, padded, np.zeros((0, 4)), 0.0, 0, 0, n_faces=(7, 1))
