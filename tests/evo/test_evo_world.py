@@ -1,9 +1,8 @@
 """Docking's collision world (uvms_jax.evo._world): the segment distance of capsule pairs
 against dense sampling, the boxes and polytopes moved into the base frame against the
 distances computed in the world, polytopes of fewer faces than the padding by their own faces
-only, and the capsule fallback at least as strict as the link
-capsules it stands for. The planner's world is compared with the planner's checkers in
-tests/plan/test_plan_world.py."""
+only, and the capsule fallback at least as strict as the link capsules it stands for. The
+planner's world is compared with the planner's checkers in tests/plan/test_plan_world.py."""
 
 import jax
 import jax.numpy as jnp
