@@ -55,7 +55,8 @@ def demo_settings(overrides: list[str]):
 def demo_problem(settings):
     """The demo's docking problem, built as the pipeline's docking stage builds it."""
     robot = planning.scenario_robot(settings.scenario)
-    task = planning.docking_task(planning.build_scene(robot, settings.scenario))
+    task = planning.docking_task(planning.build_scene(robot, settings.scenario), vehicle=settings.docking.scene,
+                                  margin=settings.plan.margin)
     return robot, task, evo.docking_problem(settings.docking.scene, settings.docking.dtype, task, robot)
 
 

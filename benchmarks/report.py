@@ -602,6 +602,51 @@ def docking_map() -> str:
                       "evaluation ratio", "amortised ratio (map counted)", "wall [s] analytic / map route"], rows) + "\n")
 
 
+def docking_collision() -> str:
+    """docs/docking.md's one world: docking's JAX collision test against the planner's sphere
+    checker and MuJoCo, its size and its cost beside the link capsules it replaced, per arm."""
+    rows, cost = [], []
+    for name, arm in (("docking_collision_demo_cpu.json", "Bravo 7"), ("docking_collision_panda_cpu.json", "Panda")):
+        d = _load(name)
+        a, w, b = d["agreement"], d["world"], d["batch"]
+        rows.append([arm, f"`{d['command']}`", f"{a['configurations']:,}".replace(",", " "),
+                     f"{100 * a['jax_free']:.1f} / {100 * a['spheres_free']:.1f} / {100 * a['mujoco_free']:.1f}",
+                     f"{100 * a['agree_spheres']:.2f}", f"{100 * a['agree_mujoco']:.2f}",
+                     f"{a['jax_collision_spheres_free']} / {a['jax_collision_mujoco_free']}",
+                     f"{a['jax_free_spheres_collision'] + a['jax_free_mujoco_collision']}"])
+        cost.append([arm, str(w["spheres_per_row"]), f"{w['sphere_pairs_per_row']:,}".replace(",", " "),
+                     f"{b['poses']} × {b['tool_poses']} × {b['seeds']} = {b['configurations']:,}".replace(",", " "),
+                     f"{d['capsules']['run_s']:.3f}", f"{d['spheres']['run_s']:.3f}",
+                     f"{d['spheres_over_capsules_time']:.1f}×", f"{d['fitness']['run_s']:.2f}",
+                     f"{d['host']['load_average'][0]:.1f}"])
+    return (_table(["arm", "command (2-core CPU)", "configurations", "free: JAX / spheres / MuJoCo [%]",
+                    "agrees with spheres [%]", "agrees with MuJoCo [%]", "JAX collision where spheres / MuJoCo free",
+                    "JAX free where either collides"], rows) + "\n\n"
+            + _table(["arm", "spheres per target", "sphere pairs per target", "batch (poses × tool poses × seeds)",
+                      "capsules [s]", "world [s]", "world / capsules", "whole fitness call [s]",
+                      "load average (shared CPU)"], cost) + "\n"
+            + _mesh_cost(_load("docking_collision_demo_cpu.json"), _load("docking_collision_panda_cpu.json"))
+            + _mjx(_load("docking_collision_demo_cpu.json")))
+
+
+def _mesh_cost(bravo: dict, panda: dict) -> str:
+    w, v = panda["world"], bravo["world"]
+    return (f"\nThe Panda's mesh links make {w['spheres_per_row'] / v['spheres_per_row']:.0f} times the Bravo 7's "
+            f"spheres and {w['sphere_pairs_per_row'] / v['sphere_pairs_per_row']:.0f} times its sphere pairs: its world "
+            f"takes {100 * panda['fitness']['collision_share_of_time']:.0f} % of its fitness call.\n")
+
+
+def _mjx(d: dict) -> str:
+    """MJX collision of the Bravo 7's docked MuJoCo scene, when the run measured it."""
+    if "mjx" not in d:
+        return ""
+    m = d["mjx"]
+    per_config = (m["run_s"] / m["configurations"]) / (d["spheres"]["run_s"] / d["batch"]["configurations"])
+    return (f"\nMJX collision of the same MuJoCo scene (one vehicle pose, the base fixed): {m['run_s']:.2f} s for "
+            f"{m['configurations']} configurations after a {m['compile_s']:.0f} s compilation, {per_config:.0f} times "
+            "the world's time per configuration on this CPU (and it would need the base as a moving body for docking).\n")
+
+
 def hw_runner() -> str:
     d = _load("hw_cpu.json")
     c, r, st = d["codec"], d["round_trip"], d["stream"]
@@ -720,7 +765,7 @@ def pipeline_arms() -> str:
                       "edges planned", "schedule", "executed (simulated)"], rows) + "\n")
 
 
-BLOCKS = {f.__name__: f for f in (hover_vehicle, kin_roofline, scale_out, surrogate_roofline, docking_ga, docking_panel, pipeline_arms, plan_benchmark, sched_benchmark, hw_runner, hw_acceptance, kin_indices_cpu, kin_indices_accuracy, kin_indices_gpu, demo, docking_search, docking_fitness, docking_map,
+BLOCKS = {f.__name__: f for f in (hover_vehicle, kin_roofline, scale_out, surrogate_roofline, docking_ga, docking_panel, pipeline_arms, plan_benchmark, sched_benchmark, hw_runner, hw_acceptance, kin_indices_cpu, kin_indices_accuracy, kin_indices_gpu, demo, docking_search, docking_fitness, docking_map, docking_collision,
                                    kin_summary, papers, hover_mjx, hover_robustness, surrogate_networks,
                                    surrogate_paper_sizes_cpu, surrogate_paper_sizes_h100, surrogate_sizes)}
 

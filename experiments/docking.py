@@ -47,7 +47,7 @@ def main(cfg: DictConfig) -> dict:
         settings = from_mapping(evo.DockingSettings, c)
         # The arm of the docking scene, in the scenario's scene (its mount replaced by the vehicle's).
         robot = evo.scene_robot(settings.scene) if scenario else None
-        task = plan.docking_task(plan.build_scene(robot, scenario)) if scenario else None
+        task = plan.docking_task(plan.build_scene(robot, scenario), vehicle=settings.scene) if scenario else None
     if settings.dtype == "float64":
         jax.config.update("jax_enable_x64", True)
     run = evo.run_docking(settings, task, robot)

@@ -69,7 +69,8 @@ def test_the_demos_docking_stage_reaches_its_dense_reference(monkeypatch):
     with initialize_config_dir(config_dir=str(root / "configs"), version_base="1.3"):
         settings = entry.settings_of(compose("pipeline", overrides=["seed=0"]))
     robot = plan.scenario_robot(settings.scenario)
-    task = plan.docking_task(plan.build_scene(robot, settings.scenario))
+    task = plan.docking_task(plan.build_scene(robot, settings.scenario), vehicle=settings.docking.scene,
+                             margin=settings.plan.margin)
     run = evo.run_docking(settings.docking, task, robot)
     reference = json.loads((root / "benchmarks" / "results" / "docking_reference_demo_h200.json").read_text())
     assert run.best.fitness >= 0.99 * reference["reference"]["fitness"], (run.best.fitness, run.best.source)

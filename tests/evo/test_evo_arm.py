@@ -13,7 +13,7 @@ from omegaconf import OmegaConf
 from uvms_jax import evo, kin, plan
 from uvms_jax.evo._collide import boxes_overlap, segment_box_distance
 from uvms_jax.settings import from_mapping
-from uvms_jax.robot import load_arm  # noqa: E402
+from uvms_jax.robot import SPHERE_SPACING, load_arm  # noqa: E402
 
 BRAVO7 = load_arm("bravo7")
 
@@ -155,7 +155,10 @@ def test_collisions_invalidate_solutions_and_poses(panel_problem):
     slab[:3, 3] = (-0.35, 0.0, 0.0)
     T_box = jnp.asarray(np.stack([slab, np.asarray(p.T_world_box[1])]), jnp.float32)  # slab + seabed
     half = p.scene_half.at[0].set(jnp.asarray([0.05, 1.0, 1.0], jnp.float32))
-    blocked = p.replace(T_world_box=T_box, scene_half=half)
+    # The arm's world of the new scene (the fallback's: link capsules against the boxes).
+    world = evo.capsule_world(p.chain, BRAVO7.link_radius, p.T_vehicle_base, (p.T_vehicle_box, p.vehicle_half),
+                              (T_box, half), p.n_groups, SPHERE_SPACING, jnp.float32)
+    blocked = p.replace(T_world_box=T_box, scene_half=half, world=world)
     assert not bool(evo.arm_solutions_jit(blocked, jnp.asarray(POSES))[1][:2].any())
     clear = np.asarray(_vehicle_clear(p, jnp.asarray(POSES)))
     assert clear.tolist() == [True, True, False]

@@ -26,7 +26,8 @@ def demo():
         scenario = OmegaConf.to_container(compose("pipeline"), resolve=True)["scenario"]
         docking = OmegaConf.to_container(compose("docking", overrides=["docking/preset=demo"]), resolve=True)
     settings = from_mapping(evo.DockingSettings, docking)
-    problem = evo.docking_problem(settings.scene, "float64", plan.docking_task(plan.build_scene(BRAVO7, scenario)))
+    task = plan.docking_task(plan.build_scene(BRAVO7, scenario), vehicle=settings.scene)
+    problem = evo.docking_problem(settings.scene, "float64", task)
     return scenario, problem
 
 

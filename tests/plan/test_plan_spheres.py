@@ -12,7 +12,7 @@ import yaml
 from uvms_jax.plan import (CollisionChecker, Context, SphereChecker, build_scene, densify, plan_motion, seed_ompl,
                            task_edges)
 from uvms_jax.plan._collision import BOUND_SLACK
-from uvms_jax.plan._sphere_kernels import _box_distance, _segment_distance, coarse_to_fine
+from uvms_jax.plan._sphere_kernels import _box_distance, _hull_faces, _mesh_spheres, _segment_distance, coarse_to_fine
 from uvms_jax.plan._tasks import _edge_set
 from uvms_jax.robot import load_arm  # noqa: E402
 
@@ -73,6 +73,59 @@ def test_box_distance_matches_dense_sampling():
         else:
             brute = np.min(np.linalg.norm(surface - x, axis=1))
             assert d <= brute + 1e-12 and d >= brute - np.linalg.norm(half) * 2 / 60
+
+
+def _hull_samples(vertices: np.ndarray, rng, n: int) -> np.ndarray:
+    """Points of the convex hull of ``vertices``: uniform in its bounding box, kept inside, and
+    on its surface (rays from an inner point to each face, so every face is sampled)."""
+    faces = _hull_faces(vertices)
+    lo, hi = vertices.min(0), vertices.max(0)
+    x = rng.uniform(lo, hi, (n, 3))
+    inside = x[np.max(x @ faces[:, :3].T + faces[:, 3], axis=1) <= 0]
+    o = vertices.mean(0)
+    d = rng.normal(size=(n, 3))
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    with np.errstate(divide="ignore"):
+        t = -(o @ faces[:, :3].T + faces[:, 3]) / (d @ faces[:, :3].T)  # (n, f) ray parameter to each plane
+    surface = o + np.min(np.where(t > 0, t, np.inf), axis=1)[:, None] * d
+    return np.concatenate([vertices, inside, surface])
+
+
+def _circumscribed_cells(vertices: np.ndarray, cell: float) -> tuple[np.ndarray, float]:
+    """The plain cover to beat: centres ``(n, 3)`` and the radius of the circumscribed spheres
+    of the grid cells whose sphere reaches the hull."""
+    faces = _hull_faces(vertices)
+    lo, hi = vertices.min(0), vertices.max(0)
+    n = np.maximum(1, np.ceil((hi - lo) / cell - 1e-9).astype(int))
+    h = (hi - lo) / n
+    c = np.stack(np.meshgrid(*[lo[i] + (np.arange(n[i]) + 0.5) * h[i] for i in range(3)], indexing="ij"), -1)
+    c, r = c.reshape(-1, 3), np.linalg.norm(h) / 2
+    return c[np.max(c @ faces[:, :3].T + faces[:, 3], axis=1) <= r], r
+
+
+def test_mesh_spheres_hold_the_hull_and_bulge_less_than_cells():
+    """Random convex meshes (a blob, a thin slab, a long rod): every sampled point of the hull
+    (inside, on the surface, its vertices) lies in some sphere; no more spheres than the plain
+    cover of circumscribed cell spheres, and less bulge out of the hull (radius plus the
+    centre's largest face distance): at most its largest, below its mean, and a small fraction
+    of it on the blob, whose spheres can centre deep inside."""
+    rng = np.random.default_rng(4)
+    cell = 0.03
+    shapes = [rng.normal(size=(60, 3)) * [0.06, 0.04, 0.1], rng.uniform(-1, 1, (40, 3)) * [0.1, 0.08, 0.004],
+              rng.uniform(-1, 1, (40, 3)) * [0.01, 0.012, 0.2]]
+    for i, v in enumerate(shapes):
+        c, r = _mesh_spheres(v, cell)
+        x = _hull_samples(v, rng, 20_000)
+        d = np.linalg.norm(x[:, None] - c[None], axis=2) - r
+        assert np.all(np.min(d, axis=1) <= 1e-12), "a point of the hull outside every sphere"
+        faces = _hull_faces(v)
+        bulge = r + np.max(c @ faces[:, :3].T + faces[:, 3], axis=1)
+        c0, r0 = _circumscribed_cells(v, cell)
+        bulge0 = r0 + np.max(c0 @ faces[:, :3].T + faces[:, 3], axis=1)
+        assert len(r) <= len(c0)
+        assert np.max(bulge) <= np.max(bulge0) and np.mean(bulge) < np.mean(bulge0)
+        if i == 0:
+            assert np.mean(bulge) < 0.2 * np.mean(bulge0)
 
 
 def test_coarse_to_fine_is_a_permutation_ending_first():

@@ -297,9 +297,9 @@ def test_panda_scene_and_sphere_checker(panda):
     Q = np.random.default_rng(2).uniform(reference.lower, reference.upper, (400, panda.n_joints))
     ok, mj = fast.spheres_free(Q, ctx), reference.is_valid_batch(Q, ctx)
     assert not np.any(ok & ~mj), "the spheres accepted a configuration MuJoCo rejects"
-    # The Panda's wrist links 5 and 7 are 2 cm apart at most: their sphere grids (3 cm cells)
-    # meet, so the spheres reject nearly everything and MuJoCo decides; motions still get
-    # MuJoCo's answer.
+    # The spheres bulge out of the meshes (the wrist links 5 and 7 are 2 cm apart at most), so
+    # they reject some configurations MuJoCo accepts and MuJoCo decides those: motions still
+    # get MuJoCo's answer.
     starts = Q[mj][:6]
     for q0, q1 in zip(starts[:-1], starts[1:]):
         q1 = q0 + 0.2 * (q1 - q0)

@@ -5,7 +5,8 @@ the search set Wd, eq. 14), the paper's binary GA (Table 2) as pure ``init/ask/t
 functions with whole runs in one jitted loop, a chunked dense grid search and CMA-ES
 (evosax) as baselines, and the ``w_max`` map of eq. 16. The same optimisers dock any arm
 under a vehicle (:class:`ArmDockingProblem`: targets as tool poses, batched multi-seed
-numerical IK checked for limits and collisions; docs/docking.md). :func:`run_docking` is the
+numerical IK checked for limits and collisions in the planner's world, :class:`SphereWorld`;
+docs/docking.md). :func:`run_docking` is the
 whole docking experiment as one stage (settings in, :class:`DockingRun` out) and
 :func:`write_docking` writes its files and figures.
 """
@@ -61,6 +62,7 @@ from uvms_jax.evo._problem import evaluate_traced
 from uvms_jax.evo._problem import in_search_set
 from uvms_jax.evo._problem import make_docking_problem
 from uvms_jax.evo._scenes import ArmTask
+from uvms_jax.evo._scenes import boxes
 from uvms_jax.evo._scenes import scene_robot
 from uvms_jax.evo._scenes import arm_docking_problem
 from uvms_jax.evo._scenes import panel_targets
@@ -78,6 +80,12 @@ from uvms_jax.evo._settings import PanelSettings
 from uvms_jax.evo._settings import SceneSettings
 from uvms_jax.evo._settings import WmaxSettings
 from uvms_jax.evo._shard import ShardedProblem
+from uvms_jax.evo._world import SLACK
+from uvms_jax.evo._world import SphereWorld
+from uvms_jax.evo._world import WorldRows
+from uvms_jax.evo._world import capsule_world
+from uvms_jax.evo._world import make_sphere_world
+from uvms_jax.evo._world import world_collides
 from uvms_jax.evo._shard import device_mesh
 from uvms_jax.evo._shard import shard_over_devices
 from uvms_jax.evo._wmax import WmaxMap

@@ -9,8 +9,10 @@ are alternatives, e.g. the symmetric grasps of an object). For a vehicle pose:
 - every pose of every target is solved by damped least squares from the same ``S`` fixed
   seeds (one jitted call over poses × targets × seeds, a fixed number of iterations);
 - a seed's solution counts when FK reaches the demanded pose, every joint lies within its
-  limits (revolute angles are only shifted by multiples of 2π, never clipped) and the arm's
-  link capsules clear the vehicle and the scene boxes;
+  limits (revolute angles are only shifted by multiples of 2π, never clipped) and it is free
+  in the collision world of its target (:mod:`uvms_jax.evo._world`: the planner's spheres,
+  pairs and margin when the task brings them, else the link capsules as spheres against the
+  vehicle's and the scene's boxes);
 - ``w`` of a target is the best manipulability over its valid solutions (0 if none), and
   ``M_a = min over targets`` (the paper's eq. 1 aggregation);
 - the fitness is the paper's eq. 15 (:func:`uvms_jax.evo._problem.docking_fitness`), with
@@ -32,9 +34,11 @@ from flax import struct
 from jax import Array
 
 from uvms_jax import indices, kin
-from uvms_jax.evo._collide import boxes_overlap, capsules_hit_boxes, link_points
+from uvms_jax.evo._collide import boxes_overlap
 from uvms_jax.evo._problem import DockingEval, base_transform, docking_fitness
+from uvms_jax.evo._world import SphereWorld, capsule_world, world_collides
 from uvms_jax.kin import Chain
+from uvms_jax.robot import SPHERE_SPACING
 
 
 @struct.dataclass
@@ -51,9 +55,10 @@ class ArmDockingProblem:
       p_dock: ``(3,)`` docking point of the vehicle in V [m] (D of eq. 3 is measured there).
       p_i: ``(3,)`` initial position of the docking point in W [m].
       a, b: weights of eq. 8.
-      link_radius: capsule radius of the arm's links [m].
+      world: the arm's collision world, one row per target (:class:`~uvms_jax.evo.SphereWorld`).
       T_vehicle_box, vehicle_half: ``(mv, 4, 4), (mv, 3)`` vehicle body boxes in V [m].
-      T_world_box, scene_half: ``(ms, 4, 4), (ms, 3)`` scene boxes (panel, tables) in W [m].
+      T_world_box, scene_half: ``(ms, 4, 4), (ms, 3)`` scene boxes (panel, tables) in W [m]:
+        the vehicle's body must not meet them (Wd).
       damping: DLS damping; λ² = damping² (‖e‖² + 10⁻⁶).
       n_groups: number of targets g (static).
       iterations: DLS iterations per seed (static).
@@ -70,7 +75,7 @@ class ArmDockingProblem:
     p_i: Array
     a: Array
     b: Array
-    link_radius: Array
+    world: SphereWorld
     T_vehicle_box: Array
     vehicle_half: Array
     T_world_box: Array
@@ -99,6 +104,7 @@ def make_arm_docking_problem(
     link_radius: float,
     vehicle_boxes=((), ()),
     scene_boxes=((), ()),
+    world: SphereWorld | None = None,
     n_seeds: int = 16,
     iterations: int = 40,
     damping: float = 1.0,
@@ -115,14 +121,18 @@ def make_arm_docking_problem(
       low, high: ``(4,)`` box of vehicle poses ``[x, y, z, ψ]`` [m, rad].
       p_dock: ``(3,)`` docking point in the vehicle frame [m]; p_i: its initial world position.
       a, b: weights of eq. 8.
-      link_radius: capsule radius of the links [m].
+      link_radius: capsule radius of the links [m] (the collision world without ``world``).
       vehicle_boxes: ``(T_vehicle_box (mv, 4, 4), half (mv, 3))`` in the vehicle frame.
       scene_boxes: ``(T_world_box (ms, 4, 4), half (ms, 3))`` in the world.
+      world: the collision world, one row per target (e.g. the planner's,
+        :func:`uvms_jax.plan.docking_world`); None: :func:`~uvms_jax.evo.capsule_world` of
+        the chain, ``link_radius`` and the boxes.
       n_seeds, iterations, damping: numerical IK (seeds uniform in the limits, from ``seed``).
       dtype: float dtype (default: JAX's default float).
 
     Raises:
-      ValueError: on wrong shapes, an empty box, a bad grouping or non-positive sizes.
+      ValueError: on wrong shapes, an empty box, a bad grouping, non-positive sizes or a
+        world whose rows are not the targets.
     """
     dtype = dtype or jnp.zeros(()).dtype
     arr = lambda x: jnp.asarray(np.asarray(x, dtype=np.float64), dtype=dtype)
@@ -152,6 +162,14 @@ def make_arm_docking_problem(
         if T_box.shape[0] != half.shape[0] or np.any(half <= 0):
             raise ValueError(f"{label}: need as many poses as positive half sizes, got {T_box.shape[0]} and {half}")
         boxes.append((arr(T_box), arr(half)))
+    n_groups = int(group.max()) + 1
+    if world is None:
+        world = capsule_world(chain, link_radius, mount, vehicle_boxes, scene_boxes, n_groups, SPHERE_SPACING, dtype)
+    elif world.rows.radius.shape[0] != n_groups or int(jnp.max(world.rows.body, initial=0)) > chain.n_joints:
+        raise ValueError(f"world has {world.rows.radius.shape[0]} rows for {n_groups} targets, or bodies beyond the "
+                         f"arm's {chain.n_joints}")
+    # The world in the problem's float dtype (indices and masks stay as they are).
+    world = jax.tree_util.tree_map(lambda x: x.astype(dtype) if jnp.issubdtype(x.dtype, jnp.floating) else x, world)
     lo, up = np.asarray(chain.lower, dtype=np.float64), np.asarray(chain.upper, dtype=np.float64)
     u = np.asarray(jax.random.uniform(jax.random.key(seed), (n_seeds, chain.n_joints), dtype=jnp.float32))
     return ArmDockingProblem(
@@ -166,13 +184,13 @@ def make_arm_docking_problem(
         p_i=arr(p_i),
         a=arr(a),
         b=arr(b),
-        link_radius=arr(link_radius),
+        world=world,
         T_vehicle_box=boxes[0][0],
         vehicle_half=boxes[0][1],
         T_world_box=boxes[1][0],
         scene_half=boxes[1][1],
         damping=arr(damping),
-        n_groups=int(group.max()) + 1,
+        n_groups=n_groups,
         iterations=int(iterations),
     )
 
@@ -197,21 +215,13 @@ def arm_solutions(problem: ArmDockingProblem, pose: Array) -> tuple[Array, Array
       ``w (..., k, S)`` manipulability (0 where not valid).
     """
     p = problem
-    T_world_vehicle, T_world_base, T_base_tool = arm_tool_poses(p, pose)
+    _, T_world_base, T_base_tool = arm_tool_poses(p, pose)
     q = kin.dls_ik(p.chain, T_base_tool[..., None, :, :], p.seeds, p.iterations, p.damping, limits="wrap")  # (..., k, S, n)
     K = kin.kinematics(p.chain, q)
     reached = kin.reaches(T_base_tool[..., None, :, :], K.T_base_tool)
     within = jnp.all((q >= p.chain.lower) & (q <= p.chain.upper), axis=-1)
-    points = link_points(T_world_base[..., None, None, :, :], K.T_base_joint, K.T_base_tool)  # (..., k, S, n + 2, 3)
-    n_caps = points.shape[-2] - 1
-    T_vb = kin.matmul(T_world_vehicle[..., None, :, :], p.T_vehicle_box)  # (..., mv, 4, 4)
-    T_vb = T_vb[..., None, None, None, :, :, :]  # (..., 1, 1, 1, mv, 4, 4): against every target, seed, capsule
-    # The first capsule (base → first joint) is fixed on the vehicle: it is not tested against it.
-    skip_vehicle = jnp.zeros((n_caps, p.vehicle_half.shape[0]), bool).at[0].set(True)
-    hit_vehicle = capsules_hit_boxes(points, p.link_radius, T_vb, p.vehicle_half, skip_vehicle)
-    hit_scene = capsules_hit_boxes(points, p.link_radius, p.T_world_box, p.scene_half,
-                                   jnp.zeros((n_caps, p.scene_half.shape[0]), bool))
-    valid = reached & within & ~hit_vehicle & ~hit_scene
+    hit = world_collides(p.world, p.group, T_world_base, K.T_base_joint)
+    valid = reached & within & ~hit
     w = jnp.where(valid, indices.manipulability_of(p.chain, q), 0.0)
     return q, valid, w
 

@@ -10,6 +10,7 @@ from uvms_jax import frames
 from uvms_jax import robot as robots
 from uvms_jax.evo._arm import ArmDockingProblem, make_arm_docking_problem
 from uvms_jax.evo._settings import ArmSceneSettings, BoxSettings, PanelSettings
+from uvms_jax.evo._world import SphereWorld
 
 
 def boxes(items: tuple[BoxSettings, ...]) -> tuple[np.ndarray, np.ndarray]:
@@ -53,7 +54,11 @@ class ArmTask(NamedTuple):
       group: ``(k,)`` target of each pose, ``0 … g − 1``; the poses of a target are
         alternatives (e.g. the symmetric grasps of an object).
       names: ``(g,)`` a label per target.
-      T_world_box, half: ``(m, 4, 4), (m, 3)`` obstacle boxes in the world [m].
+      T_world_box, half: ``(m, 4, 4), (m, 3)`` obstacle boxes in the world [m] (the vehicle
+        must not meet them).
+      world: the planner's collision world of the arm on its vehicle in this scene, one row per
+        target (:func:`uvms_jax.plan.docking_world`); None: the arm's link capsules against
+        the boxes (:func:`~uvms_jax.evo.capsule_world`).
     """
 
     T_world_tool: np.ndarray
@@ -61,13 +66,14 @@ class ArmTask(NamedTuple):
     names: tuple[str, ...]
     T_world_box: np.ndarray
     half: np.ndarray
+    world: SphereWorld | None = None
 
 
 def panel_task(panel: PanelSettings) -> ArmTask:
     """The panel's control points, each its own target, with no obstacles (the scene's boxes
     hold the panel)."""
     T = panel_targets(panel)
-    return ArmTask(T, np.arange(len(T)), tuple(f"point {i}" for i in range(len(T))), *boxes(()))
+    return ArmTask(T, np.arange(len(T)), tuple(f"point {i}" for i in range(len(T))), *boxes(()), None)
 
 
 def fewer_alternatives(task: ArmTask, alternatives: int | None) -> ArmTask:
@@ -135,6 +141,7 @@ def arm_docking_problem(scene: ArmSceneSettings, task: ArmTask | None = None, dt
         a=scene.a,
         b=scene.b,
         link_radius=robot.link_radius,
+        world=task.world,
         vehicle_boxes=boxes(scene.vehicle_boxes),
         scene_boxes=(T_box, half),
         n_seeds=scene.ik_seeds,

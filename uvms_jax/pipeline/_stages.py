@@ -13,7 +13,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from uvms_jax import evo, frames, hover, hw, planfile, progress, sched, surrogate
+from uvms_jax import evo, hover, hw, planfile, progress, sched, surrogate
 from uvms_jax import robot as robots
 from uvms_jax import plan as planning
 from uvms_jax.pipeline._report import StageReport, md_table
@@ -65,7 +65,8 @@ def _pose(p) -> list[float]:
 def _docking_problem(s: PipelineSettings, flow: Flow) -> evo.ArmDockingProblem:
     """The arm-on-vehicle docking problem over the scenario's grasp and place poses (built once)."""
     if flow.problem is None:
-        flow.task = planning.docking_task(planning.build_scene(flow.robot, s.scenario))
+        flow.task = planning.docking_task(planning.build_scene(flow.robot, s.scenario), vehicle=s.docking.scene,
+                                          margin=s.plan.margin)
         flow.problem = evo.docking_problem(s.docking.scene, s.docking.dtype, flow.task, flow.robot)
     return flow.problem
 
@@ -87,7 +88,8 @@ def surrogates(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
                      [[f"{run.n_train} / {run.n_test}", f"{100 * t['reached_fraction']:.0f} %", run.analytic_seconds,
                        r.hidden, run.train_seconds, t["rmse_w"], t["max_abs_error_w"], t["w_range"]]])
     notes = ["The docking fitness spends its time in multi-seed numerical IK; what it keeps per tool pose is the best "
-             "w over the valid solutions (reached, within the limits, clear of the vehicle), a function of the tool "
+             "w over the valid solutions (reached, within the limits, clear of the vehicle and of the arm itself), a "
+             "function of the tool "
              "pose seen from the arm's base alone. An FFBN learns it here from tool poses sampled in the base frame "
              f"(reached positions, approaches within {r.approach_cone_deg:g}° of the downward vertical), each scored by "
              "the docking fitness's own IK: the arm, its mount, the vehicle and the IK settings, not the task or the "
@@ -98,17 +100,6 @@ def surrogates(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
              "experiments/surrogate.py` (docs/reproduction.md)."]
     return StageReport("surrogate", f"Surrogate: the {flow.robot.name}'s dexterity map on its vehicle (docs/docking.md)",
                        [table], res, notes)
-
-
-def _world_obstacles(problem: evo.ArmDockingProblem, T_world_vehicle: np.ndarray) -> tuple[planning.Obstacle, ...]:
-    """The vehicle's boxes at its docked pose, as planning-scene obstacles (world frame)."""
-    out = []
-    for i, (T, half) in enumerate(zip(np.asarray(problem.T_vehicle_box), np.asarray(problem.vehicle_half))):
-        W = T_world_vehicle @ T
-        rpy = frames.matrix_rpy(W[:3, :3])
-        out.append(planning.Obstacle(f"vehicle{i}", "box", tuple(W[:3, 3].tolist()), tuple(rpy.tolist()),
-                                     tuple((2 * half).tolist())))
-    return tuple(out)
 
 
 def docked_scene(scenario, problem: evo.ArmDockingProblem, pose) -> tuple[np.ndarray, np.ndarray, planning.SceneSpec]:
@@ -122,7 +113,8 @@ def docked_scene(scenario, problem: evo.ArmDockingProblem, pose) -> tuple[np.nda
     T_world_vehicle, T_world_base, _ = (np.asarray(a, dtype=float)
                                         for a in evo.arm_tool_poses(problem, jnp.asarray(pose, problem.pose_low.dtype)))
     spec = planning.SceneSpec.from_mapping(scenario).with_base(T_world_base)
-    spec = dataclasses.replace(spec, obstacles=spec.obstacles + _world_obstacles(problem, T_world_vehicle))
+    vehicle = planning.vehicle_obstacles(T_world_vehicle, problem.T_vehicle_box, problem.vehicle_half)
+    spec = dataclasses.replace(spec, obstacles=spec.obstacles + vehicle)
     return T_world_vehicle, T_world_base, spec
 
 
@@ -461,7 +453,8 @@ def _fixed_mount_M_a(problem: evo.ArmDockingProblem, T_world_base: np.ndarray) -
         return None
     pose = np.array([*T[:3, 3], np.arctan2(T[1, 0], T[0, 0])])
     dtype = problem.T_vehicle_box.dtype
-    no_hull = problem.replace(T_vehicle_box=jnp.zeros((0, 4, 4), dtype), vehicle_half=jnp.zeros((0, 3), dtype))
+    no_hull = problem.replace(T_vehicle_box=jnp.zeros((0, 4, 4), dtype), vehicle_half=jnp.zeros((0, 3), dtype),
+                              world=problem.world.without_vehicle())
     return float(evo.evaluate_arm(no_hull, pose).M_a)
 
 

@@ -18,7 +18,9 @@ as the thesis's test cage (thesis ch. 4–5).
   hold no context a caller must set or reset;
 * targets: :func:`pick_place_targets` (batched numerical IK of the eight pick-and-place steps),
   :class:`NodeTarget`, :data:`STEPS`; :func:`docking_task` (the grasp and place poses as a
-  docking optimiser's task, ``uvms_jax.evo.ArmTask``);
+  docking optimiser's task, ``uvms_jax.evo.ArmTask``, with the planner's collision world of the
+  arm on its vehicle, :func:`docking_world`: the sphere checker's model as a
+  ``uvms_jax.evo.SphereWorld``; :func:`vehicle_obstacles`: the vehicle's boxes in a scene);
 * planning: :func:`plan_motion` (any OMPL geometric planner by name, :func:`ompl_planners`,
   with its parameters, :func:`planner_parameters`; simplification; MuJoCo re-check),
   :func:`time_parameterize`, :class:`Trajectory`, :func:`check_trajectory`, :func:`seed_ompl`;
@@ -67,7 +69,6 @@ from uvms_jax.plan._spheres import SphereChecker
 from uvms_jax.plan._targets import STEPS
 from uvms_jax.plan._targets import NodeTarget
 from uvms_jax.plan._targets import node_contexts
-from uvms_jax.plan._targets import docking_task
 from uvms_jax.plan._targets import pick_place_targets
 from uvms_jax.plan._targets import tool_poses
 from uvms_jax.plan._taskgraph import PlannerSummary
@@ -85,5 +86,10 @@ from uvms_jax.plan._tasks import task_edges
 from uvms_jax.plan._video import VideoInfo
 from uvms_jax.plan._video import render_run_video
 from uvms_jax.plan._video import scene_camera
+from uvms_jax.plan._world import VEHICLE_PREFIX
+from uvms_jax.plan._world import docking_task
+from uvms_jax.plan._world import docking_world
+from uvms_jax.plan._world import sphere_world
+from uvms_jax.plan._world import vehicle_obstacles
 from uvms_jax.plan._write import write_plan
 from uvms_jax.plan._write import write_task_graph

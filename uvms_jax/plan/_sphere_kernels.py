@@ -15,14 +15,6 @@ from scipy.spatial import ConvexHull
 _FACE_ATOL = 1e-9  # coplanar triangles of a hull give one face equation up to round-off
 
 
-def _capsule_spheres(pos, R, radius: float, half_length: float, spacing: float) -> tuple[np.ndarray, np.ndarray]:
-    """Spheres containing a capsule (centre ``pos``, axis ``R[:, 2]``): centres ``(n, 3)``, radii ``(n,)``."""
-    n = max(2, int(np.ceil(2 * half_length / spacing)) + 1)
-    step = 2 * half_length / (n - 1)
-    centres = pos + np.linspace(-half_length, half_length, n)[:, None] * R[:, 2]
-    return centres, np.full(n, np.hypot(radius, step / 2))
-
-
 def _hull_faces(vertices: np.ndarray) -> np.ndarray:
     """Face equations ``(f, 4)`` of the convex hull of ``vertices (v, 3)``: ``n·x + d ≤ 0``
     inside, ``|n| = 1``."""
@@ -55,18 +47,94 @@ def _box_of(faces: np.ndarray) -> np.ndarray | None:
     return np.vstack([centre, U * np.array([a[2] for a in axes])[:, None]])
 
 
-def _mesh_spheres(vertices: np.ndarray, cell: float) -> tuple[np.ndarray, np.ndarray]:
-    """Spheres covering the convex hull of ``vertices (v, 3)``: the circumscribed spheres of
-    the cells (edges ≤ ``cell``) of its bounding box that reach the hull."""
-    lo, hi = vertices.min(0), vertices.max(0)
-    n = np.maximum(1, np.ceil((hi - lo) / cell - 1e-9).astype(int))
-    h = (hi - lo) / n
-    axes = [lo[i] + (np.arange(n[i]) + 0.5) * h[i] for i in range(3)]
-    centres = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, 3)
-    r = float(np.linalg.norm(h) / 2)
+_CORNERS = np.array([[i, j, k] for i in (0, 1) for j in (0, 1) for k in (0, 1)], dtype=float)
+_CELL_EDGES = np.array([(a, b) for a in range(8) for b in range(a + 1, 8) if np.sum(_CORNERS[a] != _CORNERS[b]) == 1])
+_IN_TOL = 1e-9  # [m] a point this close outside the cell or the hull still counts (only enlarges a sphere)
+_DEPTHS = 24  # candidate centres along a piece's inward normal
+
+
+def _hull_edges(vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The convex hull's vertices ``(v, 3)`` and the edges of its triangles ``(e, 2)`` (indices
+    into them; edges inside a face of several triangles included)."""
+    hull = ConvexHull(vertices)
+    index = np.full(len(vertices), -1)
+    index[hull.vertices] = np.arange(len(hull.vertices))
+    tri = index[hull.simplices]
+    edges = np.sort(np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [0, 2]]]), axis=1)
+    return vertices[hull.vertices], np.unique(edges, axis=0)
+
+
+def _cell_piece(lo: np.ndarray, h: np.ndarray, V: np.ndarray, E: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """Points ``(p, 3)`` among which lie all vertices of the convex piece ``[lo, lo + h] ∩ hull``
+    (so a ball holding them holds the piece): the hull's vertices in the cell, the cell's corners
+    in the hull, the hull's edges through the cell's faces and the cell's edges where they enter
+    and leave the hull. ``V (v, 3)``, ``E (e, 2)``: the hull's vertices and edges; ``faces (f, 4)``
+    its face equations."""
+    hi = lo + h
+    in_cell = lambda x: x[np.all((x >= lo - _IN_TOL) & (x <= hi + _IN_TOL), axis=1)]
+    corners = lo + _CORNERS * h
+    out = [in_cell(V), corners[np.max(corners @ faces[:, :3].T + faces[:, 3], axis=1) <= _IN_TOL]]
+    p, d = V[E[:, 0]], V[E[:, 1]] - V[E[:, 0]]
+    for axis in range(3):
+        for plane in (lo[axis], hi[axis]):
+            with np.errstate(divide="ignore", invalid="ignore"):
+                t = (plane - p[:, axis]) / d[:, axis]
+            ok = np.isfinite(t) & (t >= 0) & (t <= 1)  # an edge in the plane: its ends are found elsewhere
+            out.append(in_cell(p[ok] + t[ok, None] * d[ok]))
+    a, b = corners[_CELL_EDGES[:, 0]], corners[_CELL_EDGES[:, 1]]  # (12, 3)
+    fa = a @ faces[:, :3].T + faces[:, 3]  # (12, f): face distance along the edge is fa + t (fb - fa)
+    slope = (b @ faces[:, :3].T + faces[:, 3]) - fa
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = -fa / slope
+    t0 = np.max(np.where(slope < 0, t, 0.0), axis=1, initial=0.0)
+    t1 = np.min(np.where(slope > 0, t, 1.0), axis=1, initial=1.0)
+    cut = (t0 <= t1) & ~np.any((slope == 0) & (fa > _IN_TOL), axis=1)
+    out += [(a + t0[:, None] * (b - a))[cut], (a + t1[:, None] * (b - a))[cut]]
+    return np.concatenate(out)
+
+
+@functools.lru_cache(maxsize=256)
+def _mesh_spheres_cached(data: bytes, n: int, cell: float) -> tuple[np.ndarray, np.ndarray]:
+    vertices = np.frombuffer(data).reshape(n, 3)
+    V, E = _hull_edges(vertices)
     faces = _hull_faces(vertices)
-    reach = np.max(centres @ faces[:, :3].T + faces[:, 3], axis=1) <= r
-    return centres[reach], np.full(int(reach.sum()), r)
+    lo, hi = V.min(0), V.max(0)
+    counts = np.maximum(1, np.ceil((hi - lo) / cell - 1e-9).astype(int))
+    h = (hi - lo) / counts
+    reach = np.linspace(0.0, np.linalg.norm(hi - lo) / 2, _DEPTHS)[:, None]
+    centres, radii = [], []
+    for ijk in np.ndindex(*counts):
+        P = _cell_piece(lo + np.array(ijk) * h, h, V, E, faces)
+        if len(P) < 4 or np.min(np.ptp(P, axis=0)) <= 1e-7 * cell:
+            continue  # no piece, or a flat one: it lies in its neighbours' pieces too
+        # The ball of least bulge out of the hull, r + largest face distance of its centre, among
+        # centres from the piece's box middle inwards (against the summed normals of the hull's
+        # faces the piece touches): deep centres put the ball's rim on the piece's faces.
+        touch = np.any(P @ faces[:, :3].T + faces[:, 3] > -_IN_TOL, axis=0)
+        inward = -faces[touch, :3].sum(0)
+        inward /= max(np.linalg.norm(inward), 1e-300)
+        c = (P.min(0) + P.max(0)) / 2 + reach * inward  # (_DEPTHS, 3)
+        r = np.max(np.linalg.norm(c[:, None] - P[None], axis=2), axis=1)
+        best = np.argmin(r + np.max(c @ faces[:, :3].T + faces[:, 3], axis=1))
+        centres.append(c[best])
+        radii.append(r[best] * (1 + 1e-12) + _IN_TOL)
+    return np.array(centres).reshape(-1, 3), np.array(radii)
+
+
+def _mesh_spheres(vertices: np.ndarray, cell: float) -> tuple[np.ndarray, np.ndarray]:
+    """Spheres covering the convex hull of ``vertices (v, 3)`` [m] (MuJoCo collides a mesh as
+    its hull): centres ``(n, 3)``, radii ``(n,)`` [m], one per cell (edges ≤ ``cell``) of a grid
+    over the hull's bounding box that the hull enters.
+
+    Each sphere holds the cell's piece of the hull (every vertex of the piece lies in it, and
+    the ball is convex), so together they hold the hull; its centre is the one, on a line from
+    the piece's middle into the hull, with the least bulge out of the hull (the circumscribed
+    sphere of a cell cut by a face bulges by up to its radius, √3/2 of the cell's edge). Cached
+    by the vertices' bytes: a link's spheres are fitted once per process.
+    """
+    vertices = np.ascontiguousarray(vertices, dtype=np.float64)
+    centres, radii = _mesh_spheres_cached(vertices.tobytes(), len(vertices), float(cell))
+    return centres.copy(), radii.copy()
 
 
 @functools.lru_cache(maxsize=4096)

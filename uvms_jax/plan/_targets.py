@@ -25,12 +25,12 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from uvms_jax import evo, frames, indices, kin
+from uvms_jax import frames, indices, kin
 from uvms_jax.plan._collision import CollisionChecker
 from uvms_jax.plan._scene import Context, Scene
 from uvms_jax.plan._settings import IkSettings
 
-__all__ = ["NodeTarget", "STEPS", "docking_task", "node_contexts", "pick_place_targets", "tool_poses"]
+__all__ = ["NodeTarget", "STEPS", "node_contexts", "pick_place_targets", "tool_poses"]
 
 #: The eight pick-and-place steps (thesis 4.4): object steps then base steps.
 STEPS = ("pre-grasp", "open", "grasp", "close", "post-grasp", "pre-final", "final", "post-final")
@@ -89,24 +89,6 @@ def tool_poses(scene: Scene, node: int, n_yaw_continuous: int = 8) -> tuple[np.n
     at = np.stack([T_obj @ frames.pose(frames.rot_z(y)) @ T_obj_tool for y in yaws])
     pre = at @ _shift(-scene.spec.approach)
     return yaws, at, pre
-
-
-def docking_task(scene: Scene, n_yaw_continuous: int = 8) -> evo.ArmTask:
-    """What a docking optimiser must let the arm reach in this scene: the grasp pose of every
-    object and the place pose of every base (one target each, in node order), each symmetric
-    yaw of the object an alternative pose of its target; the scene's tables as obstacles.
-    World frame, independent of the arm's base pose."""
-    nodes = sorted(scene.objects) + sorted(scene.bases)
-    poses, group = [], []
-    for i, node in enumerate(nodes):
-        at = tool_poses(scene, node, n_yaw_continuous)[1]
-        poses.append(at)
-        group += [i] * len(at)
-    names = tuple((scene.objects.get(node) or scene.bases[node]).name for node in nodes)
-    tables = scene.spec.tables
-    T_box = np.stack([t.T_world_box for t in tables])
-    half = np.stack([np.asarray(t.size) / 2 for t in tables])
-    return evo.ArmTask(np.concatenate(poses), np.asarray(group), names, T_box, half)
 
 
 def node_contexts(scene: Scene, node: int) -> dict[str, Context]:

@@ -11,6 +11,8 @@ planning scene and the simulated arm both use; ``self_collision_pairs`` finds th
 to leave out of self-collision checks. See docs/robots.md.
 """
 
+from uvms_jax.robot._geometry import SPHERE_SPACING
+from uvms_jax.robot._geometry import capsule_spheres
 from uvms_jax.robot._load import DESCRIPTIONS
 from uvms_jax.robot._load import load_arm
 from uvms_jax.robot._load import load_robot

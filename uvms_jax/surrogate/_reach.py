@@ -225,9 +225,13 @@ def _sample_tool_poses(key: Array, problem: evo.ArmDockingProblem, n: int, cone_
 def _best_w(problem: evo.ArmDockingProblem, T_base_tool: Array) -> Array:
     """``(c,)`` best w of tool poses ``(c, 4, 4)`` in the base frame, by the analytic fitness's own
     IK and checks: the poses are the task of the vehicle at the origin, with no scene."""
-    dtype = T_base_tool.dtype
+    dtype, c = T_base_tool.dtype, T_base_tool.shape[0]
+    # The world's rows are per target context (what a target holds or ignores); a sampled tool
+    # pose has none, so every one tests the first target's row, with the scene switched off.
+    world = problem.world.without_scene()
+    world = world.replace(rows=jax.tree.map(lambda a: a[:1], world.rows))
     at_origin = problem.replace(T_world_tool=kin.matmul(problem.T_vehicle_base, T_base_tool),
-                                group=jnp.arange(T_base_tool.shape[0], dtype=jnp.int32), n_groups=T_base_tool.shape[0],
+                                group=jnp.zeros((c,), jnp.int32), n_groups=1, world=world,
                                 T_world_box=jnp.zeros((0, 4, 4), dtype), scene_half=jnp.zeros((0, 3), dtype))
     return jnp.max(evo.arm_solutions(at_origin, jnp.zeros((4,), dtype))[2], axis=-1)
 

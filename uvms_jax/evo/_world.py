@@ -1,0 +1,338 @@
+"""The planner's collision world in JAX: the arm as spheres, the scene as boxes and polytopes.
+
+Docking tests its IK solutions in the same world the planner plans in. The planner's compiled
+checker (:class:`uvms_jax.plan.SphereChecker`) reads the arm's geoms from the scene's MuJoCo
+model as spheres fixed to its bodies (a capsule as spheres along its axis that together
+contain it, a mesh as one sphere per grid cell fitted to the cell's piece of its hull), the scene
+as boxes, half-spaces and convex polytopes, and takes its pairs from MuJoCo's collision
+filters in each context. :func:`uvms_jax.plan.docking_world` turns that model into a
+:class:`SphereWorld`, and :func:`world_collides` answers the planner's question for whole
+populations of configurations in one jitted call:
+
+* a sphere hits a box when its exact distance is at most ``radius + margin`` (the squared
+  distance of the sphere's centre to the box, no square root), a polytope when its largest
+  signed face distance is (a lower bound of the distance: both are the planner's tests);
+* two capsules of the arm by the exact distance of their axes, any other pair of arm geoms
+  by their spheres; fixed spheres (the base link, sphere and capsule obstacles) likewise.
+
+Frames (written once): the spheres sit in their body's frame (slot 0 the arm's base, slot
+``b + 1`` the body moved by joint ``b``, :func:`uvms_jax.kin.kinematics`'s ``T_base_joint``);
+obstacles fixed to the vehicle (its hull, the arm's mount) in the arm's base frame B, the
+scene's in the world W. Everything is tested in B: the scene's obstacles are moved there once
+per vehicle pose. Metres.
+
+A docking target is reached in several contexts of the planner (the object ignored on the way
+down, held on the way up, …); its row of the world holds the union of those contexts' pairs,
+so a configuration free in its row is free in each of its contexts.
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from flax import struct
+from jax import Array
+
+from uvms_jax import kin
+
+# float32 round-off of a sphere placed through six joints and of a distance computed in the
+# base frame stays below 1e-5 m for arms under 2 m; a ten times wider slack makes the JAX test
+# call a pair the planner's float64 kernel rejects by a hair a collision too (the safe side).
+SLACK = 1e-4  # [m]
+_EXACT = jax.lax.Precision.HIGHEST  # full float32 products on GPUs (TF32 moves points by ~1e-3)
+
+
+@struct.dataclass
+class WorldRows:
+    """What each docking target tests: its spheres and pairs (``r`` rows, one per target).
+
+    Attributes:
+      body: ``(r, N)`` frame slot of each sphere (0: the base, ``b + 1``: body ``b``).
+      centre: ``(r, N, 3)`` sphere centres in their body's frame [m].
+      radius: ``(r, N)`` radii [m].
+      box_on, face_on, ball_on: ``(r, N, B)``, ``(r, N, P)``, ``(r, N, M)`` the sphere–box,
+        sphere–polytope and sphere–fixed-sphere pairs tested (padding spheres: none).
+      pair_a, pair_b: ``(r, A)``, ``(r, A')`` indices (into the row's spheres) of the first and
+        the second spheres of pairs; pair_on ``(r, A, A')`` the pairs tested among them.
+      cap_body: ``(r, C, 2)`` frame slots of capsule pairs; cap_ends ``(r, C, 2, 2, 3)`` their
+        axes' end points in those frames [m]; cap_reach ``(r, C)`` the sum of their radii [m];
+        cap_on ``(r, C)``.
+    """
+
+    body: Array
+    centre: Array
+    radius: Array
+    box_on: Array
+    face_on: Array
+    ball_on: Array
+    pair_a: Array
+    pair_b: Array
+    pair_on: Array
+    cap_body: Array
+    cap_ends: Array
+    cap_reach: Array
+    cap_on: Array
+
+
+@struct.dataclass
+class SphereWorld:
+    """The arm's spheres and the scene's obstacles of a docking problem (module docstring).
+
+    Attributes:
+      rows: :class:`WorldRows`, one row per target (the problem's ``group`` indexes it).
+      box_c, box_R, box_half: ``(B, 3)``, ``(B, 3, 3)`` (columns: the box's axes), ``(B, 3)``
+        boxes: the first ``n_base_boxes`` in B, the rest in W [m].
+      box_vehicle: ``(B,)`` True for the vehicle's own boxes (not the mount).
+      faces: ``(P, F, 4)`` convex polytopes ``n·x + d ≤ 0`` inside, ``|n| = 1`` (padded by
+        repeating a face), the first ``n_base_faces`` in B, the rest in W (half-spaces: one
+        face).
+      balls: ``(M, 4)`` fixed spheres in W: centre [m], radius [m].
+      margin: the planner's safety distance [m]: a pair nearer than it is a collision.
+      n_base_boxes, n_base_faces: obstacles fixed to the vehicle (static).
+      n_faces: ``(P,)`` the faces of each polytope before its padding (static): the test reads
+        only those (a mesh's hull of 200 faces beside a box's 6 would otherwise cost 200 each).
+    """
+
+    rows: WorldRows
+    box_c: Array
+    box_R: Array
+    box_half: Array
+    box_vehicle: Array
+    faces: Array
+    balls: Array
+    margin: Array
+    n_base_boxes: int = struct.field(pytree_node=False)
+    n_base_faces: int = struct.field(pytree_node=False)
+    n_faces: tuple[int, ...] = struct.field(pytree_node=False)
+
+    def without_scene(self) -> "SphereWorld":
+        """The world with the scene's obstacles switched off (the vehicle, its mount and the
+        arm itself remain)."""
+        r = self.rows
+        return self.replace(rows=r.replace(box_on=r.box_on.at[..., self.n_base_boxes:].set(False),
+                                           face_on=r.face_on.at[..., self.n_base_faces:].set(False),
+                                           ball_on=jnp.zeros_like(r.ball_on)))
+
+    def without_vehicle(self) -> "SphereWorld":
+        """The world without the vehicle's boxes (the arm on its mount alone)."""
+        return self.replace(rows=self.rows.replace(box_on=self.rows.box_on & ~self.box_vehicle))
+
+
+def make_sphere_world(rows: dict, boxes: dict, faces: np.ndarray, balls: np.ndarray, margin: float,
+                      n_base_boxes: int, n_base_faces: int, dtype=None, n_faces=None) -> SphereWorld:
+    """A :class:`SphereWorld` from NumPy arrays (the fields' shapes; see its docstring).
+
+    Args:
+      rows: the :class:`WorldRows` fields by name.
+      boxes: ``c``, ``R``, ``half``, ``vehicle``: the box fields.
+      faces, balls: polytopes ``(P, F, 4)`` and fixed spheres ``(M, 4)``.
+      margin: safety distance [m], ≥ 0.
+      n_base_boxes, n_base_faces: how many boxes and polytopes lead the lists in the base frame.
+      dtype: float dtype (default: JAX's default float).
+      n_faces: ``(P,)`` faces of each polytope before its padding (default: all ``F``).
+
+    Raises:
+      ValueError: on inconsistent shapes or a negative margin.
+    """
+    dtype = dtype or jnp.zeros(()).dtype
+    f = lambda x: jnp.asarray(np.asarray(x, dtype=np.float64), dtype=dtype)  # noqa: E731
+    n_rows, n_sph = np.shape(rows["radius"])
+    B, P, M = len(boxes["half"]), len(faces), len(balls)
+    want = {"box_on": (n_rows, n_sph, B), "face_on": (n_rows, n_sph, P), "ball_on": (n_rows, n_sph, M),
+            "centre": (n_rows, n_sph, 3), "body": (n_rows, n_sph)}
+    for name, shape in want.items():
+        if np.shape(rows[name]) != shape:
+            raise ValueError(f"world rows: {name} must have shape {shape}, got {np.shape(rows[name])}")
+    n_faces = tuple(int(n) for n in (np.full(P, np.shape(faces)[1]) if n_faces is None else n_faces))
+    if len(n_faces) != P or any(not 1 <= n <= np.shape(faces)[1] for n in n_faces):
+        raise ValueError(f"n_faces must give 1 to {np.shape(faces)[1]} faces for each of {P} polytopes, got {n_faces}")
+    if margin < 0 or not 0 <= n_base_boxes <= B or not 0 <= n_base_faces <= P:
+        raise ValueError(f"need margin >= 0 and base obstacle counts within the lists, got {margin}, "
+                         f"{n_base_boxes} of {B} boxes, {n_base_faces} of {P} polytopes")
+    ints = lambda x: jnp.asarray(x, dtype=jnp.int32)  # noqa: E731
+    bools = lambda x: jnp.asarray(x, dtype=bool)  # noqa: E731
+    return SphereWorld(
+        rows=WorldRows(body=ints(rows["body"]), centre=f(rows["centre"]), radius=f(rows["radius"]),
+                       box_on=bools(rows["box_on"]), face_on=bools(rows["face_on"]), ball_on=bools(rows["ball_on"]),
+                       pair_a=ints(rows["pair_a"]), pair_b=ints(rows["pair_b"]), pair_on=bools(rows["pair_on"]), cap_body=ints(rows["cap_body"]),
+                       cap_ends=f(rows["cap_ends"]), cap_reach=f(rows["cap_reach"]), cap_on=bools(rows["cap_on"])),
+        box_c=f(np.reshape(boxes["c"], (B, 3))), box_R=f(np.reshape(boxes["R"], (B, 3, 3))),
+        box_half=f(np.reshape(boxes["half"], (B, 3))), box_vehicle=bools(np.reshape(boxes["vehicle"], (B,))),
+        faces=f(faces), balls=f(np.reshape(balls, (M, 4))), margin=f(margin),
+        n_base_boxes=int(n_base_boxes), n_base_faces=int(n_base_faces), n_faces=n_faces)
+
+
+def _segment_distance(p1: Array, q1: Array, p2: Array, q2: Array) -> Array:
+    """Distance between segments ``p1 q1`` and ``p2 q2`` (``(3,)`` each) [m]: the closest
+    points by clamping the line parameters (Ericson, Real-Time Collision Detection, 5.1.9),
+    the divisions guarded for points and parallel segments."""
+    d1, d2, r = q1 - p1, q2 - p2, p1 - p2
+    a, e, f = d1 @ d1, d2 @ d2, d2 @ r
+    c, b = d1 @ r, d1 @ d2
+    tiny = jnp.asarray(1e-12, p1.dtype)
+    safe = lambda x: jnp.where(x > tiny, x, 1.0)  # noqa: E731
+    on_2 = lambda: jnp.clip(-c / safe(a), 0.0, 1.0)  # noqa: E731  the point of segment 1 nearest p2
+    denom = a * e - b * b
+    s = jnp.where(denom > tiny * jnp.maximum(a * e, 1.0), jnp.clip((b * f - c * e) / safe(denom), 0.0, 1.0), 0.0)
+    s = jnp.where(a > tiny, jnp.where(e > tiny, s, on_2()), 0.0)
+    t = jnp.where(e > tiny, (b * s + f) / safe(e), 0.0)
+    s = jnp.where(t < 0.0, on_2(), jnp.where(t > 1.0, jnp.clip((b - c) / safe(a), 0.0, 1.0), s))
+    s = jnp.where(a > tiny, s, 0.0)
+    t = jnp.clip(t, 0.0, 1.0)
+    w = (p1 + d1 * s) - (p2 + d2 * t)
+    return jnp.sqrt(w @ w)
+
+
+def _row_hits(row: WorldRows, frames: Array, box_c: Array, box_R: Array, box_half: Array, faces: Array,
+              balls: Array, margin: Array, n_faces: tuple[int, ...]) -> Array:
+    """Whether one configuration collides in one row (one target): ``frames (n + 1, 4, 4)``
+    the base and body frames in B, the obstacles in B, ``n_faces`` the polytopes' unpadded
+    face counts. Scalar bool."""
+    # Products written out as sums of broadcast terms (no dot products): XLA then fuses each
+    # test into one loop over spheres × obstacles instead of materialising its operands.
+    R, p = frames[row.body, :3, :3], frames[row.body, :3, 3]
+    X = p + sum(R[:, :, j] * row.centre[:, j, None] for j in range(3))  # (N, 3) sphere centres in B
+    reach = row.radius + margin  # (N,)
+    d = X[:, None, :] - box_c  # (N, B, 3)
+    local = sum(d[..., j, None] * box_R[:, j, :] for j in range(3))  # Rᵀ (x − c) in the box's axes
+    out = jnp.maximum(jnp.abs(local) - box_half, 0.0)
+    hit = jnp.any((jnp.sum(out * out, axis=-1) <= (reach * reach)[:, None]) & row.box_on)
+    for p, n in enumerate(n_faces):  # each polytope's own faces only
+        f = faces[p, :n]
+        face = jnp.max(sum(X[:, None, j] * f[:, j] for j in range(3)) + f[:, 3], axis=-1)  # (N,)
+        hit |= jnp.any((face <= reach) & row.face_on[:, p])
+    gap = X[:, None, :] - balls[:, :3]  # (N, M, 3)
+    both = reach[:, None] + balls[:, 3]
+    hit |= jnp.any((jnp.sum(gap * gap, axis=-1) <= both * both) & row.ball_on)
+    a, b = row.pair_a, row.pair_b  # a dense block of pairs: no gather per pair
+    d = X[a][:, None, :] - X[b]  # (A, B', 3)
+    both = reach[a][:, None] + row.radius[b]
+    hit |= jnp.any((jnp.sum(d * d, axis=-1) <= both * both) & row.pair_on)
+    F = frames[row.cap_body]  # (C, 2, 4, 4)
+    ends = jnp.einsum("cgij,cgej->cgei", F[..., :3, :3], row.cap_ends, precision=_EXACT) + F[..., None, :3, 3]
+    dist = jax.vmap(_segment_distance)(ends[:, 0, 0], ends[:, 0, 1], ends[:, 1, 0], ends[:, 1, 1])
+    return hit | jnp.any((dist <= row.cap_reach + margin) & row.cap_on)
+
+
+def obstacles_in_base(world: SphereWorld, T_world_base: Array) -> tuple[Array, Array, Array, Array, Array]:
+    """The world's obstacles in the arm's base frame for base poses ``T_world_base (..., 4, 4)``:
+    box centres ``(..., B, 3)``, axes ``(..., B, 3, 3)``, half extents ``(B, 3)``, polytopes
+    ``(..., P, F, 4)`` and fixed spheres ``(..., M, 4)``."""
+    R, p = T_world_base[..., :3, :3], T_world_base[..., :3, 3]  # (..., 3, 3), (..., 3)
+    nb, nf = world.n_base_boxes, world.n_base_faces
+    batch = T_world_base.shape[:-2]
+    to_base = lambda x: jnp.einsum("...ji,...kj->...ki", R, x - p[..., None, :], precision=_EXACT)  # noqa: E731  Rᵀ (x − p)
+    fixed = lambda x: jnp.broadcast_to(x, batch + x.shape)  # noqa: E731
+    c = jnp.concatenate([fixed(world.box_c[:nb]), to_base(world.box_c[nb:])], axis=-2)
+    axes = jnp.concatenate([fixed(world.box_R[:nb]), jnp.einsum("...ji,bjk->...bik", R, world.box_R[nb:], precision=_EXACT)],
+                           axis=-3)
+    # n·x + d with x = R y + p: (Rᵀ n)·y + (n·p + d)
+    n_w, d_w = world.faces[nf:, :, :3], world.faces[nf:, :, 3]
+    n_b = jnp.einsum("...ji,pfj->...pfi", R, n_w, precision=_EXACT)
+    d_b = d_w + jnp.einsum("pfj,...j->...pf", n_w, p, precision=_EXACT)
+    faces = jnp.concatenate([fixed(world.faces[:nf]), jnp.concatenate([n_b, d_b[..., None]], axis=-1)], axis=-3)
+    balls = jnp.concatenate([to_base(world.balls[:, :3]), fixed(world.balls[:, 3:])], axis=-1)
+    return c, axes, world.box_half, faces, balls
+
+
+#: Elements of the tests' blocks (sphere × obstacle face or box, sphere pairs) one chunk of
+#: :func:`world_collides` may hold at once (about 1 GB of float32 per array).
+TEST_BUDGET = 2**28
+
+
+def world_collides(world: SphereWorld, group: Array, T_world_base: Array, T_base_joint: Array) -> Array:
+    """Collision of arm configurations in the planner's world (traceable).
+
+    Args:
+      world: the world (its rows indexed by ``group``).
+      group: ``(k,)`` the row (target) of each demanded tool pose.
+      T_world_base: ``(..., 4, 4)`` the arm's base in W, one per vehicle pose.
+      T_base_joint: ``(..., k, S, n, 4, 4)`` the body frames in B of ``S`` configurations per
+        tool pose (:func:`uvms_jax.kin.kinematics`).
+
+    Returns:
+      ``(..., k, S)`` True where a tested pair is nearer than the margin (plus :data:`SLACK`).
+    """
+    batch = T_world_base.shape[:-2]
+    k, S, n = T_base_joint.shape[-5:-2]
+    rows = jax.tree_util.tree_map(lambda a: a[group], world.rows)
+    obstacles = obstacles_in_base(world, T_world_base.reshape((-1, 4, 4)))
+    eye = jnp.broadcast_to(jnp.eye(4, dtype=T_base_joint.dtype), T_base_joint.shape[:-3] + (1, 4, 4))
+    frames = jnp.concatenate([eye, T_base_joint], axis=-3).reshape((-1, k, S, n + 1, 4, 4))
+    margin = world.margin + SLACK
+    one = lambda row, F, c, R, h, f, b: _row_hits(row, F, c, R, h, f, b, margin, world.n_faces)  # noqa: E731
+    per_seed = jax.vmap(one, in_axes=(None, 0, None, None, None, None, None))
+    per_target = jax.vmap(per_seed, in_axes=(0, 0, None, None, None, None, None))
+    per_pose = jax.vmap(per_target, in_axes=(None, 0, 0, 0, None, 0, 0))
+    c, R, half, faces, balls = obstacles
+    # XLA materialises each test's (spheres × obstacles) and (sphere pairs) block per
+    # configuration: a mesh arm's thousand spheres make megabytes each, so the vehicle poses go
+    # through in chunks that keep a call's blocks under TEST_BUDGET elements.
+    N = rows.radius.shape[-1]
+    per_config = N * (half.shape[0] + sum(world.n_faces) + balls.shape[-2]) + rows.pair_on[0].size
+    chunk = max(1, TEST_BUDGET // (k * S * per_config))
+    if chunk >= frames.shape[0]:
+        hits = per_pose(rows, frames, c, R, half, faces, balls)
+    else:
+        # lax.map vmaps its function over each chunk: the function is one pose's.
+        hits = jax.lax.map(lambda a: per_target(rows, a[0], a[1], a[2], half, a[3], a[4]), (frames, c, R, faces, balls),
+                           batch_size=chunk)
+    return hits.reshape(batch + (k, S))
+
+
+def capsule_world(chain: kin.Chain, link_radius: float, T_vehicle_base, vehicle_boxes, scene_boxes, n_rows: int,
+                  spacing: float, dtype=None) -> SphereWorld:
+    """The world of an arm without a planning scene: its links as capsules of ``link_radius``
+    [m] between consecutive joint origins (the base origin to the first joint, the last joint
+    to the tool point, as the arm's MuJoCo model has them), as spheres ``spacing`` [m] apart
+    that contain them, against the vehicle's and the scene's boxes; no self-collision, no
+    margin. The base's capsule is tested against the scene only (it is fixed to the vehicle).
+
+    Args:
+      chain: the arm; link_radius: its capsules' radius [m].
+      T_vehicle_base: ``(4, 4)`` the mount [m].
+      vehicle_boxes, scene_boxes: ``(T (m, 4, 4), half (m, 3))`` in V and in W [m].
+      n_rows: rows (targets); every row is the same.
+      spacing: sphere spacing along the capsules [m].
+      dtype: float dtype.
+    """
+    from uvms_jax.robot import capsule_spheres
+
+    T0 = np.asarray(chain.T_base_joint0, dtype=np.float64)
+    ends = np.concatenate([T0[:, :3, 3], np.asarray(chain.T_base_tool0, dtype=np.float64)[None, :3, 3]])
+    body, centre, radius, scene_only = [], [], [], []
+    for b in range(-1, chain.n_joints):
+        T_b = np.eye(4) if b < 0 else T0[b]
+        a, e = T_b[:3, 3], ends[b + 1]
+        if np.linalg.norm(e - a) < 1e-9:
+            c, r = a[None], np.array([link_radius])
+        else:
+            z = (e - a) / np.linalg.norm(e - a)
+            x = np.cross(z, [1.0, 0.0, 0.0] if abs(z[0]) < 0.9 else [0.0, 1.0, 0.0])
+            R = np.stack([x / np.linalg.norm(x), np.cross(z, x / np.linalg.norm(x)), z], axis=-1)
+            c, r = capsule_spheres((a + e) / 2, R, link_radius, np.linalg.norm(e - a) / 2, spacing)
+        c_body = (c - T_b[:3, 3]) @ T_b[:3, :3]  # into the body's frame
+        body += [b + 1] * len(r)
+        centre += list(c_body)
+        radius += list(r)
+        scene_only += [b < 0] * len(r)
+    T_vb = np.asarray(T_vehicle_base, dtype=np.float64)
+    T_bv = np.linalg.inv(T_vb)
+    Tv, hv = (np.asarray(x, dtype=np.float64).reshape(-1, *s) for x, s in zip(vehicle_boxes, ((4, 4), (3,))))
+    Ts, hs = (np.asarray(x, dtype=np.float64).reshape(-1, *s) for x, s in zip(scene_boxes, ((4, 4), (3,))))
+    Tv = T_bv @ Tv  # the vehicle's boxes in B
+    T_all = np.concatenate([Tv, Ts])
+    N, B = len(radius), len(T_all)
+    box_on = np.ones((N, B), bool)
+    box_on[np.asarray(scene_only), : len(Tv)] = False
+    tile = lambda x: np.broadcast_to(np.asarray(x), (n_rows,) + np.shape(x))  # noqa: E731
+    rows = {"body": tile(body), "centre": tile(centre), "radius": tile(radius), "box_on": tile(box_on),
+            "face_on": np.zeros((n_rows, N, 0), bool), "ball_on": np.zeros((n_rows, N, 0), bool),
+            "pair_a": np.zeros((n_rows, 0), int), "pair_b": np.zeros((n_rows, 0), int),
+            "pair_on": np.zeros((n_rows, 0, 0), bool),
+            "cap_body": np.zeros((n_rows, 0, 2), int), "cap_ends": np.zeros((n_rows, 0, 2, 2, 3)),
+            "cap_reach": np.zeros((n_rows, 0)), "cap_on": np.zeros((n_rows, 0), bool)}
+    boxes = {"c": T_all[:, :3, 3], "R": T_all[:, :3, :3], "half": np.concatenate([hv, hs]),
+             "vehicle": np.arange(B) < len(Tv)}
+    return make_sphere_world(rows, boxes, np.zeros((0, 1, 4)), np.zeros((0, 4)), 0.0, len(Tv), 0, dtype)
