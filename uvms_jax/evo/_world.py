@@ -28,6 +28,7 @@ so a configuration free in its row is free in each of its contexts.
 
 from __future__ import annotations
 
+import functools
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -198,9 +199,12 @@ def _row_hits(row: WorldRows, frames: Array, box_c: Array, box_R: Array, box_hal
     local = sum(d[..., j, None] * box_R[:, j, :] for j in range(3))  # Rᵀ (x − c) in the box's axes
     out = jnp.maximum(jnp.abs(local) - box_half, 0.0)
     hit = jnp.any((jnp.sum(out * out, axis=-1) <= (reach * reach)[:, None]) & row.box_on)
+    # The largest face distance as a chain of maxima, not a reduction: XLA's GPU reduction
+    # emitter turned a max over a polytope's few dozen faces into kernels that spilled ~90 kB of
+    # registers and took minutes to compile; the chain is one elementwise loop.
+    plane = lambda f: X[:, 0] * f[0] + X[:, 1] * f[1] + X[:, 2] * f[2] + f[3]  # noqa: E731  (N,)
     for p, n in enumerate(n_faces):  # each polytope's own faces only
-        f = faces[p, :n]
-        face = jnp.max(sum(X[:, None, j] * f[:, j] for j in range(3)) + f[:, 3], axis=-1)  # (N,)
+        face = functools.reduce(jnp.maximum, (plane(faces[p, i]) for i in range(n)))  # (N,)
         hit |= jnp.any((face <= reach) & row.face_on[:, p])
     gap = X[:, None, :] - balls[:, :3]  # (N, M, 3)
     both = reach[:, None] + balls[:, 3]
