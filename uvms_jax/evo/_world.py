@@ -164,13 +164,18 @@ def make_sphere_world(rows: dict, boxes: dict, faces: np.ndarray, balls: np.ndar
         n_base_boxes=int(n_base_boxes), n_base_faces=int(n_base_faces), n_faces=n_faces)
 
 
+def _dot(u, v) -> Array:
+    """``u · v`` of vectors stored as 3 leading rows, ``(3, ...)`` each (elementwise over the rest)."""
+    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
+
+
 def _segment_distance(p1: Array, q1: Array, p2: Array, q2: Array) -> Array:
-    """Distance between segments ``p1 q1`` and ``p2 q2`` (``(3,)`` each) [m]: the closest
-    points by clamping the line parameters (Ericson, Real-Time Collision Detection, 5.1.9),
-    the divisions guarded for points and parallel segments."""
+    """Distance between segments ``p1 q1`` and ``p2 q2`` (points as ``(3, ...)`` rows) [m]:
+    the closest points by clamping the line parameters (Ericson, Real-Time Collision Detection,
+    5.1.9), the divisions guarded for points and parallel segments."""
     d1, d2, r = q1 - p1, q2 - p2, p1 - p2
-    a, e, f = d1 @ d1, d2 @ d2, d2 @ r
-    c, b = d1 @ r, d1 @ d2
+    a, e, f = _dot(d1, d1), _dot(d2, d2), _dot(d2, r)
+    c, b = _dot(d1, r), _dot(d1, d2)
     tiny = jnp.asarray(1e-12, p1.dtype)
     safe = lambda x: jnp.where(x > tiny, x, 1.0)  # noqa: E731
     on_2 = lambda: jnp.clip(-c / safe(a), 0.0, 1.0)  # noqa: E731  the point of segment 1 nearest p2
@@ -182,41 +187,57 @@ def _segment_distance(p1: Array, q1: Array, p2: Array, q2: Array) -> Array:
     s = jnp.where(a > tiny, s, 0.0)
     t = jnp.clip(t, 0.0, 1.0)
     w = (p1 + d1 * s) - (p2 + d2 * t)
-    return jnp.sqrt(w @ w)
+    return jnp.sqrt(_dot(w, w))
 
 
 def _row_hits(row: WorldRows, frames: Array, box_c: Array, box_R: Array, box_half: Array, faces: Array,
               balls: Array, margin: Array, n_faces: tuple[int, ...]) -> Array:
-    """Whether one configuration collides in one row (one target): ``frames (n + 1, 4, 4)``
-    the base and body frames in B, the obstacles in B, ``n_faces`` the polytopes' unpadded
-    face counts. Scalar bool."""
+    """Whether configurations collide in one row (one target).
+
+    The configurations are the trailing axes ``(P, S)`` of every array (vehicle poses, seeds), so
+    each test's reduction runs over the leading sphere and obstacle axes: a column reduction,
+    one loop per configuration (with the configurations first, XLA's GPU reduction emitter
+    turned the short rows of a few spheres × obstacles into kernels that took minutes to compile).
+
+    Args:
+      row: the target's spheres and pairs (:class:`WorldRows` without its leading axis).
+      frames: ``(n + 1, 3, 4, P, S)`` the base and body frames in B.
+      box_c, box_R: ``(B, 3, P, 1)``, ``(B, 3, 3, P, 1)``; box_half ``(B, 3)``.
+      faces: ``(Q, F, 4, P, 1)`` polytopes; balls: ``(M, 4, P, 1)`` fixed spheres; in B.
+      margin: safety distance plus slack [m]; n_faces: each polytope's unpadded face count.
+
+    Returns:
+      ``(P, S)`` bool.
+    """
     # Products written out as sums of broadcast terms (no dot products): XLA then fuses each
     # test into one loop over spheres × obstacles instead of materialising its operands.
-    R, p = frames[row.body, :3, :3], frames[row.body, :3, 3]
-    X = p + sum(R[:, :, j] * row.centre[:, j, None] for j in range(3))  # (N, 3) sphere centres in B
-    reach = row.radius + margin  # (N,)
-    d = X[:, None, :] - box_c  # (N, B, 3)
-    local = sum(d[..., j, None] * box_R[:, j, :] for j in range(3))  # Rᵀ (x − c) in the box's axes
-    out = jnp.maximum(jnp.abs(local) - box_half, 0.0)
-    hit = jnp.any((jnp.sum(out * out, axis=-1) <= (reach * reach)[:, None]) & row.box_on)
-    # The largest face distance as a chain of maxima, not a reduction: XLA's GPU reduction
-    # emitter turned a max over a polytope's few dozen faces into kernels that spilled ~90 kB of
-    # registers and took minutes to compile; the chain is one elementwise loop.
-    plane = lambda f: X[:, 0] * f[0] + X[:, 1] * f[1] + X[:, 2] * f[2] + f[3]  # noqa: E731  (N,)
-    for p, n in enumerate(n_faces):  # each polytope's own faces only
-        face = functools.reduce(jnp.maximum, (plane(faces[p, i]) for i in range(n)))  # (N,)
-        hit |= jnp.any((face <= reach) & row.face_on[:, p])
-    gap = X[:, None, :] - balls[:, :3]  # (N, M, 3)
+    config = (None, None)  # the two trailing configuration axes
+    F = frames[row.body]  # (N, 3, 4, P, S)
+    X = F[:, :, 3] + sum(F[:, :, j] * row.centre[:, j, None, None, None] for j in range(3))  # (N, 3, P, S)
+    reach = (row.radius + margin)[(...,) + config]  # (N, 1, 1)
+    d = X[:, None] - box_c  # (N, B, 3, P, S)
+    local = [sum(d[:, :, j] * box_R[:, j, i] for j in range(3)) for i in range(3)]  # Rᵀ (x − c), (N, B, P, S) each
+    out = [jnp.maximum(jnp.abs(local[i]) - box_half[:, i, None, None], 0.0) for i in range(3)]
+    near = out[0] * out[0] + out[1] * out[1] + out[2] * out[2] <= (reach * reach)[:, None]
+    hit = jnp.any(near & row.box_on[(...,) + config], axis=(0, 1))
+    # The largest face distance as a chain of maxima, not a reduction over a few dozen faces
+    # (the same emitter trouble); each polytope's own faces only.
+    plane = lambda f: X[:, 0] * f[0] + X[:, 1] * f[1] + X[:, 2] * f[2] + f[3]  # noqa: E731  (N, P, S)
+    for p, n in enumerate(n_faces):
+        face = functools.reduce(jnp.maximum, (plane(faces[p, i]) for i in range(n)))
+        hit |= jnp.any((face <= reach) & row.face_on[:, p, None, None], axis=0)
+    gap = X[:, None] - balls[:, :3]  # (N, M, 3, P, S)
     both = reach[:, None] + balls[:, 3]
-    hit |= jnp.any((jnp.sum(gap * gap, axis=-1) <= both * both) & row.ball_on)
+    hit |= jnp.any((_dot(*[jnp.moveaxis(gap, 2, 0)] * 2) <= both * both) & row.ball_on[(...,) + config], axis=(0, 1))
     a, b = row.pair_a, row.pair_b  # a dense block of pairs: no gather per pair
-    d = X[a][:, None, :] - X[b]  # (A, B', 3)
-    both = reach[a][:, None] + row.radius[b]
-    hit |= jnp.any((jnp.sum(d * d, axis=-1) <= both * both) & row.pair_on)
-    F = frames[row.cap_body]  # (C, 2, 4, 4)
-    ends = jnp.einsum("cgij,cgej->cgei", F[..., :3, :3], row.cap_ends, precision=_EXACT) + F[..., None, :3, 3]
-    dist = jax.vmap(_segment_distance)(ends[:, 0, 0], ends[:, 0, 1], ends[:, 1, 0], ends[:, 1, 1])
-    return hit | jnp.any((dist <= row.cap_reach + margin) & row.cap_on)
+    d = X[a][:, None] - X[b]  # (A, A', 3, P, S)
+    both = reach[a][:, None] + row.radius[b][(None, slice(None)) + config]
+    hit |= jnp.any((_dot(*[jnp.moveaxis(d, 2, 0)] * 2) <= both * both) & row.pair_on[(...,) + config], axis=(0, 1))
+    G = frames[row.cap_body]  # (C, 2, 3, 4, P, S)
+    ends = [[jnp.stack([G[:, g, i, 3] + sum(G[:, g, i, j] * row.cap_ends[:, g, e, j, None, None] for j in range(3))
+                        for i in range(3)]) for e in range(2)] for g in range(2)]  # (3, C, P, S) each
+    dist = _segment_distance(ends[0][0], ends[0][1], ends[1][0], ends[1][1])  # (C, P, S)
+    return hit | jnp.any((dist <= (row.cap_reach + margin)[(...,) + config]) & row.cap_on[(...,) + config], axis=0)
 
 
 def obstacles_in_base(world: SphereWorld, T_world_base: Array) -> tuple[Array, Array, Array, Array, Array]:
@@ -265,23 +286,32 @@ def world_collides(world: SphereWorld, group: Array, T_world_base: Array, T_base
     eye = jnp.broadcast_to(jnp.eye(4, dtype=T_base_joint.dtype), T_base_joint.shape[:-3] + (1, 4, 4))
     frames = jnp.concatenate([eye, T_base_joint], axis=-3).reshape((-1, k, S, n + 1, 4, 4))
     margin = world.margin + SLACK
-    one = lambda row, F, c, R, h, f, b: _row_hits(row, F, c, R, h, f, b, margin, world.n_faces)  # noqa: E731
-    per_seed = jax.vmap(one, in_axes=(None, 0, None, None, None, None, None))
-    per_target = jax.vmap(per_seed, in_axes=(0, 0, None, None, None, None, None))
-    per_pose = jax.vmap(per_target, in_axes=(None, 0, 0, 0, None, 0, 0))
     c, R, half, faces, balls = obstacles
+    per_target = jax.vmap(lambda row, F, *obs: _row_hits(row, F, *obs[:2], half, *obs[2:], margin, world.n_faces),
+                          in_axes=(0, 0, None, None, None, None))
+
+    def hits_of(frames, c, R, faces, balls):
+        """``(P, k, S)`` for P vehicle poses: the configurations moved to the trailing axes."""
+        last = lambda x: jnp.moveaxis(x, 0, -1)[..., None]  # noqa: E731  (P, ...) → (..., P, 1)
+        F = jnp.moveaxis(frames[..., :3, :], (0, 2), (-2, -1))  # (k, n + 1, 3, 4, P, S)
+        return jnp.moveaxis(per_target(rows, F, last(c), last(R), last(faces), last(balls)), 0, 1)
+
     # XLA materialises each test's (spheres × obstacles) and (sphere pairs) block per
     # configuration: a mesh arm's thousand spheres make megabytes each, so the vehicle poses go
     # through in chunks that keep a call's blocks under TEST_BUDGET elements.
     N = rows.radius.shape[-1]
     per_config = N * (half.shape[0] + sum(world.n_faces) + balls.shape[-2]) + rows.pair_on[0].size
     chunk = max(1, TEST_BUDGET // (k * S * per_config))
-    if chunk >= frames.shape[0]:
-        hits = per_pose(rows, frames, c, R, half, faces, balls)
-    else:
-        # lax.map vmaps its function over each chunk: the function is one pose's.
-        hits = jax.lax.map(lambda a: per_target(rows, a[0], a[1], a[2], half, a[3], a[4]), (frames, c, R, faces, balls),
-                           batch_size=chunk)
+    poses = frames.shape[0]
+    if chunk >= poses:
+        hits = hits_of(frames, c, R, faces, balls)
+    else:  # whole chunks (the last padded with copies of the first pose), one after another
+        n_chunks = -(-poses // chunk)
+        pad = n_chunks * chunk - poses
+        split = lambda x: jnp.concatenate([x, jnp.broadcast_to(x[:1], (pad,) + x.shape[1:])]).reshape(  # noqa: E731
+            (n_chunks, chunk) + x.shape[1:])
+        hits = jax.lax.map(lambda a: hits_of(*a), tuple(map(split, (frames, c, R, faces, balls))))
+        hits = hits.reshape((n_chunks * chunk, k, S))[:poses]
     return hits.reshape(batch + (k, S))
 
 
