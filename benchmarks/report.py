@@ -407,6 +407,22 @@ def hover_vehicle() -> str:
                                                    f"{poles(p['yaw'])} rad/s in yaw"]]) + "\n")
 
 
+def _minutes(seconds: float) -> str:
+    return f"{int(seconds // 60)} min {round(seconds % 60):02d} s"
+
+
+def test_suite() -> str:
+    """CI's run in a fresh clone (``benchmarks/test_suite.py``): setup, the fast suite, the slow one."""
+    d = _load("test_suite_cpu.json")
+    t = d["targets"]
+    fast, slow = t["test"], t["test-slow"]
+    return (f"On the {d['cpu_count']}-core machine, from a fresh clone of commit {d['commit'][:7]} "
+            f"(`{d['command']}`, `benchmarks/results/test_suite_cpu.json`): `make setup` {_minutes(t['setup']['seconds'])}, "
+            f"then the {fast['passed']} fast tests {_minutes(fast['seconds'])} and the {slow['passed']} slow ones "
+            f"{_minutes(slow['seconds'])} ({slow.get('skipped', 0)} skipped: GPU only), compiling everything; load "
+            f"average {d['load_average_start'][0]:.1f} at the start.\n")
+
+
 def kin_summary() -> str:
     """The kinematics line of README.md's results, from the indices benchmark's files."""
     cpu = next(r for r in _load("kin_indices_uvms12_cpu.json")["results"] if r["batch"] == 100000)
@@ -720,7 +736,7 @@ def pipeline_arms() -> str:
                       "edges planned", "schedule", "executed (simulated)"], rows) + "\n")
 
 
-BLOCKS = {f.__name__: f for f in (hover_vehicle, kin_roofline, scale_out, surrogate_roofline, docking_ga, docking_panel, pipeline_arms, plan_benchmark, sched_benchmark, hw_runner, hw_acceptance, kin_indices_cpu, kin_indices_accuracy, kin_indices_gpu, demo, docking_search, docking_fitness, docking_map,
+BLOCKS = {f.__name__: f for f in (test_suite, hover_vehicle, kin_roofline, scale_out, surrogate_roofline, docking_ga, docking_panel, pipeline_arms, plan_benchmark, sched_benchmark, hw_runner, hw_acceptance, kin_indices_cpu, kin_indices_accuracy, kin_indices_gpu, demo, docking_search, docking_fitness, docking_map,
                                    kin_summary, papers, hover_mjx, hover_robustness, surrogate_networks,
                                    surrogate_paper_sizes_cpu, surrogate_paper_sizes_h100, surrogate_sizes)}
 
