@@ -423,6 +423,21 @@ def test_suite() -> str:
             f"average {d['load_average_start'][0]:.1f} at the start.\n")
 
 
+def docking_certify() -> str:
+    """A certified docking run of the demo's fitness on a GPU (docs/docking.md), from its
+    ``summary.json`` kept as ``docking_certify_demo_h200.json``."""
+    d = _load("docking_certify_demo_h200.json")
+    s, c = d["summary"], d["summary"]["certificate"]
+    ref = c["reference"]
+    ratios = [f / ref["fitness"] for f in s["ga_fitness"]]
+    return (f"On an {d['device']} (jax {d['jax']}; `benchmarks/results/docking_certify_demo_h200.json`): the reference "
+            f"{ref['fitness']:.4f} ({ref['search']}, {_int(ref['evaluations'])} poses, the grid at "
+            f"{_int(s['grid_candidates_per_s'])} poses/s), and {len(ratios)} GA runs at "
+            f"{_int(s['ga_evaluations_per_s'])} evaluations/s whose bests reach {_range(ratios)} of it "
+            f"({sum(r >= c['accept_ratio'] for r in ratios)} of {len(ratios)} ≥ {c['accept_ratio']:g}): "
+            f"`ga_certified: {str(c['ga_certified']).lower()}` (best {c['ga_best_ratio']:.4f}).\n")
+
+
 def kin_summary() -> str:
     """The kinematics line of README.md's results, from the indices benchmark's files."""
     cpu = next(r for r in _load("kin_indices_uvms12_cpu.json")["results"] if r["batch"] == 100000)
@@ -736,7 +751,7 @@ def pipeline_arms() -> str:
                       "edges planned", "schedule", "executed (simulated)"], rows) + "\n")
 
 
-BLOCKS = {f.__name__: f for f in (test_suite, hover_vehicle, kin_roofline, scale_out, surrogate_roofline, docking_ga, docking_panel, pipeline_arms, plan_benchmark, sched_benchmark, hw_runner, hw_acceptance, kin_indices_cpu, kin_indices_accuracy, kin_indices_gpu, demo, docking_search, docking_fitness, docking_map,
+BLOCKS = {f.__name__: f for f in (docking_certify, test_suite, hover_vehicle, kin_roofline, scale_out, surrogate_roofline, docking_ga, docking_panel, pipeline_arms, plan_benchmark, sched_benchmark, hw_runner, hw_acceptance, kin_indices_cpu, kin_indices_accuracy, kin_indices_gpu, demo, docking_search, docking_fitness, docking_map,
                                    kin_summary, papers, hover_mjx, hover_robustness, surrogate_networks,
                                    surrogate_paper_sizes_cpu, surrogate_paper_sizes_h100, surrogate_sizes)}
 
