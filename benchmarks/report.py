@@ -751,9 +751,36 @@ def pipeline_arms() -> str:
                       "edges planned", "schedule", "executed (simulated)"], rows) + "\n")
 
 
+def own_arm() -> str:
+    """README's own-arm example: what it prints and how long it takes (``benchmarks/own_arm.py``)."""
+    d = _load("own_arm_cpu.json")
+    return (f"prints `{d['printed'][0]}` and `{d['printed'][-1]}`, in {d['wall_s']:.0f} s on a "
+            f"{d['cpu_count']}-core CPU with imports and compilation (`python benchmarks/own_arm.py`, "
+            f"`benchmarks/results/own_arm_cpu.json`).\n")
+
+
+def weights_sweep() -> str:
+    """README's weight-sensitivity sweep: its gathered table and time (``benchmarks/weights_sweep.py``)."""
+    d = _load("weights_sweep_cpu.json")
+    return ("gives five job folders `multirun/weights/0 … 4` (each with `table.md`, `results.json`,\n"
+            "`route.png`, `schedule_edges.json`) and one table, `multirun/weights/gathered.md` (every\n"
+            f"column in `gathered.csv`); both commands take {d['wall_s']:.0f} s on a {d['cpu_count']}-core CPU "
+            "(`python benchmarks/weights_sweep.py`, `benchmarks/results/weights_sweep_cpu.json`):\n\n"
+            + d["gathered_md"].strip() + "\n")
+
+
+def hover_levelling() -> str:
+    """The demo's hover stage: the largest tilt with levelling on (docs/hover.md)."""
+    runs = _load("demo_cpu.json")["hover"]["runs"]
+    tilt = max(r["max_tilt_deg"] for r in runs.values())
+    return (f"Held level by the vertical thrusters, the tilt stays within {tilt:.1f}° in each of the demo's "
+            f"{len(runs)} hover runs (the `hover` stage of `benchmarks/results/demo_cpu.json`).\n")
+
+
 BLOCKS = {f.__name__: f for f in (docking_certify, test_suite, hover_vehicle, kin_roofline, scale_out, surrogate_roofline, docking_ga, docking_panel, pipeline_arms, plan_benchmark, sched_benchmark, hw_runner, hw_acceptance, kin_indices_cpu, kin_indices_accuracy, kin_indices_gpu, demo, docking_search, docking_fitness, docking_map,
                                    kin_summary, papers, hover_mjx, hover_robustness, surrogate_networks,
-                                   surrogate_paper_sizes_cpu, surrogate_paper_sizes_h100, surrogate_sizes)}
+                                   surrogate_paper_sizes_cpu, surrogate_paper_sizes_h100, surrogate_sizes, own_arm,
+                                   weights_sweep, hover_levelling)}
 
 
 def render(text: str) -> str:
