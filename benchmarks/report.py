@@ -762,7 +762,8 @@ def own_arm() -> str:
 def weights_sweep() -> str:
     """README's weight-sensitivity sweep: its gathered table and time (``benchmarks/weights_sweep.py``)."""
     d = _load("weights_sweep_cpu.json")
-    return ("gives five job folders `multirun/weights/0 … 4` (each with `table.md`, `results.json`,\n"
+    return ("```bash\n" + "\n".join(d["commands"]) + "\n```\n\n"
+            "gives five job folders `multirun/weights/0 … 4` (each with `table.md`, `results.json`,\n"
             "`route.png`, `schedule_edges.json`) and one table, `multirun/weights/gathered.md` (every\n"
             f"column in `gathered.csv`); both commands take {d['wall_s']:.0f} s on a {d['cpu_count']}-core CPU "
             "(`python benchmarks/weights_sweep.py`, `benchmarks/results/weights_sweep_cpu.json`):\n\n"

@@ -1,6 +1,6 @@
 """The README's weight-sensitivity sweep, run as the README writes it, with its time.
 
-Runs the two commands of README.md's "Sweeps" section (five weight sets of the scheduling
+Runs the two commands that README.md's "Sweeps" section shows (generated from this record) (five weight sets of the scheduling
 experiment on synthetic metrics as one Hydra multirun, then ``experiments/gather.py``) in a
 temporary sweep folder and prints one JSON object: the commands, the gathered table
 (``gathered.md``) and the wall time of both commands together [s].
@@ -13,6 +13,7 @@ from __future__ import annotations
 import json
 import os
 import platform
+import shlex
 import subprocess
 import sys
 import tempfile
@@ -35,8 +36,9 @@ def main() -> None:
                        stdout=subprocess.DEVNULL)
         wall = time.perf_counter() - start
         table = (sweep_dir / "gathered.md").read_text()
-    print(json.dumps({"commands": [" ".join(["python", *SWEEP, "hydra.sweep.dir=multirun/weights"]),
-                                   " ".join(["python", GATHER[0], "multirun/weights", *GATHER[1:]])],
+    # The commands as a user types them (shell-quoted): README.md shows these.
+    print(json.dumps({"commands": [shlex.join([".venv/bin/python", *SWEEP, "hydra.sweep.dir=multirun/weights"]),
+                                   shlex.join([".venv/bin/python", GATHER[0], "multirun/weights", *GATHER[1:]])],
                       "cpu_count": os.cpu_count(), "machine": platform.machine(), "wall_s": wall,
                       "gathered_md": table}, indent=1))
 
