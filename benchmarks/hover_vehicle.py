@@ -28,8 +28,7 @@ import mujoco
 import numpy as np
 from scipy.optimize import linprog
 
-from uvms_jax.hover import ControllerSettings, VehicleSettings, hover_model, thrust_layout
-from uvms_jax.hover._batch import fluid_bodies
+from uvms_jax.hover import ControllerSettings, VehicleSettings, fluid_bodies, hover_model, thrust_layout
 from uvms_jax.robot import load_arm
 
 #: Pure efforts reported: the row of the wrench (force xyz, moment xyz) and its name.

@@ -407,6 +407,37 @@ def hover_vehicle() -> str:
                                                    f"{poles(p['yaw'])} rad/s in yaw"]]) + "\n")
 
 
+def _minutes(seconds: float) -> str:
+    return f"{int(seconds // 60)} min {round(seconds % 60):02d} s"
+
+
+def test_suite() -> str:
+    """CI's run in a fresh clone (``benchmarks/test_suite.py``): setup, the fast suite, the slow one."""
+    d = _load("test_suite_cpu.json")
+    t = d["targets"]
+    fast, slow = t["test"], t["test-slow"]
+    return (f"On the {d['cpu_count']}-core machine, from a fresh clone of commit {d['commit'][:7]} "
+            f"(`{d['command']}`, `benchmarks/results/test_suite_cpu.json`): `make setup` {_minutes(t['setup']['seconds'])}, "
+            f"then the {fast['passed']} fast tests {_minutes(fast['seconds'])} and the {slow['passed']} slow ones "
+            f"{_minutes(slow['seconds'])} ({slow.get('skipped', 0)} skipped: GPU only), compiling everything; load "
+            f"average {d['load_average_start'][0]:.1f} at the start.\n")
+
+
+def docking_certify() -> str:
+    """A certified docking run of the demo's fitness on a GPU (docs/docking.md), from its
+    ``summary.json`` kept as ``docking_certify_demo_h200.json``."""
+    d = _load("docking_certify_demo_h200.json")
+    s, c = d["summary"], d["summary"]["certificate"]
+    ref = c["reference"]
+    ratios = [f / ref["fitness"] for f in s["ga_fitness"]]
+    return (f"On an {d['device']} (jax {d['jax']}; `benchmarks/results/docking_certify_demo_h200.json`): the reference "
+            f"{ref['fitness']:.4f} ({ref['search']}, {_int(ref['evaluations'])} poses, the grid at "
+            f"{_int(s['grid_candidates_per_s'])} poses/s), and {len(ratios)} GA runs at "
+            f"{_int(s['ga_evaluations_per_s'])} evaluations/s whose bests reach {_range(ratios)} of it "
+            f"({sum(r >= c['accept_ratio'] for r in ratios)} of {len(ratios)} ≥ {c['accept_ratio']:g}): "
+            f"`ga_certified: {str(c['ga_certified']).lower()}` (best {c['ga_best_ratio']:.4f}).\n")
+
+
 def kin_summary() -> str:
     """The kinematics line of README.md's results, from the indices benchmark's files."""
     cpu = next(r for r in _load("kin_indices_uvms12_cpu.json")["results"] if r["batch"] == 100000)
@@ -765,9 +796,37 @@ def pipeline_arms() -> str:
                       "edges planned", "schedule", "executed (simulated)"], rows) + "\n")
 
 
-BLOCKS = {f.__name__: f for f in (hover_vehicle, kin_roofline, scale_out, surrogate_roofline, docking_ga, docking_panel, pipeline_arms, plan_benchmark, sched_benchmark, hw_runner, hw_acceptance, kin_indices_cpu, kin_indices_accuracy, kin_indices_gpu, demo, docking_search, docking_fitness, docking_map, docking_collision,
+def own_arm() -> str:
+    """README's own-arm example: what it prints and how long it takes (``benchmarks/own_arm.py``)."""
+    d = _load("own_arm_cpu.json")
+    return (f"prints `{d['printed'][0]}` and `{d['printed'][-1]}`, in {d['wall_s']:.0f} s on a "
+            f"{d['cpu_count']}-core CPU with imports and compilation (`python benchmarks/own_arm.py`, "
+            f"`benchmarks/results/own_arm_cpu.json`).\n")
+
+
+def weights_sweep() -> str:
+    """README's weight-sensitivity sweep: its gathered table and time (``benchmarks/weights_sweep.py``)."""
+    d = _load("weights_sweep_cpu.json")
+    return ("```bash\n" + "\n".join(d["commands"]) + "\n```\n\n"
+            "gives five job folders `multirun/weights/0 … 4` (each with `table.md`, `results.json`,\n"
+            "`route.png`, `schedule_edges.json`) and one table, `multirun/weights/gathered.md` (every\n"
+            f"column in `gathered.csv`); both commands take {d['wall_s']:.0f} s on a {d['cpu_count']}-core CPU "
+            "(`python benchmarks/weights_sweep.py`, `benchmarks/results/weights_sweep_cpu.json`):\n\n"
+            + d["gathered_md"].strip() + "\n")
+
+
+def hover_levelling() -> str:
+    """The demo's hover stage: the largest tilt with levelling on (docs/hover.md)."""
+    runs = _load("demo_cpu.json")["hover"]["runs"]
+    tilt = max(r["max_tilt_deg"] for r in runs.values())
+    return (f"Held level by the vertical thrusters, the tilt stays within {tilt:.1f}° in each of the demo's "
+            f"{len(runs)} hover runs (the `hover` stage of `benchmarks/results/demo_cpu.json`).\n")
+
+
+BLOCKS = {f.__name__: f for f in (docking_certify, test_suite, hover_vehicle, kin_roofline, scale_out, surrogate_roofline, docking_ga, docking_panel, pipeline_arms, plan_benchmark, sched_benchmark, hw_runner, hw_acceptance, kin_indices_cpu, kin_indices_accuracy, kin_indices_gpu, demo, docking_search, docking_fitness, docking_map, docking_collision,
                                    kin_summary, papers, hover_mjx, hover_robustness, surrogate_networks,
-                                   surrogate_paper_sizes_cpu, surrogate_paper_sizes_h100, surrogate_sizes)}
+                                   surrogate_paper_sizes_cpu, surrogate_paper_sizes_h100, surrogate_sizes, own_arm,
+                                   weights_sweep, hover_levelling)}
 
 
 def render(text: str) -> str:

@@ -128,7 +128,7 @@ def main() -> None:
             trainer=f.trainer, target_mse=f.target_mse.kci, max_epochs=f.max_epochs)
         save(alone.steps[0], loop="paper size alone")
     record["finished"] = True
-    record["design_seconds"] = design.seconds + (earlier.get("design_seconds") or 0.0 if earlier else 0.0)
+    record["design_seconds"] = design.seconds + ((earlier or {}).get("design_seconds") or 0.0)
     save()
     print(json.dumps(_summary(record), indent=1))
 

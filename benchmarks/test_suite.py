@@ -28,7 +28,8 @@ ROOT = Path(__file__).resolve().parents[1]
 TARGETS = ("test", "test-slow")
 #: Targets timed, ``setup`` apart so that the tests' times leave the installation out.
 STEPS = ("setup", *TARGETS)
-SUMMARY = re.compile(r"=+ (?P<counts>.*?) in (?P<seconds>[\d.]+)s")
+#: pytest's summary line, e.g. "810 passed, 1 skipped in 300.12s (0:05:00)" (-q leaves out the rules).
+SUMMARY = re.compile(r"^=*\s*(?P<counts>\d+ \w+(?:, \d+ \w+)*) in (?P<seconds>[\d.]+)s", re.M)
 
 
 def pytest_counts(output: str) -> dict:

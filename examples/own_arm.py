@@ -2,7 +2,7 @@
 
     python examples/own_arm.py
 
-About a minute on a 2-core CPU (a small GA; ``python experiments/docking.py
+A small GA (its time and output: README.md, ``benchmarks/own_arm.py``; ``python experiments/docking.py
 docking/preset=bravo7`` is the full experiment with its grid reference). The arm here is the
 Bravo 7's shipped description; point ``URDF`` and ``TIP`` at your own file.
 """

@@ -34,6 +34,8 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import os
+import platform
 import sys
 import time
 from pathlib import Path
@@ -91,9 +93,6 @@ def document(record: dict) -> str:
 
 def device_name() -> str:
     """The device a section ran on, as the document names it: the GPU's name, or the CPU's cores."""
-    import os
-    import platform
-
     d = jax.devices()[0]
     return d.device_kind if d.platform == "gpu" else f"{os.cpu_count()} {platform.machine()} CPU cores"
 

@@ -37,6 +37,7 @@ from flax import struct
 from jax import Array
 
 from uvms_jax import evo, kin
+from uvms_jax.settings import check_fields, setting
 from uvms_jax.surrogate._adam import fit_adam
 from uvms_jax.surrogate._ffbn import MLP, mlp_apply
 from uvms_jax.surrogate._scaler import Scaler, fit_scaler
@@ -71,28 +72,22 @@ class ReachMapSettings:
         does not improve the analytic fitness.
     """
 
-    n_samples: int = 32768
-    approach_cone_deg: float = 30.0
-    position_noise_m: float = 0.03
-    test_fraction: float = 0.1
-    hidden: int = 128
-    steps: int = 6000
-    learning_rate: float = 1e-2
-    chunk: int = 256
+    n_samples: int = setting(32768, ge=10)
+    approach_cone_deg: float = setting(30.0, gt=0, le=180)
+    position_noise_m: float = setting(0.03, ge=0)
+    test_fraction: float = setting(0.1, gt=0, lt=1)
+    hidden: int = setting(128, ge=1)
+    steps: int = setting(6000, ge=1)
+    learning_rate: float = setting(1e-2, gt=0)
+    chunk: int = setting(256, ge=1)
     seed: int = 0
-    candidates: int = 16
-    refine_iterations: int = 24
-    refine_stages: int = 6
-    refine_width: float = 0.25
+    candidates: int = setting(16, ge=1)
+    refine_iterations: int = setting(24, ge=0)
+    refine_stages: int = setting(6, ge=1)
+    refine_width: float = setting(0.25, gt=0, le=1)
 
     def __post_init__(self):
-        if self.n_samples < 10 or not 0 < self.approach_cone_deg <= 180 or self.position_noise_m < 0 \
-                or not 0 < self.test_fraction < 1 or self.hidden < 1 or self.steps < 1 \
-                or not self.learning_rate > 0 or self.chunk < 1 or self.candidates < 1 or self.refine_iterations < 0 \
-                or self.refine_stages < 1 or not 0 < self.refine_width <= 1:
-            raise ValueError(f"need n_samples >= 10, 0 < approach_cone_deg <= 180, position_noise_m >= 0, "
-                             f"0 < test_fraction < 1, hidden >= 1, steps >= 1, learning_rate > 0, chunk >= 1, "
-                             f"candidates >= 1, refine_iterations >= 0, refine_stages >= 1, 0 < refine_width <= 1; got {self}")
+        check_fields(self)
 
 
 def reach_features(T_base_tool: Array) -> Array:
