@@ -11,6 +11,7 @@ from jax import Array
 from uvms_jax.kin._chain import Chain, with_dtype
 from uvms_jax.kin._fk import fk_of, pose_and_jacobian_of
 from uvms_jax.kin._lie import exp_twist, matmul, matvec, pose_error, rigid_inverse
+from uvms_jax.kin import _ik_gpu
 from uvms_jax.kin import _paden_kahan as pk
 
 POSITION_TOL = {jnp.dtype("float32"): 1e-4, jnp.dtype("float64"): 1e-8}  # [m] accepted FK(IK(T)) residual
@@ -197,7 +198,10 @@ def dls_ik(chain: Chain, T_base_tool: Array, q0: Array, iterations: int, damping
         raise ValueError(f"limits must be one of {LIMITS}, got {limits!r}")
     shape = jnp.broadcast_shapes(T_base_tool.shape[:-2], q0.shape[:-1])
     q = _keep(chain, jnp.broadcast_to(q0, shape + q0.shape[-1:]), limits)
-    return jax.lax.fori_loop(0, iterations, lambda _, q: dls_step(chain, T_base_tool, q, damping, limits), q)
+    loop = lambda T, q: jax.lax.fori_loop(0, iterations, lambda _, q: dls_step(chain, T, q, damping, limits), q)  # noqa: E731
+    if _ik_gpu.applies(q):  # on a GPU, the whole loop as one kernel (same arithmetic)
+        return _ik_gpu.dls_ik_kernel(chain, T_base_tool, q, iterations, damping, limits, loop)
+    return loop(T_base_tool, q)
 
 
 def _keep(chain: Chain, q: Array, limits: str) -> Array:
