@@ -11,6 +11,7 @@ from jax import Array
 from uvms_jax.kin._chain import Chain, with_dtype
 from uvms_jax.kin._fk import fk_of, pose_and_jacobian_of
 from uvms_jax.kin._lie import exp_twist, matmul, matvec, pose_error, rigid_inverse
+from uvms_jax.kin._scalar import spd_solve_scalars
 from uvms_jax.kin import _ik_gpu
 from uvms_jax.kin import _paden_kahan as pk
 
@@ -162,18 +163,8 @@ def spd_solve(A: Array, b: Array) -> Array:
     damping keeps ``A``'s smallest eigenvalue ≥ λ² > 0.
     """
     m = A.shape[-1]
-    L = [[None] * m for _ in range(m)]
-    for j in range(m):
-        L[j][j] = jnp.sqrt(A[..., j, j] - sum(L[j][k] * L[j][k] for k in range(j)))
-        for i in range(j + 1, m):
-            L[i][j] = (A[..., i, j] - sum(L[i][k] * L[j][k] for k in range(j))) / L[j][j]
-    y = []
-    for i in range(m):  # L y = b
-        y.append((b[..., i] - sum(L[i][k] * y[k] for k in range(i))) / L[i][i])
-    x = [None] * m
-    for i in reversed(range(m)):  # Lᵀ x = y
-        x[i] = (y[i] - sum(L[k][i] * x[k] for k in range(i + 1, m))) / L[i][i]
-    return jnp.stack(x, axis=-1)
+    return jnp.stack(spd_solve_scalars([[A[..., i, j] for j in range(i + 1)] for i in range(m)],
+                                       [b[..., i] for i in range(m)]), axis=-1)
 
 
 def dls_ik(chain: Chain, T_base_tool: Array, q0: Array, iterations: int, damping=1.0, *, limits: str = "clip") -> Array:

@@ -24,62 +24,17 @@ import jax.numpy as jnp
 from jax import Array
 
 from uvms_jax.kin._chain import Chain
-from uvms_jax.kin._scalar import _IDENTITY, Pass, _joint_step, compose, geometric_rows
+from uvms_jax.kin._lie import rotation_log_scalars
+from uvms_jax.kin._scalar import _IDENTITY, Pass, _joint_step, compose, geometric_rows, spd_solve_scalars
 
 #: Configurations per program instance, and warps per instance: one configuration per thread
 #: (the dexterity kernels' choice, ``uvms_jax.indices._gpu``).
 BLOCK = 128
 NUM_WARPS = 4
 
-# As in rotation_log: below |vee|² = (2 sin θ)² = 4e-12 the series of θ / (2 sin θ) is used.
-_SMALL_VEE_SQ = 4e-12
-
-
 def applies(q: Array) -> bool:
     """Whether the kernel serves seeds ``q``: a GPU backend and float32 joint values."""
     return jax.default_backend() == "gpu" and q.dtype == jnp.float32
-
-
-def rotation_log_scalars(R: list) -> list:
-    """:func:`uvms_jax.kin.rotation_log` of ``R`` (3 rows of 3 scalars): the axis-angle vector
-    as 3 scalars, with the same branches (series near θ = 0, the symmetric part near π)."""
-    where = jnp.where
-    cos = jnp.clip((R[0][0] + R[1][1] + R[2][2] - 1.0) / 2.0, -1.0, 1.0)
-    vee = [R[2][1] - R[1][2], R[0][2] - R[2][0], R[1][0] - R[0][1]]
-    vee_sq = vee[0] * vee[0] + vee[1] * vee[1] + vee[2] * vee[2]
-    nonzero = vee_sq > 0.0
-    sin = where(nonzero, 0.5 * jnp.sqrt(where(nonzero, vee_sq, 1.0)), 0.0)
-    theta = jnp.arctan2(sin, cos)
-    small = vee_sq < _SMALL_VEE_SQ
-    scale = where(small, 0.5 + vee_sq / 48.0, theta / (2.0 * where(small, 1.0, sin)))
-    # Near θ = π: the axis is the largest column of (R + Rᵀ)/2 − cos·I (the first on ties).
-    B = [[(R[i][j] + R[j][i]) / 2.0 - (cos if i == j else 0.0) for j in range(3)] for i in range(3)]
-    first = (B[0][0] >= B[1][1]) & (B[0][0] >= B[2][2])
-    second = ~first & (B[1][1] >= B[2][2])
-    col = [where(first, B[i][0], where(second, B[i][1], B[i][2])) for i in range(3)]
-    norm = jnp.sqrt(col[0] * col[0] + col[1] * col[1] + col[2] * col[2])
-    near_pi = cos < -0.99
-    axis = [c / where(near_pi, norm, 1.0) for c in col]
-    flip = where(axis[0] * vee[0] + axis[1] * vee[1] + axis[2] * vee[2] < 0, -1.0, 1.0)
-    return [where(near_pi, theta * flip * axis[i], scale * vee[i]) for i in range(3)]
-
-
-def spd_solve_scalars(A: list, b: list) -> list:
-    """:func:`uvms_jax.kin.spd_solve` on scalars: ``x`` with ``A x = b`` (A symmetric positive
-    definite, ``A[i][j]`` read for ``j ≤ i`` only), by the same written-out Cholesky."""
-    m = len(b)
-    L = [[None] * m for _ in range(m)]
-    for j in range(m):
-        L[j][j] = jnp.sqrt(A[j][j] - sum(L[j][k] * L[j][k] for k in range(j)))
-        for i in range(j + 1, m):
-            L[i][j] = (A[i][j] - sum(L[i][k] * L[j][k] for k in range(j))) / L[j][j]
-    y = []
-    for i in range(m):
-        y.append((b[i] - sum(L[i][k] * y[k] for k in range(i))) / L[i][i])
-    x = [None] * m
-    for i in reversed(range(m)):
-        x[i] = (y[i] - sum(L[k][i] * x[k] for k in range(i + 1, m))) / L[i][i]
-    return x
 
 
 def dls_step_scalars(twists: list, tool0: tuple[list, list], lower: list, upper: list, revolute: tuple[bool, ...],
