@@ -1,6 +1,8 @@
 """The demo's docking fitness on a batch of vehicle poses: poses/s and XLA's flop count per
 pose, with the DLS step's 6 × 6 solve written out (Cholesky, ``kin.spd_solve``, the library's)
-beside the library's LU (``jnp.linalg.solve``) in the same process; prints one JSON object.
+beside the library's LU (``jnp.linalg.solve``), and on a GPU the whole IK loop as one kernel
+(``uvms_jax.kin._ik_gpu``, the library's GPU path) beside both, in the same process; prints one
+JSON object.
 
     JAX_PLATFORMS=cpu python benchmarks/docking_fitness.py --batches 256 1024
     python benchmarks/docking_fitness.py --batches 16384 131072          # GPU
@@ -23,7 +25,7 @@ import time
 import jax
 import jax.numpy as jnp
 
-from uvms_jax.kin import _ik
+from uvms_jax.kin import _ik, _ik_gpu
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from docking_search import demo_problem, demo_settings  # noqa: E402  (the demo's problem, built as the pipeline does)
@@ -63,16 +65,20 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=3)
     args = ap.parse_args()
     _, _, problem = demo_problem(demo_settings([]))
-    library = _ik.spd_solve
+    library, kernel_applies = _ik.spd_solve, _ik_gpu.applies
     settings = demo_settings([]).docking.scene
     solves_per_pose = len(problem.T_world_tool) * settings.ik_seeds * settings.ik_iterations
+    per_pose = dls_iteration_flops(problem) * solves_per_pose
+    variants = [("cholesky", library, False), ("lu", _lu, False)]
+    if jax.default_backend() == "gpu":
+        variants.insert(0, ("kernel", library, True))
     rows = {}
-    for name, solve in (("cholesky", library), ("lu", _lu)):
-        _ik.spd_solve = solve  # dls_ik reads it at trace time: each variant compiles anew
-        per_pose = dls_iteration_flops(problem) * solves_per_pose
+    for name, solve, kernel in variants:
+        # dls_ik reads both at trace time: each variant compiles anew.
+        _ik.spd_solve, _ik_gpu.applies = solve, (kernel_applies if kernel else lambda q: False)
         rows[name] = [{**m, "dls_flops_per_pose": per_pose, "achieved_flops_per_s": per_pose * m["poses_per_s"]}
                       for m in (measure(problem, n, args.repeat) for n in args.batches)]
-    _ik.spd_solve = library
+    _ik.spd_solve, _ik_gpu.applies = library, kernel_applies
     print(json.dumps({
         "command": " ".join(["python benchmarks/docking_fitness.py", *sys.argv[1:]]),
         "device": jax.devices()[0].device_kind, "platform": jax.devices()[0].platform, "jax": jax.__version__,

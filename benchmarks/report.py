@@ -510,19 +510,24 @@ def docking_fitness() -> str:
     rows = []
     for name in ("docking_fitness_cpu.json", "docking_fitness_h100.json"):
         d = _load(name)
-        for chol, lu in zip(d["variants"]["cholesky"], d["variants"]["lu"]):
+        v = d["variants"]
+        kernel = v.get("kernel", [None] * len(v["lu"]))  # the GPU's IK kernel (GPU runs only)
+        for chol, lu, ker in zip(v["cholesky"], v["lu"], kernel):
             rows.append([d["device"] if d["platform"] == "gpu" else f"{d['cpus']}-core CPU", str(chol["batch"]),
-                         _sci(lu["poses_per_s"]), _sci(chol["poses_per_s"]), f"{chol['poses_per_s'] / lu['poses_per_s']:.2f}×",
+                         _sci(lu["poses_per_s"]), _sci(chol["poses_per_s"]), "—" if ker is None else _sci(ker["poses_per_s"]),
                          f"{chol['dls_flops_per_pose'] / 1e6:.2f}", f"{chol['achieved_flops_per_s'] / 1e12:.3f}",
                          f"{chol['compile_s']:.1f}"])
     commands = " and ".join(f"`{_load(n)['command']}`" for n in ("docking_fitness_cpu.json", "docking_fitness_h100.json"))
-    gpu = _load("docking_fitness_h100.json")["variants"]["cholesky"][-1]
+    v = _load("docking_fitness_h100.json")["variants"]
+    gpu = v.get("kernel", v["cholesky"])[-1]
+    path = "the IK kernel" if "kernel" in v else "the XLA path"
     need = 5e5 * gpu["dls_flops_per_pose"]
-    return (f"{commands} (jax {_load('docking_fitness_h100.json')['jax']} on the GPU). At the largest batch the GPU "
-            f"achieves {gpu['achieved_flops_per_s'] / 1e12:.2f} TFLOP/s of IK arithmetic; 5e5 poses/s would need "
+    return (f"{commands} (jax {_load('docking_fitness_h100.json')['jax']} on the GPU). At the largest batch {path} "
+            f"achieves {gpu['achieved_flops_per_s'] / 1e12:.2f} TFLOP/s of IK arithmetic on the GPU; 5e5 poses/s would need "
             f"{need / 1e12:.1f} TFLOP/s.\n\n"
-            + _table(["device", "batch", "poses/s, LU solve", "poses/s, written-out Cholesky (the library's)", "speed-up",
-                      "DLS Mflop per pose (XLA's count on that backend)", "achieved TFLOP/s", "compile [s]"], rows) + "\n")
+            + _table(["device", "batch", "poses/s, XLA, LU solve", "poses/s, XLA, written-out Cholesky",
+                      "poses/s, IK kernel (the library's GPU path)", "DLS Mflop per pose (XLA's count on that backend)",
+                      "achieved TFLOP/s (XLA, Cholesky)", "compile [s] (XLA, Cholesky)"], rows) + "\n")
 
 
 def _int(n: float) -> str:

@@ -11,6 +11,8 @@ from jax import Array
 from uvms_jax.kin._chain import Chain, with_dtype
 from uvms_jax.kin._fk import fk_of, pose_and_jacobian_of
 from uvms_jax.kin._lie import exp_twist, matmul, matvec, pose_error, rigid_inverse
+from uvms_jax.kin._scalar import spd_solve_scalars
+from uvms_jax.kin import _ik_gpu
 from uvms_jax.kin import _paden_kahan as pk
 
 POSITION_TOL = {jnp.dtype("float32"): 1e-4, jnp.dtype("float64"): 1e-8}  # [m] accepted FK(IK(T)) residual
@@ -161,18 +163,8 @@ def spd_solve(A: Array, b: Array) -> Array:
     damping keeps ``A``'s smallest eigenvalue ≥ λ² > 0.
     """
     m = A.shape[-1]
-    L = [[None] * m for _ in range(m)]
-    for j in range(m):
-        L[j][j] = jnp.sqrt(A[..., j, j] - sum(L[j][k] * L[j][k] for k in range(j)))
-        for i in range(j + 1, m):
-            L[i][j] = (A[..., i, j] - sum(L[i][k] * L[j][k] for k in range(j))) / L[j][j]
-    y = []
-    for i in range(m):  # L y = b
-        y.append((b[..., i] - sum(L[i][k] * y[k] for k in range(i))) / L[i][i])
-    x = [None] * m
-    for i in reversed(range(m)):  # Lᵀ x = y
-        x[i] = (y[i] - sum(L[k][i] * x[k] for k in range(i + 1, m))) / L[i][i]
-    return jnp.stack(x, axis=-1)
+    return jnp.stack(spd_solve_scalars([[A[..., i, j] for j in range(i + 1)] for i in range(m)],
+                                       [b[..., i] for i in range(m)]), axis=-1)
 
 
 def dls_ik(chain: Chain, T_base_tool: Array, q0: Array, iterations: int, damping=1.0, *, limits: str = "clip") -> Array:
@@ -197,7 +189,10 @@ def dls_ik(chain: Chain, T_base_tool: Array, q0: Array, iterations: int, damping
         raise ValueError(f"limits must be one of {LIMITS}, got {limits!r}")
     shape = jnp.broadcast_shapes(T_base_tool.shape[:-2], q0.shape[:-1])
     q = _keep(chain, jnp.broadcast_to(q0, shape + q0.shape[-1:]), limits)
-    return jax.lax.fori_loop(0, iterations, lambda _, q: dls_step(chain, T_base_tool, q, damping, limits), q)
+    loop = lambda T, q: jax.lax.fori_loop(0, iterations, lambda _, q: dls_step(chain, T, q, damping, limits), q)  # noqa: E731
+    if _ik_gpu.applies(q):  # on a GPU, the whole loop as one kernel (same arithmetic)
+        return _ik_gpu.dls_ik_kernel(chain, T_base_tool, q, iterations, damping, limits, loop)
+    return loop(T_base_tool, q)
 
 
 def _keep(chain: Chain, q: Array, limits: str) -> Array:

@@ -147,37 +147,44 @@ def rpy_matrix(rpy) -> Array:
 _SMALL_VEE_SQ = 4e-12  # sin θ < 1e-6
 
 
-def rotation_log(R: Array) -> Array:
-    """Axis-angle vector ``(..., 3)`` of a rotation ``(..., 3, 3)``; safe at θ = 0 and near π.
+def rotation_log_scalars(R: list) -> list:
+    """Axis-angle vector of a rotation given as 3 rows of 3 scalars (arrays of one batch shape),
+    as 3 scalars: the one implementation of :func:`rotation_log`, also run inside the GPU IK
+    kernel (``uvms_jax.kin._ik_gpu``). Safe at θ = 0 and near π.
 
     Value and gradient are finite everywhere: every branch that a ``where`` discards is fed a
     harmless input (double ``where``), so its derivative cannot turn into NaN.
     """
-    cos = jnp.clip((jnp.trace(R, axis1=-2, axis2=-1) - 1.0) / 2.0, -1.0, 1.0)
-    vee = jnp.stack(
-        [R[..., 2, 1] - R[..., 1, 2], R[..., 0, 2] - R[..., 2, 0], R[..., 1, 0] - R[..., 0, 1]], axis=-1
-    )
+    where = jnp.where
+    cos = jnp.clip((R[0][0] + R[1][1] + R[2][2] - 1.0) / 2.0, -1.0, 1.0)
+    vee = [R[2][1] - R[1][2], R[0][2] - R[2][0], R[1][0] - R[0][1]]
     # vee = 2 sin θ · axis. Near θ = 0, θ / (2 sin θ) = 1/2 + θ²/12 + O(θ⁴) with θ² ≈ |vee|²/4;
     # the norm's derivative is infinite at 0, so it only ever sees a nonzero input.
-    vee_sq = jnp.sum(vee * vee, axis=-1)
+    vee_sq = vee[0] * vee[0] + vee[1] * vee[1] + vee[2] * vee[2]
     nonzero = vee_sq > 0.0
-    sin = jnp.where(nonzero, 0.5 * jnp.sqrt(jnp.where(nonzero, vee_sq, 1.0)), 0.0)
+    sin = where(nonzero, 0.5 * jnp.sqrt(where(nonzero, vee_sq, 1.0)), 0.0)
     theta = jnp.arctan2(sin, cos)
     small = vee_sq < _SMALL_VEE_SQ
-    scale = jnp.where(small, 0.5 + vee_sq / 48.0, theta / (2.0 * jnp.where(small, 1.0, sin)))
-    axis_angle = scale[..., None] * vee
+    scale = where(small, 0.5 + vee_sq / 48.0, theta / (2.0 * where(small, 1.0, sin)))
     # Near θ = π the antisymmetric part vanishes; recover the axis from the symmetric part.
-    # There (R + Rᵀ)/2 − cos·I = (1 − cos) k kᵀ: take its largest column as the axis k.
+    # There (R + Rᵀ)/2 − cos·I = (1 − cos) k kᵀ: take its largest column (the first on ties) as
+    # the axis k. Elsewhere B is replaced by I (it may be 0 there: keep its norm's gradient finite).
     near_pi = cos < -0.99
-    eye = jnp.eye(3, dtype=R.dtype)
-    B = (R + jnp.swapaxes(R, -1, -2)) / 2.0 - cos[..., None, None] * eye
-    B = jnp.where(near_pi[..., None, None], B, eye)  # elsewhere B may be 0: keep its norm's gradient finite
-    pick = jax.nn.one_hot(jnp.argmax(jnp.diagonal(B, axis1=-2, axis2=-1), axis=-1), 3, dtype=R.dtype)
-    col = matvec(B, pick)
-    axis_pi = col / jnp.linalg.norm(col, axis=-1, keepdims=True)  # |col| ≥ (1 − cos)/3 > 0.6 here
+    B = [[where(near_pi, (R[i][j] + R[j][i]) / 2.0 - (cos if i == j else 0.0), float(i == j)) for j in range(3)]
+         for i in range(3)]
+    first = (B[0][0] >= B[1][1]) & (B[0][0] >= B[2][2])
+    second = ~first & (B[1][1] >= B[2][2])
+    col = [where(first, B[i][0], where(second, B[i][1], B[i][2])) for i in range(3)]
+    norm = jnp.sqrt(col[0] * col[0] + col[1] * col[1] + col[2] * col[2])  # ≥ (1 − cos)/3 > 0.6 near π
+    axis = [c / norm for c in col]
     # Sign of the axis: agree with the (small) antisymmetric part where it still carries one.
-    axis_pi = axis_pi * jnp.where(jnp.sum(axis_pi * vee, axis=-1, keepdims=True) < 0, -1.0, 1.0)
-    return jnp.where(near_pi[..., None], theta[..., None] * axis_pi, axis_angle)
+    sign = where(axis[0] * vee[0] + axis[1] * vee[1] + axis[2] * vee[2] < 0, -1.0, 1.0)
+    return [where(near_pi, theta * sign * axis[i], scale * vee[i]) for i in range(3)]
+
+
+def rotation_log(R: Array) -> Array:
+    """Axis-angle vector ``(..., 3)`` of a rotation ``(..., 3, 3)`` (:func:`rotation_log_scalars`)."""
+    return jnp.stack(rotation_log_scalars([[R[..., i, j] for j in range(3)] for i in range(3)]), axis=-1)
 
 
 def pose_error(T_target: Array, T: Array) -> Array:

@@ -167,3 +167,22 @@ def pose_array(R: list, p: list, batch_shape: tuple, dtype) -> Array:
     rows = [R[i] + [p[i]] for i in range(3)] + [[0.0, 0.0, 0.0, 1.0]]
     return stack_scalars(rows, batch_shape, dtype)
 
+
+def spd_solve_scalars(A: list, b: list) -> list:
+    """``x`` with ``A x = b`` for a small symmetric positive-definite ``A`` given as rows of
+    scalars (``A[i][j]`` read for ``j ≤ i`` only), by a Cholesky factorisation written out entry
+    by entry: the one implementation of :func:`uvms_jax.kin.spd_solve`, also run inside the GPU
+    IK kernel."""
+    m = len(b)
+    L = [[None] * m for _ in range(m)]
+    for j in range(m):
+        L[j][j] = jnp.sqrt(A[j][j] - sum(L[j][k] * L[j][k] for k in range(j)))
+        for i in range(j + 1, m):
+            L[i][j] = (A[i][j] - sum(L[i][k] * L[j][k] for k in range(j))) / L[j][j]
+    y = []
+    for i in range(m):
+        y.append((b[i] - sum(L[i][k] * y[k] for k in range(i))) / L[i][i])
+    x = [None] * m
+    for i in reversed(range(m)):
+        x[i] = (y[i] - sum(L[k][i] * x[k] for k in range(i + 1, m))) / L[i][i]
+    return x
