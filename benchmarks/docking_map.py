@@ -9,13 +9,13 @@ the analytic search's best; the evaluation ratio is the analytic search's vehicl
 evaluations / the map route's (its candidates and refinement steps). The map is the arm's, not
 the task's, and is not in that ratio; ``amortised_ratio`` counts it too, its tool poses in
 vehicle-pose evaluations of this task (k tool poses each). The dense reference optimum of the
-problem (``benchmarks/results/docking_reference_demo_h200.json``) is given alongside.
+problem (``benchmarks/results/docking_reference_demo_h100.json``) is given alongside.
 
 Prints one JSON object (``--out`` also rewrites it after every seed, so a stopped run keeps the
 seeds it finished).
 
     PYTHONPATH=. python benchmarks/docking_map.py --seeds 0 3 --out benchmarks/results/docking_map_cpu.json
-    PYTHONPATH=. python benchmarks/docking_map.py --device gpu --seeds 0 10 --out benchmarks/results/docking_map_h200.json
+    PYTHONPATH=. python benchmarks/docking_map.py --device gpu --seeds 0 10 --out benchmarks/results/docking_map_h100.json
 
 Usage: python benchmarks/docking_map.py [--device cpu|gpu] [--seeds FIRST COUNT] [--out FILE] [override ...]
 (overrides are the pipeline's, configs/pipeline.yaml, e.g. ``reach.refine_iterations=12``).
@@ -32,7 +32,7 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-REFERENCE = ROOT / "benchmarks" / "results" / "docking_reference_demo_h200.json"
+REFERENCE = ROOT / "benchmarks" / "results" / "docking_reference_demo_h100.json"
 
 
 def main() -> None:

@@ -4,10 +4,10 @@ iterations), a dense reference, and the stage's search run with many seeds, each
 pose against the reference. Prints one JSON object.
 
     # the dense reference (GPU sizes: 823 284-pose grid + 8 zoom stages of 9^4)
-    .venv/bin/python benchmarks/docking_search.py --reference > benchmarks/results/docking_reference_demo.json
+    .venv/bin/python benchmarks/docking_search.py --reference > benchmarks/results/docking_reference_demo_h100.json
     # the demo's docking search with seeds 0..19 against it (CPU: a few minutes per seed)
     .venv/bin/python benchmarks/docking_search.py --seeds 0 20 \\
-        --reference-file benchmarks/results/docking_reference_demo.json [override ...]
+        --reference-file benchmarks/results/docking_reference_demo_h100.json [override ...]
 
 Overrides are the pipeline's (``configs/pipeline.yaml``), e.g. ``docking.overrides=[...]`` or
 ``ga.population_size=64``: the search compared is the one ``make demo`` runs.

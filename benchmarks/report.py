@@ -159,7 +159,7 @@ def demo() -> str:
 
 
 def docking_search() -> str:
-    ref_file = "docking_reference_demo_h200.json"
+    ref_file = "docking_reference_demo_h100.json"
     ref, d = _load(ref_file)["reference"], _load("docking_search_demo_cpu.json")
     s = d["search"]
     runs = s["runs"]
@@ -425,12 +425,12 @@ def test_suite() -> str:
 
 def docking_certify() -> str:
     """A certified docking run of the demo's fitness on a GPU (docs/docking.md), from its
-    ``summary.json`` kept as ``docking_certify_demo_h200.json``."""
-    d = _load("docking_certify_demo_h200.json")
+    ``summary.json`` kept as ``docking_certify_demo_h100.json``."""
+    d = _load("docking_certify_demo_h100.json")
     s, c = d["summary"], d["summary"]["certificate"]
     ref = c["reference"]
     ratios = [f / ref["fitness"] for f in s["ga_fitness"]]
-    return (f"On an {d['device']} (jax {d['jax']}; `benchmarks/results/docking_certify_demo_h200.json`): the reference "
+    return (f"On an {d['device']} (jax {d['jax']}; `benchmarks/results/docking_certify_demo_h100.json`): the reference "
             f"{ref['fitness']:.4f} ({ref['search']}, {_int(ref['evaluations'])} poses, the grid at "
             f"{_int(s['grid_candidates_per_s'])} poses/s), and {len(ratios)} GA runs at "
             f"{_int(s['ga_evaluations_per_s'])} evaluations/s whose bests reach {_range(ratios)} of it "
@@ -587,12 +587,12 @@ def docking_ga() -> str:
 def docking_panel() -> str:
     """The Bravo 7 docked beside a panel (numerical IK), from ``experiments/docking.py
     docking/preset=bravo7``'s outputs on a GPU."""
-    d = _load("docking_panel_h200.json")
+    d = _load("docking_panel_h100.json")
     s, g = d["summary"], d["grid_optimum"]
     b = d["best_pose"]
     p = b["pose"]
     w = [t["w"] for t in b["targets"] if t["reached"]]
-    return (f"{d['device_kind']}, jax {d['jax']}, float32, `{d['command']}` (`benchmarks/results/docking_panel_h200.json`): "
+    return (f"{d['device_kind']}, jax {d['jax']}, float32, `{d['command']}` (`benchmarks/results/docking_panel_h100.json`): "
             f"the 7 GA runs in one call {s['ga_batch_seconds']:.1f} s after compilation "
             f"({s['ga_compile_and_first_batch_seconds']:.0f} s with it), {_range(s['ga_generations'], 'd')} generations, "
             f"{_int(sum(s['ga_evaluations']))} evaluations, **{_int(s['ga_evaluations_per_s'])} evaluations/s**; the grid's "

@@ -24,7 +24,7 @@ from uvms_jax.settings import from_mapping
 
 CONFIG_DIR = Path(__file__).resolve().parents[2] / "configs"
 BRAVO7 = load_arm("bravo7")
-# Vehicle poses [x, y, z, ψ]: the demo's docked pose (benchmarks/results/docking_reference_demo_h200.json)
+# Vehicle poses [x, y, z, ψ]: the demo's docked pose (benchmarks/results/docking_reference_demo_h100.json)
 # and one over the other tables.
 POSES = np.array([[-0.262, 0.300, 1.205, -0.873], [0.15, -0.35, 1.0, 2.2]])
 N_CONFIGS = 10_000  # random configurations, spread over the poses and the targets
