@@ -507,27 +507,33 @@ def papers() -> str:
 
 
 def docking_fitness() -> str:
+    """The demo's docking fitness per batch: XLA with LU and with the written-out Cholesky, and
+    the GPU's IK kernel (``benchmarks/docking_fitness.py``; the kernel on GPUs only)."""
+    def pair(chol, ker, fmt):
+        return fmt(chol) + ("" if ker is None else " / " + fmt(ker))
+
     rows = []
     for name in ("docking_fitness_cpu.json", "docking_fitness_h100.json"):
         d = _load(name)
         v = d["variants"]
-        kernel = v.get("kernel", [None] * len(v["lu"]))  # the GPU's IK kernel (GPU runs only)
+        kernel = v.get("kernel", [None] * len(v["lu"]))
         for chol, lu, ker in zip(v["cholesky"], v["lu"], kernel):
             rows.append([d["device"] if d["platform"] == "gpu" else f"{d['cpus']}-core CPU", str(chol["batch"]),
                          _sci(lu["poses_per_s"]), _sci(chol["poses_per_s"]), "—" if ker is None else _sci(ker["poses_per_s"]),
-                         f"{chol['dls_flops_per_pose'] / 1e6:.2f}", f"{chol['achieved_flops_per_s'] / 1e12:.3f}",
-                         f"{chol['compile_s']:.1f}"])
+                         "—" if ker is None else f"{ker['poses_per_s'] / chol['poses_per_s']:.1f}×",
+                         f"{chol['dls_flops_per_pose'] / 1e6:.2f}",
+                         pair(chol, ker, lambda r: f"{r['achieved_flops_per_s'] / 1e12:.3f}"),
+                         pair(chol, ker, lambda r: f"{r['compile_s']:.0f}")])
     commands = " and ".join(f"`{_load(n)['command']}`" for n in ("docking_fitness_cpu.json", "docking_fitness_h100.json"))
-    v = _load("docking_fitness_h100.json")["variants"]
-    gpu = v.get("kernel", v["cholesky"])[-1]
-    path = "the IK kernel" if "kernel" in v else "the XLA path"
-    need = 5e5 * gpu["dls_flops_per_pose"]
-    return (f"{commands} (jax {_load('docking_fitness_h100.json')['jax']} on the GPU). At the largest batch {path} "
-            f"achieves {gpu['achieved_flops_per_s'] / 1e12:.2f} TFLOP/s of IK arithmetic on the GPU; 5e5 poses/s would need "
-            f"{need / 1e12:.1f} TFLOP/s.\n\n"
+    gpu = _load("docking_fitness_h100.json")
+    ker = gpu["variants"]["kernel"][-1]
+    return (f"{commands} (jax {gpu['jax']} on the GPU). At the largest batch the IK kernel achieves "
+            f"{ker['achieved_flops_per_s'] / 1e12:.2f} TFLOP/s of IK arithmetic on the GPU; 5e5 poses/s would need "
+            f"{5e5 * ker['dls_flops_per_pose'] / 1e12:.1f} TFLOP/s.\n\n"
             + _table(["device", "batch", "poses/s, XLA, LU solve", "poses/s, XLA, written-out Cholesky",
-                      "poses/s, IK kernel (the library's GPU path)", "DLS Mflop per pose (XLA's count on that backend)",
-                      "achieved TFLOP/s (XLA, Cholesky)", "compile [s] (XLA, Cholesky)"], rows) + "\n")
+                      "poses/s, IK kernel (the library's GPU path)", "kernel / Cholesky",
+                      "DLS Mflop per pose (XLA's count on that backend)", "achieved TFLOP/s (Cholesky / kernel)",
+                      "compile [s] (Cholesky / kernel)"], rows) + "\n")
 
 
 def _int(n: float) -> str:
@@ -598,7 +604,7 @@ def docking_panel() -> str:
             f"{_int(sum(s['ga_evaluations']))} evaluations, **{_int(s['ga_evaluations_per_s'])} evaluations/s**; the grid's "
             f"{_int(g['candidates'])} candidates ({' × '.join(map(str, g['counts']))}) {g['seconds']:.0f} s "
             f"({_int(s['grid_candidates_per_s'])} candidates/s), its {len(g['refined']['stages'])} zoom stages "
-            f"({_int(g['refined']['candidates'])} candidates) {g['refined']['seconds']:.0f} s.\n\n"
+            f"({_int(g['refined']['candidates'])} candidates) {g['refined']['seconds']:.0f} s with their compilation.\n\n"
             + _table(["reference", "fitness", "GA / reference, 7 runs", "runs ≥ 0.99"],
                      [[f"grid {' × '.join(map(str, g['counts']))}", f"{g['fitness']:.4f}",
                        ", ".join(f"{r:.3f}" for r in s["ga_ratio_to_grid"]), str(s["ga_runs_within_0.99_of_grid"])],
@@ -632,7 +638,8 @@ def docking_map() -> str:
     r0 = d["runs"][0]
     return ("\n\n".join(out) + f" The map: {r0['map_tool_poses']} tool poses, what "
             f"{r0['map_vehicle_pose_equivalents']:.0f} docking evaluations of this task cost; the amortised ratio counts "
-            f"them in one run. Reference: {d['reference_fitness']:.4f} (dense grid + zoom on an H200).\n\n"
+            f"them in one run. Reference: {d['reference_fitness']:.4f} (dense grid + zoom, "
+            f"`benchmarks/results/docking_reference_demo_h100.json`).\n\n"
             + _table(["device", "seed", "analytic search: best", "its evaluations", "map: best candidate (analytic)",
                       "map route: refined (analytic)", "/ reference", "its analytic evaluations", "loss of optimum",
                       "evaluation ratio", "amortised ratio (map counted)", "wall [s] analytic / map route"], rows) + "\n")
