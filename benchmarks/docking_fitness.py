@@ -11,6 +11,8 @@ The fitness is the demo's (``make demo``'s docking stage: 16 tool poses, 8 IK se
 iterations each, collisions), on poses drawn uniformly in its pose box. Compilation is timed
 apart; the best of ``--repeat`` calls is reported. ``flops_per_pose`` is XLA's cost analysis of
 the compiled call over the batch; with the device's peak it bounds the rate from above.
+``stages`` times cumulative pieces of the fitness at the largest batch (:data:`STAGES`): where
+the time goes.
 """
 
 from __future__ import annotations
@@ -25,6 +27,8 @@ import time
 import jax
 import jax.numpy as jnp
 
+from uvms_jax import indices, kin
+from uvms_jax.evo import _arm
 from uvms_jax.kin import _ik, _ik_gpu
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -49,6 +53,52 @@ def measure(problem, n: int, repeat: int) -> dict:
     best = min(times[1:])
     return {"batch": n, "compile_s": compile_s, "best_s": best, "poses_per_s": n / best,
             "fitness_sum": float(jnp.nansum(f))}
+
+
+def _solutions(p, poses):
+    _, T_world_base, T_base_tool = _arm.arm_tool_poses(p, poses)
+    q = kin.dls_ik(p.chain, T_base_tool[..., None, :, :], p.seeds, p.iterations, p.damping, limits="wrap")
+    return T_world_base, T_base_tool, q
+
+
+def _with_fk(p, poses):
+    _, T_base_tool, q = _solutions(p, poses)
+    K = kin.kinematics(p.chain, q)
+    return jnp.sum(kin.reaches(T_base_tool[..., None, :, :], K.T_base_tool)) + jnp.sum(K.T_base_joint[..., 3])
+
+
+def _with_collision(p, poses):
+    T_world_base, _, q = _solutions(p, poses)
+    return jnp.sum(_arm.world_collides(p.world, p.group, T_world_base, kin.kinematics(p.chain, q).T_base_joint))
+
+
+#: Cumulative pieces of the fitness (``evo.ArmDockingProblem.fitness``: IK, then forward
+#: kinematics and the reach test, the collision test, w), each compiled alone and summed so
+#: that XLA keeps all of it.
+STAGES = {
+    "ik, 1 iteration": (lambda p, x: jnp.sum(_solutions(p, x)[2]), 1),
+    "ik": (lambda p, x: jnp.sum(_solutions(p, x)[2]), None),
+    "ik + fk + reach test": (_with_fk, None),
+    "ik + fk + collision test": (_with_collision, None),
+    "ik + w": (lambda p, x: jnp.sum(indices.manipulability_of(p.chain, _solutions(p, x)[2])), None),
+    "fitness": (lambda p, x: jnp.sum(p.fitness(x)), None),
+}
+
+
+def stage_seconds(problem, n: int, repeat: int) -> dict:
+    """Best time [s] of each of :data:`STAGES` over ``n`` poses (the library's path)."""
+    poses = jax.random.uniform(jax.random.key(0), (n, 4), jnp.float32, problem.pose_low, problem.pose_high)
+    out = {}
+    for name, (f, iterations) in STAGES.items():
+        p = problem if iterations is None else problem.replace(iterations=iterations)
+        compiled = jax.jit(f).lower(p, poses).compile()
+        times = []
+        for _ in range(repeat + 1):
+            t0 = time.perf_counter()
+            jax.block_until_ready(compiled(p, poses))
+            times.append(time.perf_counter() - t0)
+        out[name] = min(times[1:])
+    return out
 
 
 def dls_iteration_flops(problem) -> float:
@@ -79,11 +129,12 @@ def main() -> None:
         rows[name] = [{**m, "dls_flops_per_pose": per_pose, "achieved_flops_per_s": per_pose * m["poses_per_s"]}
                       for m in (measure(problem, n, args.repeat) for n in args.batches)]
     _ik.spd_solve, _ik_gpu.applies = library, kernel_applies
+    stages = {"batch": args.batches[-1], "seconds": stage_seconds(problem, args.batches[-1], args.repeat)}
     print(json.dumps({
         "command": " ".join(["python benchmarks/docking_fitness.py", *sys.argv[1:]]),
         "device": jax.devices()[0].device_kind, "platform": jax.devices()[0].platform, "jax": jax.__version__,
         "machine": platform.machine(), "cpus": os.cpu_count(), "fitness": "demo (16 tool poses, 8 seeds x 25 DLS iterations)",
-        "variants": rows}, indent=1))
+        "variants": rows, "stages": stages}, indent=1))
 
 
 if __name__ == "__main__":
