@@ -533,18 +533,20 @@ def docking_fitness() -> str:
             + _table(["device", "batch", "poses/s, XLA, LU solve", "poses/s, XLA, written-out Cholesky",
                       "poses/s, IK kernel (the library's GPU path)", "kernel / Cholesky",
                       "DLS Mflop per pose (XLA's count on that backend)", "achieved TFLOP/s (Cholesky / kernel)",
-                      "compile [s] (Cholesky / kernel)"], rows) + "\n\n" + _fitness_stages(gpu))
+                      "compile [s] (Cholesky / kernel)"], rows) + "\n\n"
+            + "\n".join(_fitness_stages(_load(n)) for n in ("docking_fitness_cpu.json", "docking_fitness_h100.json")))
 
 
 def _fitness_stages(d: dict) -> str:
-    """Where the fitness's time goes (``stages`` of a docking_fitness record)."""
+    """Where the fitness's time goes (``stages`` of a docking_fitness record), one paragraph."""
     st = d["stages"]["seconds"]
     ik, fk, hit, whole = st["ik"], st["ik + fk + reach test"], st["ik + fk + collision test"], st["fitness"]
-    return (f"Where the time goes, {d['device']} at {_int(d['stages']['batch'])} poses (each piece compiled alone, "
+    device = d["device"] if d["platform"] == "gpu" else f"{d['cpus']}-core CPU"
+    return (f"Where the time goes, {device} at {_int(d['stages']['batch'])} poses (each piece compiled alone, "
             f"the library's path): the IK {1e3 * ik:.1f} ms ({1e3 * st['ik, 1 iteration']:.1f} ms with one "
             f"iteration), with the forward kinematics and reach test {1e3 * fk:.1f} ms, with the collision test "
             f"instead {1e3 * hit:.1f} ms, with w instead {1e3 * st['ik + w']:.1f} ms; the whole fitness "
-            f"{1e3 * whole:.1f} ms. The collision test takes {100 * (hit - fk) / whole:.0f} % of the fitness.\n")
+            f"{1e3 * whole:.1f} ms: the IK {100 * ik / whole:.0f} %, the collision test {100 * (hit - fk) / whole:.0f} %.\n")
 
 
 def _int(n: float) -> str:
