@@ -562,7 +562,8 @@ def _range(values, fmt: str = ".4f") -> str:
 def docking_ga() -> str:
     """The paper's docking problem: the GA batch, the dense grid and CMA-ES (evosax) on the CPU and
     on a GPU, from ``benchmarks/docking.py``'s result files."""
-    cpu, gpu = _load("docking_cpu.json"), _load("docking_h200.json")
+    files = ("docking_cpu.json", "docking_h200.json", "docking_h100.json")
+    cpu, *gpus = (_load(f) for f in files)
 
     def ga_row(d):
         g = d["ga"]
@@ -583,24 +584,28 @@ def docking_ga() -> str:
         return f"CMA-ES (evosax), {c['runs']} runs × {_int(c['population'])} × {c['generations']} generations"
 
     rows = []
-    for d, label in ((cpu, "2-core CPU"), (gpu, gpu["device_kind"])):
+    for d in (cpu, *gpus):
+        label = "2-core CPU" if d is cpu else d["device_kind"]
         g, gr, c = d["ga"], d["grid"], d["cmaes"]
         rows += [[label, ga_row(d), t(g), f"{_rate(g['evaluations_per_s'])} evaluations/s", f"{g['compile_and_first_s']:.0f} s"],
                  [label, grid_row(d), t(gr), f"{_rate(gr['candidates_per_s'])} candidates/s",
                   f"{gr['compile_and_tiny_grid_s']:.0f} s"],
                  [label, cma_row(d), t(c), f"{_rate(c['evaluations_per_s'])} evaluations/s", f"{c['compile_and_first_s']:.0f} s"]]
     ratios = [f / cpu["grid"]["best_fitness"] for f in cpu["ga"]["best_fitness"]]
+    on = lambda parts: " and ".join(parts)  # noqa: E731
     return (f"Commands: `{cpu['command']}` (2-core {cpu['platform']} CPU, jax {cpu['jax']}, load average "
-            f"{cpu['load_average_start'][0]:.1f} at the start) and `{gpu['command']}` ({gpu['device_kind']}, jax {gpu['jax']}); "
-            f"files `benchmarks/results/docking_cpu.json`, `docking_h200.json`. Times after compilation, best of the "
-            "repeats (median in brackets).\n\n"
+            f"{cpu['load_average_start'][0]:.1f} at the start) and "
+            + on(f"`{d['command']}` ({d['device_kind']}, jax {d['jax']})" for d in gpus)
+            + "; files " + ", ".join(f"`benchmarks/results/{f}`" for f in files) + ". Times after compilation, best "
+            "of the repeats (median in brackets).\n\n"
             + _table(["device", "what", "time", "rate", "compile + first call"], rows)
             + f"\n\nGA against CMA-ES, evaluations/s: {cpu['ga_over_cmaes_evaluations_per_s']:.2f}× on the CPU, "
-              f"{gpu['ga_over_cmaes_evaluations_per_s']:.2f}× on the GPU. On the CPU the {cpu['ga']['runs']} GA runs reach "
+            + on(f"{d['ga_over_cmaes_evaluations_per_s']:.2f}× on the {d['device_kind']}" for d in gpus)
+            + f". On the CPU the {cpu['ga']['runs']} GA runs reach "
               f"{_range(ratios, '.3f')} of the {_int(cpu['grid']['candidates'])}-candidate grid's optimum "
               f"{cpu['grid']['best_fitness']:.4f} ({sum(r >= 0.99 for r in ratios)} of {len(ratios)} ≥ 0.99); "
               f"CMA-ES's best {max(cpu['cmaes']['best_fitness']):.4f}. The paper's 1e8-candidate grid takes "
-              f"{gpu['grid']['best_s']:.2f} s on the {gpu['device_kind']}.\n")
+            + on(f"{d['grid']['best_s']:.2f} s on the {d['device_kind']}" for d in gpus) + ".\n")
 
 
 def docking_panel() -> str:
