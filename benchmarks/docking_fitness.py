@@ -39,18 +39,26 @@ def _lu(A, b):
     return jnp.linalg.solve(A, b[..., None])[..., 0]
 
 
-def measure(problem, n: int, repeat: int) -> dict:
-    poses = jax.random.uniform(jax.random.key(0), (n, 4), jnp.float32, problem.pose_low, problem.pose_high)
-    fitness = jax.jit(lambda p, x: p.fitness(x))
+def _poses(problem, n: int):
+    return jax.random.uniform(jax.random.key(0), (n, 4), jnp.float32, problem.pose_low, problem.pose_high)
+
+
+def _timed(f, problem, poses, repeat: int):
+    """``f(problem, poses)`` compiled, then called ``repeat + 1`` times (the first warms up):
+    (compile [s], best call [s], its output)."""
     t0 = time.perf_counter()
-    compiled = fitness.lower(problem, poses).compile()
+    compiled = jax.jit(f).lower(problem, poses).compile()
     compile_s = time.perf_counter() - t0
     times = []
-    for _ in range(repeat + 1):  # the first call warms up
+    for _ in range(repeat + 1):
         t0 = time.perf_counter()
-        f = jax.block_until_ready(compiled(problem, poses))
+        out = jax.block_until_ready(compiled(problem, poses))
         times.append(time.perf_counter() - t0)
-    best = min(times[1:])
+    return compile_s, min(times[1:]), out
+
+
+def measure(problem, n: int, repeat: int) -> dict:
+    compile_s, best, f = _timed(lambda p, x: p.fitness(x), problem, _poses(problem, n), repeat)
     return {"batch": n, "compile_s": compile_s, "best_s": best, "poses_per_s": n / best,
             "fitness_sum": float(jnp.nansum(f))}
 
@@ -87,18 +95,9 @@ STAGES = {
 
 def stage_seconds(problem, n: int, repeat: int) -> dict:
     """Best time [s] of each of :data:`STAGES` over ``n`` poses (the library's path)."""
-    poses = jax.random.uniform(jax.random.key(0), (n, 4), jnp.float32, problem.pose_low, problem.pose_high)
-    out = {}
-    for name, (f, iterations) in STAGES.items():
-        p = problem if iterations is None else problem.replace(iterations=iterations)
-        compiled = jax.jit(f).lower(p, poses).compile()
-        times = []
-        for _ in range(repeat + 1):
-            t0 = time.perf_counter()
-            jax.block_until_ready(compiled(p, poses))
-            times.append(time.perf_counter() - t0)
-        out[name] = min(times[1:])
-    return out
+    poses = _poses(problem, n)
+    return {name: _timed(f, problem if iterations is None else problem.replace(iterations=iterations), poses, repeat)[1]
+            for name, (f, iterations) in STAGES.items()}
 
 
 def dls_iteration_flops(problem) -> float:
