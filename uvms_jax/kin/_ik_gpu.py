@@ -32,6 +32,7 @@ from uvms_jax.kin._scalar import _IDENTITY, Pass, _joint_step, compose, geometri
 BLOCK = 128
 NUM_WARPS = 4
 
+
 def applies(q: Array) -> bool:
     """Whether the kernel serves seeds ``q``: a GPU backend and float32 joint values."""
     return jax.default_backend() == "gpu" and q.dtype == jnp.float32
@@ -146,4 +147,3 @@ def dls_ik_kernel(chain: Chain, T_base_tool: Array, q0: Array, iterations: int, 
         return jax.jvp(xla_path, primals, tangents)
 
     return solve(T_base_tool, q0)
-
