@@ -506,35 +506,42 @@ def papers() -> str:
         f"{eq['grasp/thesis']['optimal_of_20']} of 20 runs.\n")
 
 
-def docking_fitness() -> str:
-    """The demo's docking fitness per batch: XLA with LU and with the written-out Cholesky, and
-    the GPU's IK kernel (``benchmarks/docking_fitness.py``; the kernel on GPUs only)."""
-    def pair(chol, ker, fmt):
-        return fmt(chol) + ("" if ker is None else " / " + fmt(ker))
+#: benchmarks/docking_fitness.py's variants, as the tables name them.
+FITNESS_VARIANTS = {"kernels": "IK kernel + collision kernel (the library's GPU path)",
+                    "ik kernel": "IK kernel, XLA collision test", "cholesky": "XLA, written-out Cholesky (the library's CPU path)",
+                    "lu": "XLA, LU solve"}
 
+
+def docking_fitness() -> str:
+    """The demo's docking fitness per batch and variant (``benchmarks/docking_fitness.py``: each
+    file's variants timed in one process), and the GPU path's arithmetic against the H100's
+    compute ceiling."""
+    names = ("docking_fitness_cpu.json", "docking_fitness_h100.json")
     rows = []
-    for name in ("docking_fitness_cpu.json", "docking_fitness_h100.json"):
+    for name in names:
         d = _load(name)
-        v = d["variants"]
-        kernel = v.get("kernel", [None] * len(v["lu"]))
-        for chol, lu, ker in zip(v["cholesky"], v["lu"], kernel):
-            rows.append([d["device"] if d["platform"] == "gpu" else f"{d['cpus']}-core CPU", str(chol["batch"]),
-                         _sci(lu["poses_per_s"]), _sci(chol["poses_per_s"]), "—" if ker is None else _sci(ker["poses_per_s"]),
-                         "—" if ker is None else f"{ker['poses_per_s'] / chol['poses_per_s']:.1f}×",
-                         f"{chol['dls_flops_per_pose'] / 1e6:.2f}",
-                         pair(chol, ker, lambda r: f"{r['achieved_flops_per_s'] / 1e12:.3f}"),
-                         pair(chol, ker, lambda r: f"{r['compile_s']:.0f}")])
-    commands = " and ".join(f"`{_load(n)['command']}`" for n in ("docking_fitness_cpu.json", "docking_fitness_h100.json"))
-    gpu = _load("docking_fitness_h100.json")
-    ker = gpu["variants"]["kernel"][-1]
-    return (f"{commands} (jax {gpu['jax']} on the GPU). At the largest batch the IK kernel achieves "
-            f"{ker['achieved_flops_per_s'] / 1e12:.2f} TFLOP/s of IK arithmetic on the GPU; 5e5 poses/s would need "
-            f"{5e5 * ker['dls_flops_per_pose'] / 1e12:.1f} TFLOP/s.\n\n"
-            + _table(["device", "batch", "poses/s, XLA, LU solve", "poses/s, XLA, written-out Cholesky",
-                      "poses/s, IK kernel (the library's GPU path)", "kernel / Cholesky",
-                      "DLS Mflop per pose (XLA's count on that backend)", "achieved TFLOP/s (Cholesky / kernel)",
-                      "compile [s] (Cholesky / kernel)"], rows) + "\n\n"
-            + "\n".join(_fitness_stages(_load(n)) for n in ("docking_fitness_cpu.json", "docking_fitness_h100.json")))
+        device = d["device"] if d["platform"] == "gpu" else f"{d['cpus']}-core CPU"
+        for variant, runs in d["variants"].items():
+            rows += [[device, _int(r["batch"]), FITNESS_VARIANTS[variant], _sci(r["poses_per_s"]), f"{r['compile_s']:.0f}",
+                      f"{r['fitness_sum']:.9g}"] for r in runs]
+    cpu, gpu = (_load(n) for n in names)
+    kernels, ik = gpu["variants"]["kernels"][-1], gpu["variants"]["ik kernel"][-1]
+    chol, lu = cpu["variants"]["cholesky"][-1], cpu["variants"]["lu"][-1]
+    flops = kernels["dls_flops_per_pose"] + gpu["collision_flops_per_pose"]
+    ceiling = 2 * HOPPER_FP32  # XLA counts a multiply-add as two flops
+    return (" and ".join(f"`{_load(n)['command']}`" for n in names) + f" (jax {gpu['jax']} on the GPU). At "
+            f"{_int(kernels['batch'])} poses on the {gpu['device']} the library's path runs "
+            f"**{_sci(kernels['poses_per_s'])} poses/s**, {kernels['poses_per_s'] / ik['poses_per_s']:.2f}× the IK kernel "
+            f"with XLA's collision test (the path before the collision kernel) in the same process, with the same "
+            f"fitness sum. A pose costs {kernels['dls_flops_per_pose'] / 1e6:.2f} Mflop of DLS iterations and "
+            f"{gpu['collision_flops_per_pose'] / 1e6:.2f} Mflop of collision tests (XLA's count of the same arithmetic "
+            f"on the GPU), so the kernels achieve {flops * kernels['poses_per_s'] / 1e12:.1f} TFLOP/s: "
+            f"{100 * flops * kernels['poses_per_s'] / ceiling:.0f} % of the H100's {ceiling / 1e12:.0f} TFLOP/s FP32 ceiling "
+            f"(132 SMs × 128 lanes × 1.98 GHz, a multiply-add as two flops), which bounds the fitness near "
+            f"{_sci(ceiling / flops)} poses/s. On the CPU at {_int(chol['batch'])} poses the written-out Cholesky runs "
+            f"{chol['poses_per_s'] / lu['poses_per_s']:.2f}× the LU solve.\n\n"
+            + _table(["device", "batch", "variant", "poses/s", "compile [s]", "fitness sum"], rows) + "\n\n"
+            + "\n".join(_fitness_stages(_load(n)) for n in names))
 
 
 def _fitness_stages(d: dict) -> str:
@@ -562,7 +569,7 @@ def _range(values, fmt: str = ".4f") -> str:
 def docking_ga() -> str:
     """The paper's docking problem: the GA batch, the dense grid and CMA-ES (evosax) on the CPU and
     on a GPU, from ``benchmarks/docking.py``'s result files."""
-    files = ("docking_cpu.json", "docking_h200.json", "docking_h100.json")
+    files = ("docking_cpu.json", "docking_h100.json")
     cpu, *gpus = (_load(f) for f in files)
 
     def ga_row(d):
@@ -605,7 +612,17 @@ def docking_ga() -> str:
               f"{_range(ratios, '.3f')} of the {_int(cpu['grid']['candidates'])}-candidate grid's optimum "
               f"{cpu['grid']['best_fitness']:.4f} ({sum(r >= 0.99 for r in ratios)} of {len(ratios)} ≥ 0.99); "
               f"CMA-ES's best {max(cpu['cmaes']['best_fitness']):.4f}. The paper's 1e8-candidate grid takes "
-            + on(f"{d['grid']['best_s']:.2f} s on the {d['device_kind']}" for d in gpus) + ".\n")
+            + on(f"{d['grid']['best_s']:.2f} s on the {d['device_kind']}" for d in gpus) + ". " + _grid_chunks())
+
+
+def _grid_chunks() -> str:
+    """The paper's 1e8 grid in chunks of several sizes on a GPU: compile time and search time."""
+    d = _load("docking_grid_chunks_h100.json")
+    runs = [(_int(r["chunk"]), r["grid"]["compile_and_tiny_grid_s"], r["grid"]["best_s"]) for r in d["runs"]]
+    return (f"In chunks of {', '.join(c for c, _, _ in runs[:-1])} and {runs[-1][0]} candidates it compiles (with a "
+            f"2⁴ grid's call) in {', '.join(f'{t:.0f}' for _, t, _ in runs)} s and searches the grid in "
+            f"{', '.join(f'{t:.2f}' for _, _, t in runs)} s on the {d['device_kind']} (`{d['command']}`, "
+            f"`benchmarks/results/docking_grid_chunks_h100.json`).\n")
 
 
 def docking_panel() -> str:

@@ -145,3 +145,63 @@ def test_polytopes_of_few_faces_beside_a_padded_one():
     np.testing.assert_array_equal(got[clear], (depth <= r)[clear])
     with pytest.raises(ValueError, match="n_faces"):
         evo.make_sphere_world(rows, no_boxes, padded, np.zeros((0, 4)), 0.0, 0, 0, n_faces=(7, 1))
+
+
+def _every_kind_world(chain, rng):
+    """A world of two rows holding every kind of pair: spheres on every body, boxes and
+    polytopes both fixed to the vehicle (in B) and in the scene (in W, one polytope a padded
+    half-space), fixed spheres, sphere pairs and capsule pairs, each row its own masks."""
+    n_rows, N, A, A2, C = 2, 12, 7, 5, 3
+    body = np.tile(np.arange(N) % (chain.n_joints + 1), (n_rows, 1))
+    cube = np.array([[s * a[0], s * a[1], s * a[2], -0.15] for a in np.eye(3) for s in (1.0, -1.0)])
+    cube[:, 3] -= cube[:, :3] @ [0.1, 0.3, -0.4]  # centred at (0.1, 0.3, -0.4)
+    tilted = cube.copy()
+    tilted[:, 3] -= tilted[:, :3] @ [0.3, -0.4, 0.9]
+    floor = np.concatenate([[[0.0, 0.0, 1.0, -0.45]], np.repeat([[1.0, 0.0, 0.0, 0.0]], 5, axis=0)])
+    mask = lambda *shape: rng.random((n_rows,) + shape) < 0.7  # noqa: E731
+    rows = {"body": body, "centre": rng.uniform(-0.05, 0.05, (n_rows, N, 3)), "radius": rng.uniform(0.02, 0.05, (n_rows, N)),
+            "box_on": mask(N, 4), "face_on": mask(N, 3), "ball_on": mask(N, 2),
+            "pair_a": np.tile(np.arange(A), (n_rows, 1)), "pair_b": np.tile(np.arange(A, A + A2), (n_rows, 1)),
+            "pair_on": mask(A, A2) & (np.abs(body[:, :A, None] - body[:, None, A:]) > 1),  # not the same or next body
+            "cap_body": np.tile([[0, 3], [1, 5], [2, 6]], (n_rows, 1, 1)),
+            "cap_ends": rng.uniform(-0.05, 0.05, (n_rows, C, 2, 2, 3)), "cap_reach": rng.uniform(0.04, 0.08, (n_rows, C)),
+            "cap_on": mask(C)}
+    T_box = [frames.rpy_pose(p, a) for p, a in (((0.3, 0.3, 0.3), (0.0, 0.0, 0.3)), ((0.2, -0.4, -0.4), (0.4, 0.0, 0.0)),
+                                                 ((0.6, 0.2, 0.5), (0.0, 0.2, 1.0)), ((-0.2, -0.6, 1.3), (0.1, 0.1, 0.1)))]
+    boxes = {"c": np.stack([T[:3, 3] for T in T_box]), "R": np.stack([T[:3, :3] for T in T_box]),
+             "half": rng.uniform(0.05, 0.15, (4, 3)), "vehicle": np.array([True, False, False, False])}
+    balls = np.array([[0.4, 0.0, 1.0, 0.1], [0.0, 0.3, 0.7, 0.15]])
+    return evo.make_sphere_world(rows, boxes, np.stack([cube, tilted, floor]), balls, 0.02, 2, 1, jnp.float32,
+                                 n_faces=(6, 6, 1))
+
+
+def test_gpu_kernel_answers_as_the_xla_test():
+    """The collision kernel (uvms_jax.evo._world_gpu), emulated, calls exactly the
+    configurations colliding that the XLA test does, in a world with every kind of pair and at
+    vehicle poses that move the scene's obstacles; and each kind of pair decides some
+    configurations."""
+    from uvms_jax.evo import _world, _world_gpu
+
+    chain = BRAVO7.chain
+    rng = np.random.default_rng(4)
+    world = _every_kind_world(chain, rng)
+    group = jnp.array([0, 1, 1], jnp.int32)
+    T_vb = frames.rpy_pose((0.35, 0.0, -0.2), (np.pi, 0.0, 0.0))
+    T_world_base = jnp.asarray(np.stack([frames.rpy_pose((x, 0.1, 1.0 - x), (0.1, 0.0, 2 * x)) @ T_vb
+                                         for x in (-0.2, 0.0, 0.3)]), jnp.float32)
+    q = rng.uniform(BRAVO7.lower, BRAVO7.upper, (3, 3, 100, chain.n_joints))
+    K = kin.kinematics(chain, jnp.asarray(q, jnp.float32))
+    xla = np.asarray(jax.jit(_world.world_collides)(world, group, T_world_base, K.T_base_joint))
+    kernel = jax.jit(lambda w, *a: _world_gpu.world_collides_kernel(w, *a, interpret=True))
+    np.testing.assert_array_equal(np.asarray(kernel(world, group, T_world_base, K.T_base_joint)), xla)
+    assert 0.1 < xla.mean() < 0.9
+    r = world.rows
+    for kind in ({"box_on": r.box_on}, {"face_on": r.face_on}, {"ball_on": r.ball_on}, {"pair_on": r.pair_on},
+                 {"cap_on": r.cap_on}):
+        name, on = next(iter(kind.items()))
+        alone = world.replace(rows=r.replace(**{n: jnp.zeros_like(getattr(r, n)) for n in
+                                                ("box_on", "face_on", "ball_on", "pair_on", "cap_on") if n != name}))
+        hits = np.asarray(kernel(alone, group, T_world_base, K.T_base_joint))
+        assert hits.any(), name
+        np.testing.assert_array_equal(hits, np.asarray(jax.jit(_world.world_collides)(alone, group, T_world_base,
+                                                                                      K.T_base_joint)), err_msg=name)

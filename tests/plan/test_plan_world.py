@@ -18,6 +18,7 @@ from omegaconf import OmegaConf
 
 from uvms_jax import evo, kin
 from uvms_jax import plan
+from uvms_jax.evo import _world_gpu
 from uvms_jax.pipeline import docked_scene
 from uvms_jax.robot import load_arm
 from uvms_jax.settings import from_mapping
@@ -72,7 +73,8 @@ def test_jax_frames_are_mujocos_bodies(demo):
 def test_random_configurations_agree_on_the_safe_side(demo):
     """1e4 configurations, uniform in the joint limits, at two docked poses and every target:
     the JAX test calls a collision wherever the sphere checker or MuJoCo does (in any of the
-    target's contexts), and agrees with the sphere checker on nearly all."""
+    target's contexts), and agrees with the sphere checker on nearly all; its GPU kernel
+    gives the same answers as its XLA form."""
     scenario, problem, margin = demo
     n_rows = problem.n_groups
     per = N_CONFIGS // (len(POSES) * n_rows)
@@ -80,8 +82,10 @@ def test_random_configurations_agree_on_the_safe_side(demo):
     Q = rng.uniform(BRAVO7.lower, BRAVO7.upper, (len(POSES), n_rows, per, BRAVO7.n_joints))
     T_world_base = np.stack([docked_scene(scenario, problem, p)[1] for p in POSES])
     frames = kin.kinematics(problem.chain, jnp.asarray(Q, jnp.float32)).T_base_joint
-    jax_free = ~np.asarray(jax.jit(evo.world_collides)(problem.world, jnp.arange(n_rows), jnp.asarray(T_world_base,
-                                                                                                    jnp.float32), frames))
+    args = (problem.world, jnp.arange(n_rows), jnp.asarray(T_world_base, jnp.float32), frames)
+    jax_free = ~np.asarray(jax.jit(evo.world_collides)(*args))
+    kernel = jax.jit(lambda *a: _world_gpu.world_collides_kernel(*a, interpret=True))  # the GPU path, emulated
+    np.testing.assert_array_equal(~np.asarray(kernel(*args)), jax_free)
     spheres_free, mujoco_free = np.zeros_like(jax_free), np.zeros_like(jax_free)
     for i, pose in enumerate(POSES):
         reference, spheres, contexts, _ = _planner(scenario, problem, pose, margin)

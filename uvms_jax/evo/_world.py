@@ -164,19 +164,36 @@ def make_sphere_world(rows: dict, boxes: dict, faces: np.ndarray, balls: np.ndar
         n_base_boxes=int(n_base_boxes), n_base_faces=int(n_base_faces), n_faces=n_faces)
 
 
+# The tests' arithmetic, on points given as 3 components (arrays that broadcast together, or
+# a kernel's per-lane vectors): the XLA path (:func:`_row_hits`) and the GPU kernel
+# (:mod:`uvms_jax.evo._world_gpu`) share it.
+
 def _dot(u, v) -> Array:
-    """``u · v`` of vectors stored as 3 leading rows, ``(3, ...)`` each (elementwise over the rest)."""
+    """``u · v`` of vectors given as 3 components."""
     return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
 
 
-def _segment_distance(p1: Array, q1: Array, p2: Array, q2: Array) -> Array:
-    """Distance between segments ``p1 q1`` and ``p2 q2`` (points as ``(3, ...)`` rows) [m]:
-    the closest points by clamping the line parameters (Ericson, Real-Time Collision Detection,
+def _box_gap2(x, c, R, half) -> Array:
+    """Squared distance of point ``x`` from a box (0 inside): centre ``c``, axes ``R[j][i]``
+    (component ``j`` of axis ``i``), half extents ``half``, all as components [m²]."""
+    local = [sum((x[j] - c[j]) * R[j][i] for j in range(3)) for i in range(3)]  # Rᵀ (x − c)
+    out = [jnp.maximum(jnp.abs(local[i]) - half[i], 0.0) for i in range(3)]
+    return _dot(out, out)
+
+
+def _plane(x, face) -> Array:
+    """Signed distance ``n·x + d`` of point ``x`` from the face ``(n, d)`` (4 components) [m]."""
+    return x[0] * face[0] + x[1] * face[1] + x[2] * face[2] + face[3]
+
+
+def _segment_distance(p1, q1, p2, q2) -> Array:
+    """Distance between segments ``p1 q1`` and ``p2 q2`` (points as 3 components) [m]: the
+    closest points by clamping the line parameters (Ericson, Real-Time Collision Detection,
     5.1.9), the divisions guarded for points and parallel segments."""
-    d1, d2, r = q1 - p1, q2 - p2, p1 - p2
+    d1, d2, r = ([u[i] - v[i] for i in range(3)] for u, v in ((q1, p1), (q2, p2), (p1, p2)))
     a, e, f = _dot(d1, d1), _dot(d2, d2), _dot(d2, r)
     c, b = _dot(d1, r), _dot(d1, d2)
-    tiny = jnp.asarray(1e-12, p1.dtype)
+    tiny = 1e-12
     safe = lambda x: jnp.where(x > tiny, x, 1.0)  # noqa: E731
     on_2 = lambda: jnp.clip(-c / safe(a), 0.0, 1.0)  # noqa: E731  the point of segment 1 nearest p2
     denom = a * e - b * b
@@ -186,7 +203,7 @@ def _segment_distance(p1: Array, q1: Array, p2: Array, q2: Array) -> Array:
     s = jnp.where(t < 0.0, on_2(), jnp.where(t > 1.0, jnp.clip((b - c) / safe(a), 0.0, 1.0), s))
     s = jnp.where(a > tiny, s, 0.0)
     t = jnp.clip(t, 0.0, 1.0)
-    w = (p1 + d1 * s) - (p2 + d2 * t)
+    w = [(p1[i] + d1[i] * s) - (p2[i] + d2[i] * t) for i in range(3)]
     return jnp.sqrt(_dot(w, w))
 
 
@@ -215,27 +232,26 @@ def _row_hits(row: WorldRows, frames: Array, box_c: Array, box_R: Array, box_hal
     F = frames[row.body]  # (N, 3, 4, P, S)
     X = F[:, :, 3] + sum(F[:, :, j] * row.centre[:, j, None, None, None] for j in range(3))  # (N, 3, P, S)
     reach = (row.radius + margin)[(...,) + config]  # (N, 1, 1)
-    d = X[:, None] - box_c  # (N, B, 3, P, S)
-    local = [sum(d[:, :, j] * box_R[:, j, i] for j in range(3)) for i in range(3)]  # Rᵀ (x − c), (N, B, P, S) each
-    out = [jnp.maximum(jnp.abs(local[i]) - box_half[:, i, None, None], 0.0) for i in range(3)]
-    near = out[0] * out[0] + out[1] * out[1] + out[2] * out[2] <= (reach * reach)[:, None]
-    hit = jnp.any(near & row.box_on[(...,) + config], axis=(0, 1))
+    x = [X[:, j] for j in range(3)]  # (N, P, S) each
+    at = [x_j[:, None] for x_j in x]  # (N, 1, P, S): the spheres against an obstacle axis
+    gap2 = _box_gap2(at, [box_c[:, j] for j in range(3)], [[box_R[:, j, i] for i in range(3)] for j in range(3)],
+                     [box_half[:, i, None, None] for i in range(3)])  # (N, B, P, S)
+    hit = jnp.any((gap2 <= (reach * reach)[:, None]) & row.box_on[(...,) + config], axis=(0, 1))
     # The largest face distance as a chain of maxima, not a reduction over a few dozen faces
     # (the same emitter trouble); each polytope's own faces only.
-    plane = lambda f: X[:, 0] * f[0] + X[:, 1] * f[1] + X[:, 2] * f[2] + f[3]  # noqa: E731  (N, P, S)
     for p, n in enumerate(n_faces):
-        face = functools.reduce(jnp.maximum, (plane(faces[p, i]) for i in range(n)))
+        face = functools.reduce(jnp.maximum, (_plane(x, faces[p, i]) for i in range(n)))
         hit |= jnp.any((face <= reach) & row.face_on[:, p, None, None], axis=0)
-    gap = X[:, None] - balls[:, :3]  # (N, M, 3, P, S)
+    gap = [at[j] - balls[:, j] for j in range(3)]  # (N, M, P, S) each
     both = reach[:, None] + balls[:, 3]
-    hit |= jnp.any((_dot(*[jnp.moveaxis(gap, 2, 0)] * 2) <= both * both) & row.ball_on[(...,) + config], axis=(0, 1))
+    hit |= jnp.any((_dot(gap, gap) <= both * both) & row.ball_on[(...,) + config], axis=(0, 1))
     a, b = row.pair_a, row.pair_b  # a dense block of pairs: no gather per pair
-    d = X[a][:, None] - X[b]  # (A, A', 3, P, S)
+    d = [x_j[a][:, None] - x_j[b] for x_j in x]  # (A, A', P, S) each
     both = reach[a][:, None] + row.radius[b][(None, slice(None)) + config]
-    hit |= jnp.any((_dot(*[jnp.moveaxis(d, 2, 0)] * 2) <= both * both) & row.pair_on[(...,) + config], axis=(0, 1))
+    hit |= jnp.any((_dot(d, d) <= both * both) & row.pair_on[(...,) + config], axis=(0, 1))
     G = frames[row.cap_body]  # (C, 2, 3, 4, P, S)
-    ends = [[jnp.stack([G[:, g, i, 3] + sum(G[:, g, i, j] * row.cap_ends[:, g, e, j, None, None] for j in range(3))
-                        for i in range(3)]) for e in range(2)] for g in range(2)]  # (3, C, P, S) each
+    ends = [[[G[:, g, i, 3] + sum(G[:, g, i, j] * row.cap_ends[:, g, e, j, None, None] for j in range(3))
+              for i in range(3)] for e in range(2)] for g in range(2)]  # 3 components of (C, P, S) each
     dist = _segment_distance(ends[0][0], ends[0][1], ends[1][0], ends[1][1])  # (C, P, S)
     return hit | jnp.any((dist <= (row.cap_reach + margin)[(...,) + config]) & row.cap_on[(...,) + config], axis=0)
 
@@ -279,6 +295,10 @@ def world_collides(world: SphereWorld, group: Array, T_world_base: Array, T_base
     Returns:
       ``(..., k, S)`` True where a tested pair is nearer than the margin (plus :data:`SLACK`).
     """
+    from uvms_jax.evo import _world_gpu  # (it builds on this module's tests)
+
+    if _world_gpu.applies(T_base_joint):  # on a GPU, one thread per configuration (the same tests)
+        return _world_gpu.world_collides_kernel(world, group, T_world_base, T_base_joint)
     batch = T_world_base.shape[:-2]
     k, S, n = T_base_joint.shape[-5:-2]
     rows = jax.tree_util.tree_map(lambda a: a[group], world.rows)

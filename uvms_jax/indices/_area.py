@@ -7,13 +7,15 @@ inner ``max`` alone is the ``w_max`` of the docking paper's eq. 16.
 
 from __future__ import annotations
 
+import functools
+
 import jax
 import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
 from uvms_jax import kin
-from uvms_jax.indices._indices import manipulability_of
+from uvms_jax.indices._indices import manipulability_from_rows
 
 
 def control_points(center, size: float, n_per_side: int = 2) -> np.ndarray:
@@ -79,20 +81,32 @@ def tool_targets(T_world_base, p_world_points, R_world_tool) -> Array:
     return _tool_targets(T_world_base, points, R)
 
 
-def _max_branch_w_one(chain: kin.Chain, T: Array) -> Array:
-    # The raw branches (finite everywhere) feed the Jacobian, so w does not wait for the FK
-    # check and its gradient stays finite; the check only masks the result.
-    branches = kin.elbow_branches(chain, T)  # (8, 6)
-    T_reached = kin.fk_of(chain, branches.q)
-    valid = branches.valid & kin.reaches(T, T_reached)
-    return jnp.max(jnp.where(valid, manipulability_of(chain, branches.q), 0.0), axis=-1)
-
-
 @jax.jit
 def _max_branch_w(chain: kin.Chain, T: Array) -> Array:
+    """``(...)`` best w over the valid closed-form branches of targets ``T (..., 4, 4)``, on
+    scalars: the IK fuses into one loop, then each branch's FK, Jacobian and w into another
+    (no Jacobian is ever stored)."""
     chain = kin.with_dtype(chain, T.dtype)
-    flat = T.reshape((-1, 4, 4))
-    return jax.vmap(_max_branch_w_one, in_axes=(None, 0))(chain, flat).reshape(T.shape[:-2])
+    batch = T.shape[:-2]
+    R_t, p_t = [[T[..., i, j] for j in range(3)] for i in range(3)], [T[..., i, 3] for i in range(3)]
+    q, ok = kin.elbow_branch_scalars(chain, R_t, p_t)
+    # The branches one after another (a scan), not unrolled: eight copies of the FK and the
+    # Jacobian in one expression made the GPU compiler take over a minute.
+    q = jnp.concatenate([jnp.broadcast_to(x, (1,) + batch) for q_b in q for x in q_b]).reshape((8, 6) + batch)
+
+    def branch(best, x):
+        q_b, ok_b = list(x[0]), x[1]
+        finite = functools.reduce(jnp.logical_and, [jnp.isfinite(a) for a in q_b])
+        inside = functools.reduce(jnp.logical_and, [(a >= lo) & (a <= up) for a, lo, up in
+                                                    zip(q_b, chain.lower, chain.upper)])
+        # Finite angles feed the FK and the Jacobian, so w and its gradient stay finite where a
+        # branch does not exist; the checks only mask the result.
+        R, p, rows = kin.pose_and_jacobian_rows(chain, [jnp.where(finite, a, 0.0) for a in q_b])
+        valid = ok_b & finite & inside & kin.reaches_scalars(R_t, p_t, R, p, T.dtype)
+        return jnp.maximum(best, jnp.where(valid, manipulability_from_rows(rows), 0.0)), None
+
+    best, _ = jax.lax.scan(branch, jnp.zeros(batch, T.dtype), (q, jnp.stack(ok)))
+    return best
 
 
 # Eager calls pad the flat batch of targets to a bucket, so that populations, grids and maps

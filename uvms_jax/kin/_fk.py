@@ -124,3 +124,10 @@ def jacobian_rows(chain: Chain, q: Array) -> list:
     them, and J is never stored. No input checks (see :func:`check_joint_array`).
     """
     return _scalar.jacobian_rows(chain, q)
+
+
+def pose_and_jacobian_rows(chain: Chain, q) -> tuple[list, list, list]:
+    """Tool pose (rotation rows, translation) and geometric Jacobian rows at ``q`` (an array
+    ``(..., n)`` or n arrays of one batch shape), as scalars of the batch shape, for fused
+    kernels as :func:`jacobian_rows`."""
+    return _scalar.pose_and_jacobian_rows(chain, q)

@@ -10,8 +10,8 @@ from jax import Array
 
 from uvms_jax.kin._chain import Chain, with_dtype
 from uvms_jax.kin._fk import fk_of, pose_and_jacobian_of
-from uvms_jax.kin._lie import exp_twist, matmul, matvec, pose_error, rigid_inverse
-from uvms_jax.kin._scalar import spd_solve_scalars
+from uvms_jax.kin._lie import cross3, dot3, exp_scalars, matmul, matvec, pose_error, stack_scalars
+from uvms_jax.kin._scalar import compose, invert, rotate, spd_solve_scalars, wrap_angle
 from uvms_jax.kin import _ik_gpu
 from uvms_jax.kin import _paden_kahan as pk
 
@@ -48,9 +48,7 @@ def wrap_into_limits(chain: Chain, q: Array) -> tuple[Array, Array]:
     Returns the shifted ``q (..., n)`` and ``inside (...)`` (every joint within its limits).
     """
     revolute = jnp.array([k == "revolute" for k in chain.kinds])
-    two_pi = 2.0 * jnp.pi
-    wrapped = chain.lower + jnp.mod(q - chain.lower, two_pi)
-    q = jnp.where(revolute, wrapped, q)
+    q = jnp.where(revolute, wrap_angle(q, chain.lower), q)
     return q, jnp.all((q >= chain.lower) & (q <= chain.upper), axis=-1)
 
 
@@ -59,58 +57,72 @@ def reaches(T_target: Array, T: Array) -> Array:
 
     The orientation test uses ``‖R_target − R‖_F ≈ √2 |Δθ|`` (cheaper than a matrix log).
     """
-    dp = jnp.linalg.norm(T_target[..., :3, 3] - T[..., :3, 3], axis=-1)
-    dR = jnp.sqrt(jnp.sum((T_target[..., :3, :3] - T[..., :3, :3]) ** 2, axis=(-1, -2)))
-    return (dp < POSITION_TOL[T.dtype]) & (dR < jnp.sqrt(2.0) * ROTATION_TOL[T.dtype])
+    entries = lambda T: ([[T[..., i, j] for j in range(3)] for i in range(3)], [T[..., i, 3] for i in range(3)])  # noqa: E731
+    return reaches_scalars(*entries(T_target), *entries(T), T.dtype)
+
+
+def reaches_scalars(R_target: list, p_target: list, R: list, p: list, dtype) -> Array:
+    """:func:`reaches` on scalars (rotation rows and translations of one batch shape)."""
+    dp2 = sum((a - b) ** 2 for a, b in zip(p_target, p))
+    dR2 = sum((a - b) ** 2 for ra, rb in zip(R_target, R) for a, b in zip(ra, rb))
+    position_tol, rotation_tol = POSITION_TOL[jnp.dtype(dtype)], ROTATION_TOL[jnp.dtype(dtype)]
+    return (jnp.sqrt(dp2) < position_tol) & (jnp.sqrt(dR2) < jnp.sqrt(2.0) * rotation_tol)
+
+
+def elbow_branch_scalars(chain: Chain, R_t: list, p_t: list) -> tuple[list, list]:
+    """The eight closed-form branches (Murray §3.3.2) on scalars: the target ``R_t`` (3 rows of
+    3), ``p_t`` (3) as arrays of one batch shape (:mod:`uvms_jax.kin._scalar`'s form).
+
+    Returns:
+      ``q`` (8 branches of 6 scalars: the raw algebraic angles, revolute ones shifted into
+      ``[lower, lower + 2π)``, not clipped) and ``ok`` (8 scalars: every subproblem solvable);
+      ordered (elbow, shoulder, wrist) branch bits. Callers check the limits and FK.
+    """
+    twists = [[chain.twists[j, i] for i in range(6)] for j in range(6)]
+    w = [t[3:] for t in twists]
+    M = [[chain.T_base_tool0[i, j] for j in range(4)] for i in range(3)]
+    # Points on the axes: shoulder = closest point of axis 2 to the origin (it lies on axis 1
+    # too), elbow likewise on axis 3; wrist centre = tool point at q = 0.
+    shoulder, elbow, wrist0 = cross3(w[1], twists[1][:3]), cross3(w[2], twists[2][:3]), [M[i][3] for i in range(3)]
+    to_shoulder = pk.sub3(p_t, shoulder)
+    theta3, ok3 = pk.distance(w[2], elbow, wrist0, shoulder, jnp.sqrt(dot3(to_shoulder, to_shoulder)))
+    M_inverse = invert([row[:3] for row in M], wrist0)
+    on_axis6, off_axis6 = [wrist0[i] + w[5][i] for i in range(3)], [wrist0[i] + w[3][i] for i in range(3)]
+    branches_q, branches_ok = [], []
+    for e in range(2):
+        R3, p3 = exp_scalars(twists[2], theta3[e])
+        wrist_e = [a + b for a, b in zip(rotate(R3, wrist0), p3)]
+        theta1, theta2, ok12 = pk.two_axes(w[0], w[1], shoulder, wrist_e, p_t)
+        for s in range(2):
+            R123, p123 = compose(*compose(*exp_scalars(twists[0], theta1[s]), *exp_scalars(twists[1], theta2[s])), R3, p3)
+            # g_a = (e1 e2 e3)⁻¹ T M⁻¹ = e4 e5 e6.
+            Ra, pa = compose(*compose(*invert(R123, p123), R_t, p_t), *M_inverse)
+            at_axis6 = [a + b for a, b in zip(rotate(Ra, on_axis6), pa)]
+            theta4, theta5, ok45 = pk.two_axes(w[3], w[4], wrist0, on_axis6, at_axis6)
+            moved = [a + b for a, b in zip(rotate(Ra, off_axis6), pa)]
+            for r in range(2):
+                R45, p45 = compose(*exp_scalars(twists[3], theta4[r]), *exp_scalars(twists[4], theta5[r]))
+                Rb, pb = invert(R45, p45)
+                target = [a + b for a, b in zip(rotate(Rb, moved), pb)]
+                theta6 = pk.rotation_to(w[5], wrist0, off_axis6, target)
+                q = [theta1[s], theta2[s], theta3[e], theta4[r], theta5[r], theta6]
+                branches_q.append([wrap_angle(q[j], chain.lower[j]) for j in range(6)])
+                branches_ok.append(ok3 & ok12 & ok45)
+    return branches_q, branches_ok
 
 
 def elbow_branches(chain: Chain, T: Array) -> IKSolutions:
-    """Eight closed-form branches for one target ``T (4, 4)`` (Murray §3.3.2), unverified.
-
-    ``q`` holds the raw algebraic angles shifted into the limits modulo 2π (finite
-    everywhere); ``valid`` covers solvability of every subproblem and the joint limits.
-    Callers confirm with :func:`reaches` on FK of ``q``.
-    """
-    w = chain.twists[:, 3:]
-    # Points on the axes: shoulder = closest point of axis 2 to the origin (it lies on axis 1
-    # too), elbow likewise on axis 3; wrist centre = tool point at q = 0.
-    point = lambda i: jnp.cross(w[i], chain.twists[i, :3])
-    shoulder, elbow, wrist0 = point(1), point(2), chain.T_base_tool0[:3, 3]
-    p = T[:3, 3]
-
-    theta3, ok3 = pk.distance(w[2], elbow, wrist0, shoulder, jnp.linalg.norm(p - shoulder))
-    branches_q, branches_ok = [], []
-    Rm, pm = rigid_inverse(chain.T_base_tool0[:3, :3], chain.T_base_tool0[:3, 3])
-    for e in range(2):
-        R3, p3 = exp_twist(chain.twists[2], theta3[e])
-        wrist_e = matvec(R3, wrist0) + p3
-        theta1, theta2, ok12 = pk.two_axes(w[0], w[1], shoulder, wrist_e, p)
-        for s in range(2):
-            R1, p1 = exp_twist(chain.twists[0], theta1[s])
-            R2, p2 = exp_twist(chain.twists[1], theta2[s])
-            R12, p12 = matmul(R1, R2), matvec(R1, p2) + p1
-            R123, p123 = matmul(R12, R3), matvec(R12, p3) + p12
-            Ri, pi = rigid_inverse(R123, p123)
-            # g_a = (e1 e2 e3)^-1 T M^-1 = e4 e5 e6.
-            Ra = matmul(matmul(Ri, T[:3, :3]), Rm)
-            pa = matvec(Ri, matvec(T[:3, :3], pm) + T[:3, 3]) + pi
-            on_axis6 = wrist0 + w[5]
-            theta4, theta5, ok45 = pk.two_axes(w[3], w[4], wrist0, on_axis6, matvec(Ra, on_axis6) + pa)
-            off_axis6 = wrist0 + w[3]
-            for r in range(2):
-                R4, p4 = exp_twist(chain.twists[3], theta4[r])
-                R5, p5 = exp_twist(chain.twists[4], theta5[r])
-                R45, p45 = matmul(R4, R5), matvec(R4, p5) + p4
-                Rb, pb = rigid_inverse(R45, p45)
-                target = matvec(Rb, matvec(Ra, off_axis6) + pa) + pb
-                theta6 = pk.rotation_to(w[5], wrist0, off_axis6, target)
-                branches_q.append(jnp.stack([theta1[s], theta2[s], theta3[e], theta4[r], theta5[r], theta6]))
-                branches_ok.append(ok3 & ok12 & ok45)
-    q = jnp.stack(branches_q)
-    q, inside = wrap_into_limits(chain, q)
+    """Eight closed-form branches for targets ``T (..., 4, 4)`` (:func:`elbow_branch_scalars`),
+    unverified: ``q (..., 8, 6)`` finite everywhere (0 where an angle is not),
+    ``valid (..., 8)`` covering solvability of every subproblem and the joint limits. Callers
+    confirm with :func:`reaches` on FK of ``q``."""
+    q, ok = elbow_branch_scalars(chain, [[T[..., i, j] for j in range(3)] for i in range(3)],
+                                 [T[..., i, 3] for i in range(3)])
+    q = stack_scalars(q, T.shape[:-2], T.dtype)  # (..., 8, 6)
     finite = jnp.all(jnp.isfinite(q), axis=-1)
-    valid = jnp.stack(branches_ok) & inside & finite
-    return IKSolutions(q=jnp.where(finite[:, None], q, 0.0), valid=valid)
+    inside = jnp.all((q >= chain.lower) & (q <= chain.upper), axis=-1)
+    valid = jnp.stack(ok, axis=-1) & inside & finite
+    return IKSolutions(q=jnp.where(finite[..., None], q, 0.0), valid=valid)
 
 
 def _elbow_ik_one(chain: Chain, T: Array) -> IKSolutions:

@@ -17,7 +17,6 @@ path (a custom JVP): the kernel changes speed, never results beyond round-off.
 from __future__ import annotations
 
 import functools
-import math
 
 import jax
 import jax.numpy as jnp
@@ -25,7 +24,7 @@ from jax import Array
 
 from uvms_jax.kin._chain import Chain
 from uvms_jax.kin._lie import rotation_log_scalars
-from uvms_jax.kin._scalar import _IDENTITY, Pass, _joint_step, compose, geometric_rows, spd_solve_scalars
+from uvms_jax.kin._scalar import _IDENTITY, Pass, _joint_step, compose, geometric_rows, spd_solve_scalars, wrap_angle
 
 #: Configurations per program instance, and warps per instance: one configuration per thread
 #: (the dexterity kernels' choice, ``uvms_jax.indices._gpu``).
@@ -66,8 +65,7 @@ def dls_step_scalars(twists: list, tool0: tuple[list, list], lower: list, upper:
     q = [q[i] + sum(J[a][i] * y[a] for a in range(6)) for i in range(n)]
     if limits == "clip":
         return [jnp.clip(q[i], lower[i], upper[i]) for i in range(n)]
-    two_pi = 2.0 * math.pi
-    return [lower[i] + jnp.mod(q[i] - lower[i], two_pi) if revolute[i] else q[i] for i in range(n)]
+    return [wrap_angle(q[i], lower[i]) if revolute[i] else q[i] for i in range(n)]
 
 
 def _geometry(chain: Chain, damping, dtype) -> Array:

@@ -21,20 +21,33 @@ import numpy as np
 from jax import Array
 
 from uvms_jax.kin._chain import Chain
-from uvms_jax.kin._lie import cross3, exp_scalars, stack_scalars
+from uvms_jax.kin._lie import cross3, dot3, exp_scalars, stack_scalars
 
 Rows = list  # nested list of scalars (arrays of one batch shape, or Python floats)
 
 _IDENTITY = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
 
 
-def _rotate(R, x) -> list:
-    return [R[i][0] * x[0] + R[i][1] * x[1] + R[i][2] * x[2] for i in range(3)]
+def rotate(R, x) -> list:
+    """``R x`` for a rotation given as 3 rows of 3 scalars and a point as 3."""
+    return [dot3(R[i], x) for i in range(3)]
+
+
+def invert(R, p) -> tuple[list, list]:
+    """``(Rᵀ, −Rᵀ p)``: the inverse of the rigid motion ``(R, p)``."""
+    Rt = [[R[j][i] for j in range(3)] for i in range(3)]
+    return Rt, [-dot3(Rt[i], p) for i in range(3)]
+
+
+def wrap_angle(q, lower):
+    """Revolute angle ``q`` shifted by a multiple of 2π to the smallest value ≥ ``lower`` [rad]
+    (the same pose; never clipped)."""
+    return lower + jnp.mod(q - lower, 2.0 * np.pi)
 
 
 def compose(R, p, Ri, pi) -> tuple[list, list]:
     """``(R, p) ∘ (Ri, pi) = (R Ri, R pi + p)``."""
-    Rp = _rotate(R, pi)
+    Rp = rotate(R, pi)
     return (
         [[R[i][0] * Ri[0][j] + R[i][1] * Ri[1][j] + R[i][2] * Ri[2][j] for j in range(3)] for i in range(3)],
         [Rp[i] + p[i] for i in range(3)],
@@ -84,8 +97,8 @@ def _joint_step(carry, joint):
     product through joint i and the spatial twist ``ξ'_i = Ad(carry) ξ_i`` as ``(v', ω')``.
     """
     (R, p), (twist, theta) = carry, joint
-    w_s = _rotate(R, twist[3:])
-    v_s = [a + b for a, b in zip(_rotate(R, twist[:3]), cross3(p, w_s))]
+    w_s = rotate(R, twist[3:])
+    v_s = [a + b for a, b in zip(rotate(R, twist[:3]), cross3(p, w_s))]
     return compose(R, p, *exp_scalars(twist, theta)), (v_s, w_s)
 
 
@@ -150,16 +163,21 @@ def spatial_rows(chain: Chain, q) -> Rows:
     return [[v[r] for v, _ in columns] for r in range(3)] + [[w[r] for _, w in columns] for r in range(3)]
 
 
-def jacobian_rows(chain: Chain, q) -> Rows:
-    """Geometric Jacobian of ``chain`` at ``q`` as 6 rows × n scalars of the batch shape.
+def pose_and_jacobian_rows(chain: Chain, q) -> tuple[list, list, Rows]:
+    """Tool pose ``(R, p)`` and geometric Jacobian (6 rows × n) of ``chain`` at ``q`` as
+    scalars of the batch shape, from one unrolled pass.
 
     ``q`` is an array ``(..., n)`` or a list of n arrays (its columns). For kernels that
     consume J entry by entry (indices): they fuse with the kinematics and never store J.
     """
-    q_cols = columns_of(q)
-    kpass = forward(chain, q_cols)
-    _, p_tool = tool_pose(chain, kpass)
-    return geometric_rows(kpass, p_tool)
+    kpass = forward(chain, columns_of(q))
+    R_tool, p_tool = tool_pose(chain, kpass)
+    return R_tool, p_tool, geometric_rows(kpass, p_tool)
+
+
+def jacobian_rows(chain: Chain, q) -> Rows:
+    """Geometric Jacobian of ``chain`` at ``q`` as 6 rows × n scalars (:func:`pose_and_jacobian_rows`)."""
+    return pose_and_jacobian_rows(chain, q)[2]
 
 
 def pose_array(R: list, p: list, batch_shape: tuple, dtype) -> Array:
