@@ -117,7 +117,7 @@ def main() -> None:
     design = surrogate.design_ffbn(
         k_loop, train, test, error_goal=f.error_goal, max_hidden=f.max_hidden.kci, hidden_start=start, hidden_step=step,
         trainer=f.trainer, target_mse=f.target_mse.kci, max_epochs=f.max_epochs, adam_steps=f.adam.steps,
-        adam_learning_rate=f.adam.learning_rate, callback=save)
+        adam_learning_rate=f.adam.learning_rate, together=f.together, callback=save)
     if not any(st["size"] == paper_units for st in record["steps"]):
         # The loop's key of this size: design_ffbn splits its key once per size, from size 1.
         key = k_net

@@ -46,6 +46,8 @@ from uvms_jax.surrogate._ffbn import padded_width
 from uvms_jax.surrogate._ffbn import trim_hidden
 from uvms_jax.surrogate._ffbn import train_ffbn_adam
 from uvms_jax.surrogate._ffbn import train_ffbn_lm
+from uvms_jax.surrogate._ffbn import train_ffbns_adam
+from uvms_jax.surrogate._ffbn import train_ffbns_lm
 from uvms_jax.surrogate._form import JACOBIAN_FORMS
 from uvms_jax.surrogate._form import IndexForm
 from uvms_jax.surrogate._io import load_network

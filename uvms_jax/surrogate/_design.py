@@ -10,10 +10,11 @@ only where T stays away from 0 (the paper's sampling keeps w and KCI well above 
 - RBFN: for spread = s0, s0 + st_spread, … ≤ L_s: greedy design until training mse ≤ E_th
   (or the unit limit), then test; stop at the first spread with ``e < E``.
 
-The outer loops are Python loops over networks; each network's training is one jitted call.
-FFBNs are trained zero-padded to the next power of two of hidden units (at least 8), which
-gives the same network and compiles the trainer once per width rather than once per size; the
-RBFN spread is traced, so a spread search compiles once.
+The outer loops are Python loops over networks; each network's training is one jitted call, or
+several sizes' in one vmapped call (``together``). FFBNs are trained zero-padded to the next
+power of two of hidden units (at least 8), which gives the same network and compiles the
+trainer once per width rather than once per size; the RBFN spread is traced, so a spread
+search compiles once.
 """
 
 from __future__ import annotations
@@ -29,7 +30,7 @@ from jax import Array
 
 from uvms_jax import progress
 from uvms_jax.surrogate._dataset import Dataset
-from uvms_jax.surrogate._ffbn import FFBN, init_ffbn, padded_width, train_ffbn_adam, train_ffbn_lm
+from uvms_jax.surrogate._ffbn import FFBN, init_ffbn, padded_width, train_ffbns_adam, train_ffbns_lm
 from uvms_jax.surrogate._lm import LMHyperParams
 from uvms_jax.surrogate._rbfn import RBFN, fit_rbfn
 
@@ -105,6 +106,7 @@ def design_ffbn(
     lm_hyper: LMHyperParams = LMHyperParams(),
     adam_steps: int = 2000,
     adam_learning_rate: float = 1e-2,
+    together: int = 1,
     callback: Callable[[DesignStep], None] | None = None,
 ) -> Design:
     """Grow an FFBN until its max relative test error < ``error_goal`` (paper Fig. 6a).
@@ -118,47 +120,67 @@ def design_ffbn(
       trainer: "lm" (Levenberg–Marquardt, E_mse/L_epochs) or "adam" (``adam_steps``).
       target_mse: E_mse in squared index units (paper: 1e-3 for w, 5e-6 for KCI).
       max_epochs: L_epochs (paper: 100).
+      together: up to this many consecutive sizes of one padded width train side by side in
+        one vmapped call (each exactly as alone, from the key the one-by-one loop gives it);
+        the loop still reports and stops at the first size that meets the goal, so sizes
+        trained beyond it in its call are dropped. On a GPU this turns a loop of small
+        latency-bound trainings into a few wide ones; 1 trains one size at a time.
       callback: called with each :class:`DesignStep` (progress reporting).
     """
     _check_pair(train, test)
     if trainer not in TRAINERS:
         raise ValueError(f"unknown trainer {trainer!r}; expected one of {TRAINERS}")
-    if not (1 <= hidden_start <= max_hidden and hidden_step >= 1):
-        raise ValueError(f"need 1 <= hidden_start <= max_hidden and hidden_step >= 1, got "
-                         f"{hidden_start}, {max_hidden}, {hidden_step}")
+    if not (1 <= hidden_start <= max_hidden and hidden_step >= 1 and together >= 1):
+        raise ValueError(f"need 1 <= hidden_start <= max_hidden, hidden_step >= 1 and together >= 1, got "
+                         f"{hidden_start}, {max_hidden}, {hidden_step}, {together}")
     t_all = time.perf_counter()
     steps: list[DesignStep] = []
     best = None
+    sizes = list(range(hidden_start, max_hidden + 1, hidden_step))
+    keys = []
+    for _ in sizes:  # one key per size, split as a one-by-one loop splits it
+        key, sub = jax.random.split(key)
+        keys.append(sub)
     # The loop stops at the first size that meets the target: the bar's total is the most it can take.
-    sizes = range(hidden_start, max_hidden + 1, hidden_step)
     with progress.bar(total=len(sizes), desc="FFBN design", unit="size") as bar:
-        for hidden in sizes:
-            key, sub = jax.random.split(key)
+        for group in _groups(sizes, together):
             t0 = time.perf_counter()
-            net = init_ffbn(sub, hidden, train)
-            width = padded_width(hidden)
+            nets = [init_ffbn(keys[i], sizes[i], train) for i in group]
+            width = padded_width(sizes[group[-1]])
             if trainer == "lm":
-                net, state, history = train_ffbn_lm(net, train, max_epochs=max_epochs, target_mse=target_mse,
-                                                    hyper=lm_hyper, pad_to=width)
-                mse, epochs = float(state.mse), int(state.epoch)
+                trained = [(net, float(state.mse), int(state.epoch), history) for net, state, history in
+                           train_ffbns_lm(nets, train, max_epochs=max_epochs, target_mse=target_mse, hyper=lm_hyper,
+                                          pad_to=width)]
             else:
-                net, history = train_ffbn_adam(net, train, steps=adam_steps, learning_rate=adam_learning_rate,
-                                               pad_to=width)
-                mse, epochs = float(history[-1]), adam_steps
-            err = float(max_relative_error(test.y, net.predict(test.x)))
-            step = DesignStep(hidden, float("nan"), err, mse, epochs, time.perf_counter() - t0)
-            steps.append(step)
-            bar.update()
-            log.info("FFBN-%s H=%d: max rel test error %.4f, train mse %.3g, %d epochs, %.2f s",
-                     train.index, hidden, err, mse, epochs, step.seconds)
-            if callback is not None:
-                callback(step)
-            history = np.asarray(history)
-            if best is None or err < best[1]:
-                best = (net, err, history[np.isfinite(history)])
-            if err < error_goal:
-                return Design(net, steps, True, time.perf_counter() - t_all, best[2])
+                trained = [(net, float(history[-1]), adam_steps, history) for net, history in
+                           train_ffbns_adam(nets, train, steps=adam_steps, learning_rate=adam_learning_rate, pad_to=width)]
+            errors = [float(max_relative_error(test.y, net.predict(test.x))) for net, *_ in trained]
+            seconds = (time.perf_counter() - t0) / len(group)
+            for (net, mse, epochs, history), err in zip(trained, errors):
+                step = DesignStep(net.hidden, float("nan"), err, mse, epochs, seconds)
+                steps.append(step)
+                bar.update()
+                log.info("FFBN-%s H=%d: max rel test error %.4f, train mse %.3g, %d epochs, %.2f s",
+                         train.index, net.hidden, err, mse, epochs, step.seconds)
+                if callback is not None:
+                    callback(step)
+                history = np.asarray(history)
+                if best is None or err < best[1]:
+                    best = (net, err, history[np.isfinite(history)])
+                if err < error_goal:
+                    return Design(net, steps, True, time.perf_counter() - t_all, best[2])
     return Design(best[0], steps, False, time.perf_counter() - t_all, best[2])
+
+
+def _groups(sizes: list[int], together: int) -> list[list[int]]:
+    """Indices of ``sizes`` in runs of consecutive sizes of one padded width, at most ``together`` long."""
+    groups: list[list[int]] = []
+    for i, size in enumerate(sizes):
+        if groups and len(groups[-1]) < together and padded_width(sizes[groups[-1][0]]) == padded_width(size):
+            groups[-1].append(i)
+        else:
+            groups.append([i])
+    return groups
 
 
 def design_rbfn(

@@ -179,43 +179,71 @@ def _normalised(net: FFBN, data: Dataset) -> tuple[Array, Array]:
     return net.x_norm(x), net.y_norm(jnp.asarray(data.y, x.dtype))
 
 
-def train_ffbn_lm(
-    net: FFBN,
+def _side_by_side(nets: list[FFBN], data: Dataset, pad_to: int | None, fit) -> tuple:
+    """Train FFBNs initialised on ``data`` side by side: each zero-padded to one width
+    (:func:`pad_hidden`), stacked, and ``fit(params, x, y)`` on the normalised data run for
+    all of them in one vmapped call; returns ``fit``'s output, stacked."""
+    x, y = _normalised(nets[0], data)  # the scalers are data's: the same for every network
+    width = pad_to or max(net.hidden for net in nets)
+    padded = [pad_hidden(jax.tree_util.tree_map(lambda p: p.astype(x.dtype), net.params), width) for net in nets]
+    stacked = jax.tree_util.tree_map(lambda *p: jnp.stack(p), *padded)
+    return jax.vmap(lambda params: fit(params, x, y))(stacked)
+
+
+def _output_scale2(nets: list[FFBN]) -> float:
+    """Index units² per normalised unit² of the networks' (shared) output scaler."""
+    if not nets:
+        raise ValueError("no networks to train")
+    return float(jnp.asarray(nets[0].y_norm.scale)) ** 2
+
+
+def _unstacked(nets: list[FFBN], params: Any) -> list[FFBN]:
+    return [net.replace(params=trim_hidden(jax.tree_util.tree_map(lambda a: a[i], params), net.hidden))
+            for i, net in enumerate(nets)]
+
+
+def train_ffbns_lm(
+    nets: list[FFBN],
     data: Dataset,
     *,
     max_epochs: int = 100,
     target_mse: float = 0.0,
     hyper: LMHyperParams = LMHyperParams(),
     pad_to: int | None = None,
-) -> tuple[FFBN, LMState, Array]:
-    """Levenberg–Marquardt training of ``net`` on ``data`` (paper §3.3).
+) -> list[tuple[FFBN, LMState, Array]]:
+    """Levenberg–Marquardt training (paper §3.3) of networks initialised on ``data``, side by
+    side in one vmapped call: each trains exactly as alone (its own μ, epochs and stop).
 
     ``target_mse`` (E_mse) is in squared index units (eq. 19); internally the mse lives on the
     normalised output, so it is converted with the output scale. ``pad_to`` trains zero-padded
-    to that many hidden units (same result, shared compilation; :func:`pad_hidden`). Returns
-    (net, final LM state, history of the mse in index units, NaN after the last epoch).
+    to that many hidden units (same result, shared compilation; :func:`pad_hidden`; default:
+    the largest network's). Returns per network (net, final LM state, history of the mse in
+    index units, NaN after the last epoch).
     """
-    x, y = _normalised(net, data)
-    s2 = jnp.asarray(net.y_norm.scale, y.dtype) ** 2
-    params = jax.tree_util.tree_map(lambda p: p.astype(x.dtype), net.params)
-    hidden = net.hidden
-    params = pad_hidden(params, pad_to or hidden)
-    params, state, history = fit_lm(mlp_apply, params, x, y, max_epochs=max_epochs,
-                                    target_mse=float(target_mse) * float(s2), hyper=hyper)
-    return net.replace(params=trim_hidden(params, hidden)), state._replace(mse=state.mse / s2), history / s2
+    s2 = _output_scale2(nets)
+    fit = lambda p, x, y: fit_lm(mlp_apply, p, x, y, max_epochs=max_epochs, target_mse=float(target_mse) * s2,  # noqa: E731
+                                 hyper=hyper)
+    params, state, history = _side_by_side(nets, data, pad_to, fit)
+    return [(net, jax.tree_util.tree_map(lambda a: a[i], state._replace(mse=state.mse / s2)), history[i] / s2)
+            for i, net in enumerate(_unstacked(nets, params))]
 
 
-def train_ffbn_adam(
-    net: FFBN, data: Dataset, *, steps: int = 2000, learning_rate: float = 1e-2, pad_to: int | None = None
-) -> tuple[FFBN, Array]:
-    """Full-batch Adam training of ``net``; returns (net, mse history in index units).
+def train_ffbn_lm(net: FFBN, data: Dataset, **kwargs) -> tuple[FFBN, LMState, Array]:
+    """:func:`train_ffbns_lm` of one network: (net, final LM state, mse history in index units)."""
+    return train_ffbns_lm([net], data, **kwargs)[0]
 
-    ``pad_to`` as in :func:`train_ffbn_lm`.
-    """
-    x, y = _normalised(net, data)
-    s2 = jnp.asarray(net.y_norm.scale, y.dtype) ** 2
-    params = jax.tree_util.tree_map(lambda p: p.astype(x.dtype), net.params)
-    hidden = net.hidden
-    params = pad_hidden(params, pad_to or hidden)
-    params, history = fit_adam(mlp_apply, params, x, y, steps=steps, learning_rate=learning_rate)
-    return net.replace(params=trim_hidden(params, hidden)), history / s2
+
+def train_ffbns_adam(nets: list[FFBN], data: Dataset, *, steps: int = 2000, learning_rate: float = 1e-2,
+                     pad_to: int | None = None) -> list[tuple[FFBN, Array]]:
+    """Full-batch Adam training of networks initialised on ``data``, side by side in one
+    vmapped call; per network (net, mse history in index units). ``pad_to`` as in
+    :func:`train_ffbns_lm`."""
+    s2 = _output_scale2(nets)
+    fit = lambda p, x, y: fit_adam(mlp_apply, p, x, y, steps=steps, learning_rate=learning_rate)  # noqa: E731
+    params, history = _side_by_side(nets, data, pad_to, fit)
+    return [(net, history[i] / s2) for i, net in enumerate(_unstacked(nets, params))]
+
+
+def train_ffbn_adam(net: FFBN, data: Dataset, **kwargs) -> tuple[FFBN, Array]:
+    """:func:`train_ffbns_adam` of one network: (net, mse history in index units)."""
+    return train_ffbns_adam([net], data, **kwargs)[0]

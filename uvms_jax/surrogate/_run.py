@@ -120,7 +120,7 @@ def _design_network(key: Array, name: str, train: Dataset, test: Dataset, settin
         return design_ffbn(
             key, train, test, error_goal=f.error_goal, max_hidden=f.max_hidden[index], hidden_step=f.hidden_step,
             trainer=f.trainer, target_mse=f.target_mse[index], max_epochs=f.max_epochs, adam_steps=f.adam.steps,
-            adam_learning_rate=f.adam.learning_rate,
+            adam_learning_rate=f.adam.learning_rate, together=f.together,
         )
     r = settings.rbfn
     return design_rbfn(

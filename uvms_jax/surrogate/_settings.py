@@ -127,6 +127,9 @@ class FFBNSettings:
       max_hidden: L_iter per index; hidden_step: neurons added per step, ≥ 1.
       target_mse: E_mse per index [index units²]; max_epochs: L_epochs, ≥ 1.
       adam: Adam settings (trainer "adam").
+      together: sizes of one padded width trained side by side in one vmapped call, ≥ 1
+        (:func:`~uvms_jax.surrogate.design_ffbn`; the same loop, a few wide calls on a GPU
+        instead of many small ones).
     """
 
     trainer: str = setting("lm", choices=TRAINERS)
@@ -136,6 +139,7 @@ class FFBNSettings:
     target_mse: IndexFloats = IndexFloats(w=1.0e-3, kci=5.0e-6)
     max_epochs: int = setting(100, ge=1)
     adam: AdamSettings = AdamSettings()
+    together: int = setting(32, ge=1)
 
     def __post_init__(self):
         if self.trainer not in TRAINERS:
