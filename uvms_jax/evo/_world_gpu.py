@@ -101,6 +101,7 @@ def _build(sizes: tuple[int, ...], n_faces: tuple[int, ...], n_base_boxes: int, 
         frame = lambda r: [frame_ref[0, r + e, :] for e in range(12)]  # noqa: E731  a 3 × 4 frame, row by row
 
         def apply(F, c):
+            """Point ``c`` (3 components) moved by the frame ``F`` (12 numbers, row by row)."""
             return [F[4 * a + 3] + F[4 * a] * c[0] + F[4 * a + 1] * c[1] + F[4 * a + 2] * c[2] for a in range(3)]
 
         T_world_base = frame(0)
