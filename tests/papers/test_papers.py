@@ -179,12 +179,14 @@ def test_size_search_sentence():
             "best_error": 0.03, "error_at_paper_units": None}
     assert dexterity.size_search_fields(rec, "f")["sizes_result"] == (
         "did not reach 2 % within 2 neurons (the run was stopped there, short of L_iter = 100); best 3.00 % at 2 neurons")
-    # Resumed in steps of 5 on another device: the sizes and both devices are named.
+    # Resumed in steps of 5 on another device: the sizes tried and both devices are named, and no
+    # claim is made for the sizes skipped.
     steps += [{"size": s, "test_error": e, "loop": "design loop"} for s, e in ((7, 0.025), (12, 0.04))]
     rec |= {"steps": steps, "largest_size_tried": 12, "finished": True, "best_size": 7, "best_error": 0.025,
             "parts": [{"from": 1, "step": 1, "device": "d1"}, {"from": 7, "step": 5, "device": "d2"}]}
     fields = dexterity.size_search_fields(rec, "f")
-    assert fields["sizes_result"] == "did not reach 2 % within 12 neurons (sizes 1–3, then 7–12 in steps of 5); best 2.50 % at 7 neurons"
+    assert fields["sizes_result"] == ("did not reach 2 % at any size tried up to 12 neurons (sizes 1–3, then 7–12 in "
+                                      "steps of 5); best 2.50 % at 7 neurons")
     assert fields["sizes_device"] == "d1, then d2"
 
 

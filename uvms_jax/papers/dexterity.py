@@ -210,7 +210,9 @@ def size_search_fields(record: dict, name: str) -> dict:
         tried, limit = record["largest_size_tried"], record["max_hidden"]
         stopped = ("" if record["finished"] or tried >= limit
                    else f" (the run was stopped there, short of L_iter = {limit})")
-        result = (f"did not reach {goal:g} % within {tried} neurons{stopped}{_parts(record)}; "
+        parts = _parts(record)  # sizes skipped by coarser steps: only those tried are claimed
+        span = f"at any size tried up to {tried} neurons" if parts else f"within {tried} neurons"
+        result = (f"did not reach {goal:g} % {span}{stopped}{parts}; "
                   f"best {100 * record['best_error']:.2f} % at {record['best_size']} neurons")
     paper = record["error_at_paper_units"]
     if paper is not None:
