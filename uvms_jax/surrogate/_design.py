@@ -121,7 +121,7 @@ def design_ffbn(
       target_mse: E_mse in squared index units (paper: 1e-3 for w, 5e-6 for KCI).
       max_epochs: L_epochs (paper: 100).
       together: up to this many consecutive sizes of one padded width train side by side in
-        one vmapped call (each exactly as alone, from the key the one-by-one loop gives it);
+        one vmapped call (each as alone up to round-off, from the key the one-by-one loop gives it);
         the loop still reports and stops at the first size that meets the goal, so sizes
         trained beyond it in its call are dropped. On a GPU this turns a loop of small
         latency-bound trainings into a few wide ones; 1 trains one size at a time.

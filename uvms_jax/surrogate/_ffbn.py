@@ -212,7 +212,7 @@ def train_ffbns_lm(
     pad_to: int | None = None,
 ) -> list[tuple[FFBN, LMState, Array]]:
     """Levenberg–Marquardt training (paper §3.3) of networks initialised on ``data``, side by
-    side in one vmapped call: each trains exactly as alone (its own μ, epochs and stop).
+    side in one vmapped call: each with its own μ, epochs and stop, as alone up to round-off.
 
     ``target_mse`` (E_mse) is in squared index units (eq. 19); internally the mse lives on the
     normalised output, so it is converted with the output scale. ``pad_to`` trains zero-padded
