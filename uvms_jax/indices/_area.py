@@ -7,8 +7,6 @@ inner ``max`` alone is the ``w_max`` of the docking paper's eq. 16.
 
 from __future__ import annotations
 
-import functools
-
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -96,13 +94,10 @@ def _max_branch_w(chain: kin.Chain, T: Array) -> Array:
 
     def branch(best, x):
         q_b, ok_b = list(x[0]), x[1]
-        finite = functools.reduce(jnp.logical_and, [jnp.isfinite(a) for a in q_b])
-        inside = functools.reduce(jnp.logical_and, [(a >= lo) & (a <= up) for a, lo, up in
-                                                    zip(q_b, chain.lower, chain.upper)])
-        # Finite angles feed the FK and the Jacobian, so w and its gradient stay finite where a
-        # branch does not exist; the checks only mask the result.
-        R, p, rows = kin.pose_and_jacobian_rows(chain, [jnp.where(finite, a, 0.0) for a in q_b])
-        valid = ok_b & finite & inside & kin.reaches_scalars(R_t, p_t, R, p, T.dtype)
+        # The branch's angles are finite even where it does not exist (elbow_branch_scalars), so
+        # w and its gradient stay finite; the checks only mask the result.
+        R, p, rows = kin.pose_and_jacobian_rows(chain, q_b)
+        valid = ok_b & kin.reaches_scalars(R_t, p_t, R, p, T.dtype)
         return jnp.maximum(best, jnp.where(valid, manipulability_from_rows(rows), 0.0)), None
 
     best, _ = jax.lax.scan(branch, jnp.zeros(batch, T.dtype), (q, jnp.stack(ok)))

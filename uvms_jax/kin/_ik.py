@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 from typing import NamedTuple
 
 import jax
@@ -75,8 +76,10 @@ def elbow_branch_scalars(chain: Chain, R_t: list, p_t: list) -> tuple[list, list
 
     Returns:
       ``q`` (8 branches of 6 scalars: the raw algebraic angles, revolute ones shifted into
-      ``[lower, lower + 2π)``, not clipped) and ``ok`` (8 scalars: every subproblem solvable);
-      ordered (elbow, shoulder, wrist) branch bits. Callers check the limits and FK.
+      ``[lower, lower + 2π)``, not clipped; a branch with a non-finite angle is all 0, so
+      that FK, Jacobians and their gradients stay finite) and ``ok`` (8 scalars: every
+      subproblem solvable, every angle finite and within its limits); ordered (elbow,
+      shoulder, wrist) branch bits. Callers confirm with :func:`reaches` on FK of ``q``.
     """
     twists = [[chain.twists[j, i] for i in range(6)] for j in range(6)]
     w = [t[3:] for t in twists]
@@ -105,9 +108,13 @@ def elbow_branch_scalars(chain: Chain, R_t: list, p_t: list) -> tuple[list, list
                 Rb, pb = invert(R45, p45)
                 target = [a + b for a, b in zip(rotate(Rb, moved), pb)]
                 theta6 = pk.rotation_to(w[5], wrist0, off_axis6, target)
-                q = [theta1[s], theta2[s], theta3[e], theta4[r], theta5[r], theta6]
-                branches_q.append([wrap_angle(q[j], chain.lower[j]) for j in range(6)])
-                branches_ok.append(ok3 & ok12 & ok45)
+                q = [wrap_angle(a, lo) for a, lo in zip([theta1[s], theta2[s], theta3[e], theta4[r], theta5[r], theta6],
+                                                        chain.lower)]
+                finite = functools.reduce(jnp.logical_and, [jnp.isfinite(a) for a in q])
+                inside = functools.reduce(jnp.logical_and, [(a >= lo) & (a <= up) for a, lo, up in
+                                                            zip(q, chain.lower, chain.upper)])
+                branches_q.append([jnp.where(finite, a, 0.0) for a in q])
+                branches_ok.append(ok3 & ok12 & ok45 & finite & inside)
     return branches_q, branches_ok
 
 
@@ -118,11 +125,7 @@ def elbow_branches(chain: Chain, T: Array) -> IKSolutions:
     confirm with :func:`reaches` on FK of ``q``."""
     q, ok = elbow_branch_scalars(chain, [[T[..., i, j] for j in range(3)] for i in range(3)],
                                  [T[..., i, 3] for i in range(3)])
-    q = stack_scalars(q, T.shape[:-2], T.dtype)  # (..., 8, 6)
-    finite = jnp.all(jnp.isfinite(q), axis=-1)
-    inside = jnp.all((q >= chain.lower) & (q <= chain.upper), axis=-1)
-    valid = jnp.stack(ok, axis=-1) & inside & finite
-    return IKSolutions(q=jnp.where(finite[..., None], q, 0.0), valid=valid)
+    return IKSolutions(q=stack_scalars(q, T.shape[:-2], T.dtype), valid=jnp.stack(ok, axis=-1))
 
 
 def _elbow_ik_one(chain: Chain, T: Array) -> IKSolutions:
