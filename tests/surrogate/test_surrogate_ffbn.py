@@ -7,7 +7,8 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from uvms_jax.surrogate import init_ffbn, padded_width, train_ffbn_adam, train_ffbn_lm
+from uvms_jax.surrogate import (MLP, init_ffbn, init_ffbns, padded_width, predict_side_by_side, train_ffbn_adam,
+                               train_ffbn_lm)
 
 from _surrogate_helpers import synthetic_dataset
 
@@ -76,9 +77,27 @@ def test_zero_padded_training_gives_the_unpadded_network(data):
     assert padded_width(1) == 8 and padded_width(9) == 16 and padded_width(64) == 64
 
 
+def test_networks_of_several_sizes_start_and_predict_as_one_at_a_time(data):
+    keys, sizes = list(jax.random.split(jax.random.key(3), 3)), [2, 5, 7]
+    nets = init_ffbns(keys, sizes, data)
+    for key, size, net in zip(keys, sizes, nets):
+        # flax's own initialisation of that size, outside any compiled call
+        expected = MLP(size).init(key, net.x_norm(data.x[:1]))["params"]
+        for layer in ("hidden", "output"):
+            for leaf in ("kernel", "bias"):
+                np.testing.assert_array_equal(np.asarray(net.params[layer][leaf]), np.asarray(expected[layer][leaf]))
+    trained = [train_ffbn_lm(net, data, max_epochs=3)[0] for net in nets]
+    together = predict_side_by_side(trained, data.x)
+    assert together.shape == (3, data.x.shape[0])
+    for net, row in zip(trained, together):
+        np.testing.assert_allclose(np.asarray(row), np.asarray(net.predict(data.x)), rtol=1e-12, atol=1e-14)
+
+
 def test_bad_input_raises(data):
     with pytest.raises(ValueError, match="hidden"):
         init_ffbn(jax.random.key(0), 0, data)
+    with pytest.raises(ValueError, match="one key per size"):
+        init_ffbns([jax.random.key(0)], [2, 3], data)
     net = init_ffbn(jax.random.key(0), 2, data)
     with pytest.raises(ValueError, match="shape"):
         net.index_fn(jnp.zeros((3, 7)))

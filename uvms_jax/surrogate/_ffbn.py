@@ -118,22 +118,32 @@ def _evaluate(net: FFBN, x: Array, columns: tuple[int, ...]) -> Array:
 
 
 @partial(jax.jit, static_argnums=2)
-def _init_params(key: Array, x: Array, hidden: int) -> Any:
-    return MLP(hidden).init(key, x)["params"]
+def _init_params(keys: Array, x: Array, sizes: tuple[int, ...]) -> tuple:
+    # One compilation for a whole list of sizes (a design loop's group), not one per size.
+    return tuple(MLP(h).init(k, x)["params"] for k, h in zip(keys, sizes))
 
 
-def init_ffbn(key: Array, hidden: int, data: Dataset) -> FFBN:
-    """A fresh FFBN of ``hidden`` neurons, normalised to ``data``'s input and target ranges.
+def init_ffbns(keys: Array, sizes: list[int], data: Dataset) -> list[FFBN]:
+    """Fresh FFBNs of ``sizes[i]`` neurons from ``keys[i]``, normalised to ``data``'s input and
+    target ranges; each is :func:`init_ffbn` of its key and size.
 
     Weights use flax's defaults (LeCun-normal kernels, zero biases) in the dtype of ``data.x``.
     """
-    if hidden < 1:
-        raise ValueError(f"hidden must be >= 1, got {hidden}")
+    sizes = tuple(int(h) for h in sizes)
+    if not sizes or min(sizes) < 1 or len(keys) != len(sizes):
+        raise ValueError(f"need one key per size and sizes >= 1, got {len(keys)} keys and sizes {list(sizes)}")
     x_norm, y_norm = fit_scaler(data.x, axis=0), fit_scaler(data.y, axis=None)
     x = jnp.asarray(data.x)
-    params = _init_params(key, x_norm(x[:1]), int(hidden))
-    return FFBN(params=params, x_norm=x_norm, y_norm=y_norm, index=data.index, inputs=data.inputs,
-                n_joints=data.q.shape[-1])
+    return [FFBN(params=params, x_norm=x_norm, y_norm=y_norm, index=data.index, inputs=data.inputs,
+                 n_joints=data.q.shape[-1]) for params in _init_params(keys, x_norm(x[:1]), sizes)]
+
+
+def init_ffbn(key: Array, hidden: int, data: Dataset) -> FFBN:
+    """A fresh FFBN of ``hidden`` neurons, normalised to ``data``'s input and target ranges
+    (:func:`init_ffbns` of one size)."""
+    if hidden < 1:
+        raise ValueError(f"hidden must be >= 1, got {hidden}")
+    return init_ffbns([key], [hidden], data)[0]
 
 
 def padded_width(hidden: int, minimum: int = 8) -> int:
@@ -179,15 +189,33 @@ def _normalised(net: FFBN, data: Dataset) -> tuple[Array, Array]:
     return net.x_norm(x), net.y_norm(jnp.asarray(data.y, x.dtype))
 
 
+@partial(jax.jit, static_argnums=(1, 2))
+def _stacked(params: tuple, width: int, dtype) -> Any:
+    # Pad and stack in one compiled call: eager pads of every size would compile per size.
+    padded = [pad_hidden(jax.tree_util.tree_map(lambda p: p.astype(dtype), p), width) for p in params]
+    return jax.tree_util.tree_map(lambda *p: jnp.stack(p), *padded)
+
+
 def _side_by_side(nets: list[FFBN], data: Dataset, pad_to: int | None, fit) -> tuple:
     """Train FFBNs initialised on ``data`` side by side: each zero-padded to one width
     (:func:`pad_hidden`), stacked, and ``fit(params, x, y)`` on the normalised data run for
     all of them in one vmapped call; returns ``fit``'s output, stacked."""
     x, y = _normalised(nets[0], data)  # the scalers are data's: the same for every network
-    width = pad_to or max(net.hidden for net in nets)
-    padded = [pad_hidden(jax.tree_util.tree_map(lambda p: p.astype(x.dtype), net.params), width) for net in nets]
-    stacked = jax.tree_util.tree_map(lambda *p: jnp.stack(p), *padded)
+    stacked = _stacked(tuple(net.params for net in nets), pad_to or max(net.hidden for net in nets), x.dtype)
     return jax.vmap(lambda params: fit(params, x, y))(stacked)
+
+
+def predict_side_by_side(nets: list[FFBN], x: Array) -> Array:
+    """``(len(nets), ...)`` predictions at network inputs ``x: (..., d)`` of networks that share
+    their scalers (initialised on one dataset), in one vmapped call at one padded width.
+
+    This is the normalised form the trainers fit, which equals :meth:`FFBN.predict` up to
+    round-off; it compiles once per width, where ``predict`` compiles once per size.
+    """
+    x = nets[0]._checked_inputs(x)
+    stacked = _stacked(tuple(net.params for net in nets), padded_width(max(net.hidden for net in nets)), x.dtype)
+    z = jax.vmap(mlp_apply, in_axes=(0, None))(stacked, nets[0].x_norm(x))
+    return nets[0].y_norm.inverse(z)
 
 
 def _output_scale2(nets: list[FFBN]) -> float:
@@ -198,8 +226,10 @@ def _output_scale2(nets: list[FFBN]) -> float:
 
 
 def _unstacked(nets: list[FFBN], params: Any) -> list[FFBN]:
-    return [net.replace(params=trim_hidden(jax.tree_util.tree_map(lambda a: a[i], params), net.hidden))
-            for i, net in enumerate(nets)]
+    # Sliced on the host: device slices of every size would compile per size.
+    host = jax.device_get(params)
+    return [net.replace(params=jax.tree_util.tree_map(jnp.asarray, trim_hidden(
+        jax.tree_util.tree_map(lambda a: a[i], host), net.hidden))) for i, net in enumerate(nets)]
 
 
 def train_ffbns_lm(
