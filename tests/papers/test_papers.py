@@ -190,6 +190,30 @@ def test_size_search_sentence():
     assert fields["sizes_device"] == "d1, then d2"
 
 
+def test_rbfn_speed_sentence():
+    """Slower or faster in both forms, or faster in one form only: each batch size is named under
+    the verdict its two speed-ups give (the H100 pattern of the paper preset)."""
+    from types import SimpleNamespace
+
+    from uvms_jax.papers import dexterity
+
+    def run(w, kci):
+        return SimpleNamespace(networks={n: {"timing": {b: {"speedup": r} for b, r in zip(("1000", "100000"), rs)}}
+                                         for n, rs in (("rbfn_w", w), ("rbfn_kci", kci))})
+
+    runs = {"spatial": run((3.9, 0.5), (7.8, 1.4)), "geometric": run((0.7, 0.4), (0.9, 0.4))}
+    sentence = dexterity._rbfn_speed(runs, ["1000", "100000"])
+    assert sentence.startswith(
+        "RBFN-w is slower than the analytic index at 100000 inputs, and faster than it only with the spatial form, "
+        "at 1000 inputs: it runs at 3.9× / 0.5× the analytic w's speed at 1000 / 100000 inputs with the spatial "
+        "form and 0.7× / 0.4× with the geometric form.")
+    assert "RBFN-KCI is faster than the analytic index only with the spatial form, at every batch size:" in sentence
+    runs = {"spatial": run((0.5, 0.1), (8.0, 3.7)), "geometric": run((0.4, 0.1), (6.5, 3.3))}
+    sentence = dexterity._rbfn_speed(runs, ["1000", "100000"])
+    assert "RBFN-w is slower than the analytic index at every batch size:" in sentence
+    assert "RBFN-KCI is faster than the analytic index at every batch size:" in sentence
+
+
 def test_only_recomputes_the_sections_named(tmp_path, monkeypatch):
     """``--only`` replaces the sections it computes, with their own command and device, and keeps
     the others as recorded; a section neither computed nor recorded is refused."""

@@ -175,23 +175,23 @@ def _ratios(run, name: str, batches: list[str]) -> str:
 
 def _rbfn_speed(runs: dict, batches: list[str]) -> str:
     """One sentence per RBFN: its speed as a multiple of the analytic index's at each batch size
-    of Table 5, both forms, and where that is slower (< 1×) or faster."""
+    of Table 5, both forms, and where that is slower (< 1×) or faster, in both forms or in one."""
+    def at(sizes: list[str]) -> str:
+        return "every batch size" if len(sizes) == len(batches) else f"{' and '.join(sizes)} inputs"
+
     sentences = []
     for name in ("rbfn_w", "rbfn_kci"):
         index = "w" if name.endswith("_w") else "KCI"
-        ratio = {(f, b): runs[f].networks[name]["timing"][b]["speedup"] for f in FORMS for b in batches}
-        slower = [b for b in batches if all(ratio[f, b] < 1 for f in FORMS)]
-        faster = [b for b in batches if all(ratio[f, b] >= 1 for f in FORMS)]
-        if len(slower) == len(batches):
-            verdict = "slower than the analytic index at every batch size"
-        elif len(faster) == len(batches):
-            verdict = "faster than the analytic index at every batch size"
-        else:
-            verdict = "; ".join(part for part in (
-                f"slower than the analytic index at {' and '.join(slower)} inputs" if slower else "",
-                f"faster at {' and '.join(faster)}" if faster else "",
-                "between the forms elsewhere" if len(slower) + len(faster) < len(batches) else "") if part)
-        sentences.append(f"{_label(name)} is {verdict}: it runs at {_ratios(runs['spatial'], name, batches)} "
+        faster = {f: [b for b in batches if runs[f].networks[name]["timing"][b]["speedup"] >= 1] for f in FORMS}
+        in_both = [b for b in batches if all(b in faster[f] for f in FORMS)]
+        in_neither = [b for b in batches if not any(b in faster[f] for f in FORMS)]
+        verdicts = [("slower than {} at " + at(in_neither)) if in_neither else "",
+                    ("faster than {} at " + at(in_both)) if in_both else ""]
+        verdicts += [f"faster than {{}} only with the {f} form, at {at(only)}"
+                     for f in FORMS if (only := [b for b in faster[f] if b not in in_both])]
+        # The first verdict names the analytic index; the later ones refer back to it.
+        clauses = [v.format("it" if i else "the analytic index") for i, v in enumerate(v for v in verdicts if v)]
+        sentences.append(f"{_label(name)} is {', and '.join(clauses)}: it runs at {_ratios(runs['spatial'], name, batches)} "
                          f"the analytic {index}'s speed at {' / '.join(batches)} inputs with the spatial form "
                          f"and {_ratios(runs['geometric'], name, batches)} with the geometric form.")
     return " ".join(sentences)
