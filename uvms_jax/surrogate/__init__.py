@@ -44,10 +44,10 @@ from uvms_jax.surrogate._ffbn import init_ffbns
 from uvms_jax.surrogate._ffbn import mlp_apply
 from uvms_jax.surrogate._ffbn import pad_hidden
 from uvms_jax.surrogate._ffbn import padded_width
+from uvms_jax.surrogate._ffbn import predict_side_by_side
 from uvms_jax.surrogate._ffbn import trim_hidden
 from uvms_jax.surrogate._ffbn import train_ffbn_adam
 from uvms_jax.surrogate._ffbn import train_ffbn_lm
-from uvms_jax.surrogate._ffbn import predict_side_by_side
 from uvms_jax.surrogate._ffbn import train_ffbns_adam
 from uvms_jax.surrogate._ffbn import train_ffbns_lm
 from uvms_jax.surrogate._form import JACOBIAN_FORMS

@@ -118,12 +118,12 @@ def _evaluate(net: FFBN, x: Array, columns: tuple[int, ...]) -> Array:
 
 
 @partial(jax.jit, static_argnums=2)
-def _init_params(keys: Array, x: Array, sizes: tuple[int, ...]) -> tuple:
+def _init_params(keys: list[Array], x: Array, sizes: tuple[int, ...]) -> tuple:
     # One compilation for a whole list of sizes (a design loop's group), not one per size.
     return tuple(MLP(h).init(k, x)["params"] for k, h in zip(keys, sizes))
 
 
-def init_ffbns(keys: Array, sizes: list[int], data: Dataset) -> list[FFBN]:
+def init_ffbns(keys: list[Array], sizes: list[int], data: Dataset) -> list[FFBN]:
     """Fresh FFBNs of ``sizes[i]`` neurons from ``keys[i]``, normalised to ``data``'s input and
     target ranges; each is :func:`init_ffbn` of its key and size.
 

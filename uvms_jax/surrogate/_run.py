@@ -161,8 +161,9 @@ def _xla_count(chain: kin.Chain, index: str, form, q: Array) -> float | None:
     which XLA's cost analysis does not see into, and counts the spatial form's program differently.)"""
     try:
         cpu = jax.devices("cpu")[0]
-    except RuntimeError:  # JAX_PLATFORMS without the CPU: the default device's count
-        cpu = None
+    except RuntimeError:  # JAX_PLATFORMS leaves the CPU out: no count rather than another one
+        log.warning("no CPU backend (JAX_PLATFORMS): the analytic %s is not counted", index)
+        return None
     program = jax.jit(analytic_index, static_argnums=(2, 3))  # the chain as an argument: XLA's path
     chain, q = jax.device_put((chain, q), cpu)
     return xla_flops_per_sample(lambda q: program(chain, q, index, form), q)
