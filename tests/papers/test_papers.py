@@ -205,8 +205,8 @@ def test_rbfn_speed_sentence():
     sentence = dexterity._rbfn_speed(runs, ["1000", "100000"])
     assert sentence.startswith(
         "RBFN-w is slower than the analytic index at 100000 inputs, and faster than it only with the spatial form, "
-        "at 1000 inputs: it runs at 3.9× / 0.5× the analytic w's speed at 1000 / 100000 inputs with the spatial "
-        "form and 0.7× / 0.4× with the geometric form.")
+        "at 1000 inputs: it runs at 3.9× / 0.50× the analytic w's speed at 1000 / 100000 inputs with the spatial "
+        "form and 0.70× / 0.40× with the geometric form.")
     assert "RBFN-KCI is faster than the analytic index only with the spatial form, at every batch size:" in sentence
     runs = {"spatial": run((0.5, 0.1), (8.0, 3.7)), "geometric": run((0.4, 0.1), (6.5, 3.3))}
     sentence = dexterity._rbfn_speed(runs, ["1000", "100000"])

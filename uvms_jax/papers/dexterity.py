@@ -151,6 +151,16 @@ def _flops(count: float | None) -> str:
     return "not counted by XLA" if count is None else f"{count:.0f} XLA flops"
 
 
+def _time(seconds: float) -> str:
+    """A run time to 3 digits, in ms below a second and in s above."""
+    return f"{seconds * 1e3:.3g} ms" if seconds < 1 else f"{seconds:.3g} s"
+
+
+def _ratio(speedup: float) -> str:
+    """A speed-up; two decimals below 1, so that a network slower than the index never reads 1.0×."""
+    return f"{speedup:.2f}×" if speedup < 1 else f"{speedup:.1f}×"
+
+
 def _timing_table(runs: dict, batches: list[str]) -> str:
     """Table 5, run time per batch size (as strings) and speed-up over the analytic index."""
     rows = []
@@ -160,13 +170,13 @@ def _timing_table(runs: dict, batches: list[str]) -> str:
         row = [_label(name), f"{paper_s * 1e3:.1f} ms ({analytic_s / paper_s:.0f}×)"]
         for form in FORMS:
             tm = runs[form].networks[name]["timing"]
-            row.append(" / ".join(f"{tm[b]['network_s'] * 1e3:.3g} ms ({tm[b]['speedup']:.1f}×)" for b in batches))
+            row.append(" / ".join(f"{_time(tm[b]['network_s'])} ({_ratio(tm[b]['speedup'])})" for b in batches))
         rows.append(row)
     for index in ("w", "kci"):
         row = [f"analytic {index} (fused kernel)", f"{D16_NETWORKS[f'analytic_{index}']['seconds_1000'] * 1e3:.0f} ms"]
         for form in FORMS:
             tm = runs[form].analytic[index]["timing"]
-            row.append(" / ".join(f"{tm[b]['seconds'] * 1e3:.3g} ms" for b in batches))
+            row.append(" / ".join(_time(tm[b]['seconds']) for b in batches))
         rows.append(row)
     return md_table(["", "paper, 1000 inputs (speed-up)", f"ours, spatial: {' / '.join(batches)} inputs (speed-up)",
                      f"ours, geometric: {' / '.join(batches)} inputs (speed-up)"], rows)
@@ -174,7 +184,7 @@ def _timing_table(runs: dict, batches: list[str]) -> str:
 
 def _ratios(run, name: str, batches: list[str]) -> str:
     """``"0.4× / 0.1×"``: a network's speed over the analytic index's, per batch size."""
-    return " / ".join(f"{run.networks[name]['timing'][b]['speedup']:.1f}×" for b in batches)
+    return " / ".join(_ratio(run.networks[name]['timing'][b]['speedup']) for b in batches)
 
 
 def _rbfn_speed(runs: dict, batches: list[str]) -> str:
