@@ -123,8 +123,9 @@ def design_ffbn(
       together: up to this many consecutive sizes of one padded width train side by side in
         one vmapped call (each as alone up to round-off, from the key the one-by-one loop gives it);
         the loop still reports and stops at the first size that meets the goal, so sizes
-        trained beyond it in its call are dropped. On a GPU this turns a loop of small
-        latency-bound trainings into a few wide ones; 1 trains one size at a time.
+        trained beyond it in its call are dropped. A group is initialised, trained and tested
+        in one compiled call each, where one size at a time compiles every size anew (most of
+        a GPU's time); 1 trains one size at a time.
       callback: called with each :class:`DesignStep` (progress reporting).
     """
     _check_pair(train, test)
