@@ -14,7 +14,14 @@ from uvms_jax.surrogate import design_ffbn, design_rbfn, max_relative_error
 from _surrogate_helpers import synthetic_dataset
 
 GOAL = 0.02
-TRAINED_RTOL = 1e-2  # networks trained side by side against alone (round-off amplified by training)
+# Networks trained side by side against alone: the batched solves round differently in the last
+# bits, and training amplifies that (a step accepted in one path and rejected in the other). The
+# spread was measured over both paths on four CPU code paths (XLA's default, AVX and SSE4.2 ISAs
+# on an Intel Xeon, and the default on an AMD EPYC): a size that misses the goal by far (LM,
+# 3 units: 0.1476 … 0.1535) spreads by 4.0 % across them, the network that meets the goal by
+# 1.7e-4. The tolerances are 2.5× and 6× those spreads.
+MISSED_RTOL = 0.10  # sizes the design passed over: their errors only have to stay above the goal
+CHOSEN_RTOL = 1e-3  # the last size tried: the network the design returns where it meets the goal
 
 
 @pytest.fixture(scope="module")
@@ -52,12 +59,13 @@ def test_ffbn_sizes_trained_together_match_one_at_a_time(sets, trainer):
     kw = dict(error_goal=GOAL, max_hidden=8, target_mse=1e-8, max_epochs=40, trainer=trainer, adam_steps=300)
     alone = design_ffbn(jax.random.key(2), train, test, **kw)
     together = design_ffbn(jax.random.key(2), train, test, together=8, **kw)
+    # What the design claims: the same sizes tried, the same stop, the same last network (the
+    # chosen one where the goal is met).
     assert [s.size for s in together.steps] == [s.size for s in alone.steps]
-    # The batched solves round differently in the last bits, and training amplifies that (a
-    # step accepted or rejected in one and not the other): the same networks to 1 %.
-    np.testing.assert_allclose([s.test_error for s in together.steps], [s.test_error for s in alone.steps],
-                               rtol=TRAINED_RTOL)
     assert together.met == alone.met and together.network.hidden == alone.network.hidden
+    np.testing.assert_allclose([s.test_error for s in together.steps[:-1]], [s.test_error for s in alone.steps[:-1]],
+                               rtol=MISSED_RTOL)
+    assert together.steps[-1].test_error == pytest.approx(alone.steps[-1].test_error, rel=CHOSEN_RTOL)
     if trainer == "lm":
         assert alone.met and len(alone.steps) < 8  # it stopped inside the shared call
 
