@@ -14,6 +14,13 @@ traceback::
     $ python experiments/docking.py ga.mutation_rate=2.0 n_runs=-1
     error: ga.mutation_rate: expected a value in [0, 1], got 2.0; n_runs: expected a value >= 1, got -1
 
+A run folder that holds an earlier run (its results, or the ``RUNNING`` marker of a run that
+did not end) is refused the same way, naming the marker's run and when it started, unless
+``--overwrite`` (or the override ``overwrite=true``) is given; an experiment whose config asks
+for it (``hydra.callbacks``: :class:`RefuseUsedRunFolder`) checks before Hydra writes anything
+into the folder. Ctrl-C (SIGINT) and SIGTERM stop a run alike: what it finished is on disk, its
+folder marked ``interrupted``; exit status 130 and 143.
+
 Any other exception keeps its full traceback; ``HYDRA_FULL_ERROR=1`` shows it for
 configuration errors too. Importing this module (the scripts' folder is on ``sys.path``) also
 registers the ``uvms_config_groups`` resolver that ``configs/hydra/help/uvms.yaml`` uses.
@@ -22,6 +29,7 @@ registers the ``uvms_config_groups`` resolver that ``configs/hydra/help/uvms.yam
 from __future__ import annotations
 
 import contextlib
+import importlib
 import logging
 import os
 import sys
@@ -29,15 +37,19 @@ from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
 from hydra.core.global_hydra import GlobalHydra
+from hydra.experimental.callback import Callback
 from hydra.core.hydra_config import HydraConfig
 from hydra.errors import ConfigCompositionException, MissingConfigException, OverrideParseException
 from omegaconf import OmegaConf
 from omegaconf.errors import ConfigAttributeError, ConfigKeyError, OmegaConfBaseException
 
+from uvms_jax.files import EXIT_INTERRUPTED, EXIT_TERMINATED, UsedFolderError, refuse_used_folder, sigterm_as_interrupt
 from uvms_jax.settings import SettingsError
 
 USAGE_EXIT = 2  # as argparse: the command line is wrong, nothing ran
-CONFIG_ERRORS = (SettingsError, ConfigCompositionException, OverrideParseException, OmegaConfBaseException)
+CONFIG_ERRORS = (SettingsError, ConfigCompositionException, OverrideParseException, OmegaConfBaseException,
+                 UsedFolderError)
+OVERWRITE_FLAG = "--overwrite"  # the command-line flag for the override `overwrite=true`
 # Read before run() sets it: the user's own HYDRA_FULL_ERROR=1 asks for tracebacks.
 SHOW_TRACEBACK = os.environ.get("HYDRA_FULL_ERROR") == "1"
 
@@ -77,18 +89,45 @@ def config_errors() -> Iterator[None]:
 
 def run(main: Callable[[], Any]) -> None:
     """Run a ``@hydra.main`` function; errors in composing the config (unknown key or group
-    option, bad override) → one line on stderr, exit 2; Ctrl-C → one line, exit 130 (what the
-    run had finished is on disk, its folder marked)."""
+    option, bad override) → one line on stderr, exit 2; Ctrl-C → one line, exit 130, SIGTERM
+    → the same, exit 143 (what the run had finished is on disk, its folder marked).
+    ``--overwrite`` on the command line is the override ``overwrite=true``."""
     # Hydra prints its own multi-line report and exits 1 unless HYDRA_FULL_ERROR is set; with
     # it set, the exception reaches this frame.
     os.environ["HYDRA_FULL_ERROR"] = "1"
-    try:
-        with config_errors():
-            main()
-    except KeyboardInterrupt:
-        print("interrupted: the partial results and the run folder's RUNNING marker say how far it got",
-              file=sys.stderr)
-        sys.exit(130)
+    if OVERWRITE_FLAG in sys.argv[1:]:
+        sys.argv = [a for a in sys.argv if a != OVERWRITE_FLAG] + ["overwrite=true"]
+    with sigterm_as_interrupt() as terminated:
+        try:
+            with config_errors():
+                main()
+        except KeyboardInterrupt:
+            signal = "SIGTERM" if terminated() else "SIGINT"
+            print(f"interrupted ({signal}): the partial results and the run folder's RUNNING marker say how far "
+                  "it got", file=sys.stderr)
+            sys.exit(EXIT_TERMINATED if terminated() else EXIT_INTERRUPTED)
+
+
+class RefuseUsedRunFolder(Callback):
+    """A Hydra callback (``hydra.callbacks``) that refuses a run folder (``hydra.run.dir``)
+    holding an earlier run before Hydra writes into it (``.hydra/``, the log), unless the
+    config's ``overwrite`` is true: the earlier run's files stay as they were.
+
+    Args:
+      runner: the module of the experiment's runner (e.g. ``uvms_jax.pipeline``): its
+        ``RUN_FILES`` (a folder holding any of them holds a run) and ``RETRY`` (what a refused
+        user does instead), which the runner's own check uses too.
+    """
+
+    def __init__(self, runner: str) -> None:
+        self.runner = runner
+
+    def on_run_start(self, config, **kwargs: Any) -> None:
+        if OmegaConf.select(config, "overwrite", default=False) is True:
+            return
+        runner = importlib.import_module(self.runner)
+        with config_errors():  # one line, exit 2 (Hydra turns a callback's exception into a warning)
+            refuse_used_folder(OmegaConf.select(config, "hydra.run.dir"), runner.RUN_FILES, runner.RETRY)
 
 
 def overridden(*keys: str) -> list[str]:

@@ -16,6 +16,12 @@ and ``summary.md`` (the chain at a glance, every stage's tables, links to every 
     python experiments/pipeline.py                      # the demo (< 10 min on 2 CPU cores)
     python experiments/pipeline.py experiment=tiny      # smoke run
     python experiments/pipeline.py 'stages=[schedule,hw]' hw.plan=examples/thesis_plan.json
+    python experiments/pipeline.py hydra.run.dir=outputs/mine --overwrite   # rerun into a used folder
+
+A folder that holds an earlier run (results.json, summary.md, or the RUNNING marker of a run that
+did not end) is refused (exit 2, one line naming the marker's run and when it started) unless
+``--overwrite``; SIGTERM stops a run as Ctrl-C does (partial results marked ``interrupted``,
+exit 143; Ctrl-C: 130).
 
 The docking and schedule stages take their experiment's own config (``configs/<name>.yaml``)
 composed with ``<stage>.overrides``; ``ga``, ``seed`` and ``sched.weights`` of this config are
@@ -36,14 +42,15 @@ from hydra.core.hydra_config import HydraConfig  # noqa: E402
 from omegaconf import DictConfig, OmegaConf  # noqa: E402
 
 from uvms_jax import evo  # noqa: E402
-from uvms_jax.pipeline import PipelineSettings, run_pipeline  # noqa: E402
+from uvms_jax.files import refuse_used_folder  # noqa: E402
+from uvms_jax.pipeline import RETRY, RUN_FILES, PipelineSettings, run_pipeline  # noqa: E402
 from uvms_jax.settings import SettingsError, check_keys, from_mapping  # noqa: E402
 
 EXAMPLE_PLAN = Path(__file__).resolve().parents[1] / "examples" / "thesis_plan.json"
 # The keys of configs/pipeline.yaml (anything else, e.g. a `+foo=1` override, is an error), and
 # of its sections that are not settings dataclasses themselves.
-KEYS = ("seed", "stages", "reach", "ga", "docking", "docking_fitness", "scenario", "baseline", "plan", "sched", "hw",
-        "hover")
+KEYS = ("overwrite", "seed", "stages", "reach", "ga", "docking", "docking_fitness", "scenario", "baseline", "plan",
+        "sched", "hw", "hover")
 SECTION_KEYS = {"docking": ("overrides",), "sched": ("planner", "overrides", "weights")}
 
 
@@ -105,10 +112,15 @@ def main(cfg: DictConfig) -> dict:
     # float64; the docking GA and all timings ask for float32 explicitly.
     jax.config.update("jax_enable_x64", True)
     with _cli.config_errors():
+        if not isinstance(cfg.overwrite, bool):
+            raise SettingsError(f"overwrite: expected true/false, got {cfg.overwrite!r}")
         settings = settings_of(cfg)
         if "schedule" in settings.stages:
             _cli.reject_unused_weights(settings.sched.source.kind)
-    return run_pipeline(settings, Path(HydraConfig.get().runtime.output_dir), OmegaConf.to_yaml(cfg))
+        out = Path(HydraConfig.get().runtime.output_dir)
+        if not cfg.overwrite:  # a multirun's job folder (a run's: the callback checked it already)
+            refuse_used_folder(out, RUN_FILES, RETRY)
+    return run_pipeline(settings, out, OmegaConf.to_yaml(cfg), overwrite=cfg.overwrite)
 
 
 if __name__ == "__main__":
