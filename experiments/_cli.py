@@ -34,24 +34,33 @@ import logging
 import os
 import sys
 from collections.abc import Callable, Iterator, Sequence
+from pathlib import Path
 from typing import Any
 
 from hydra.core.global_hydra import GlobalHydra
 from hydra.experimental.callback import Callback
 from hydra.core.hydra_config import HydraConfig
 from hydra.errors import ConfigCompositionException, MissingConfigException, OverrideParseException
+import omegaconf._utils
+import yaml
 from omegaconf import OmegaConf
 from omegaconf.errors import ConfigAttributeError, ConfigKeyError, OmegaConfBaseException
 
 from uvms_jax.files import EXIT_INTERRUPTED, EXIT_TERMINATED, UsedFolderError, refuse_used_folder, sigterm_as_interrupt
-from uvms_jax.settings import SettingsError
+from uvms_jax.settings import SettingsError, bounded_yaml_loader
 
 USAGE_EXIT = 2  # as argparse: the command line is wrong, nothing ran
 CONFIG_ERRORS = (SettingsError, ConfigCompositionException, OverrideParseException, OmegaConfBaseException,
-                 UsedFolderError)
+                 UsedFolderError, yaml.YAMLError)
 OVERWRITE_FLAG = "--overwrite"  # the command-line flag for the override `overwrite=true`
 # Read before run() sets it: the user's own HYDRA_FULL_ERROR=1 asks for tracebacks.
 SHOW_TRACEBACK = os.environ.get("HYDRA_FULL_ERROR") == "1"
+
+# Every config file Hydra reads goes through OmegaConf's YAML loader: bounded here
+# (uvms_jax.settings.bounded_yaml_loader), so an alias bomb or a repeated key is one line naming
+# the file and line, not a process filling the memory or the last key winning.
+_omegaconf_yaml_loader = omegaconf._utils.get_yaml_loader
+omegaconf._utils.get_yaml_loader = lambda: bounded_yaml_loader(_omegaconf_yaml_loader())
 
 # JAX logs at INFO which platforms it could not load ("Unable to initialize backend 'tpu'") and
 # warns when a GPU exists without a CUDA jaxlib; neither says anything about the run.
@@ -61,6 +70,11 @@ logging.getLogger("jax._src.xla_bridge").setLevel(logging.ERROR)
 def one_line(e: BaseException) -> str:
     """A configuration error as one line that names the key (or config) at fault."""
     cause = e.__cause__
+    if isinstance(e, yaml.MarkedYAMLError) or isinstance(cause, yaml.MarkedYAMLError):
+        y = e if isinstance(e, yaml.MarkedYAMLError) else cause
+        mark = y.problem_mark or y.context_mark
+        where = f"{mark.name}, line {mark.line + 1}: " if mark is not None else ""
+        return f"{where}{' '.join(str(y.problem or y.context).split())}"
     if isinstance(e, MissingConfigException):
         first = str(e).splitlines()[0].strip()
         return f"{first}; available: {', '.join(e.options)}" if e.options else first
@@ -128,6 +142,34 @@ class RefuseUsedRunFolder(Callback):
         runner = importlib.import_module(self.runner)
         with config_errors():  # one line, exit 2 (Hydra turns a callback's exception into a warning)
             refuse_used_folder(OmegaConf.select(config, "hydra.run.dir"), runner.RUN_FILES, runner.RETRY)
+
+
+@contextlib.contextmanager
+def quiet(logger: str) -> Iterator[None]:
+    """Inside it, ``logger`` logs warnings and errors only (a check that repeats work the run
+    logs itself)."""
+    log = logging.getLogger(logger)
+    level = log.level
+    log.setLevel(logging.WARNING)
+    try:
+        yield
+    finally:
+        log.setLevel(level)
+
+
+def config_file(group: str) -> str:
+    """The file of the option chosen for config group ``group`` (e.g. ``scenario`` or
+    ``scenario@baseline``) in this job's config search path (relative to the working directory
+    where inside it), or ``group/option.yaml`` where it is not a plain file (call inside a
+    Hydra context)."""
+    hc = HydraConfig.get()
+    choice = hc.runtime.choices.get(group)
+    folder = group.split("@", 1)[0]
+    for source in hc.runtime.config_sources:
+        path = Path(source.path) / folder / f"{choice}.yaml"
+        if source.schema == "file" and path.is_file():
+            return os.path.relpath(path) if path.resolve().is_relative_to(Path.cwd()) else str(path)
+    return f"{folder}/{choice}.yaml"
 
 
 def overridden(*keys: str) -> list[str]:

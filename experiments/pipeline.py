@@ -42,6 +42,7 @@ from hydra.core.hydra_config import HydraConfig  # noqa: E402
 from omegaconf import DictConfig, OmegaConf  # noqa: E402
 
 from uvms_jax import evo  # noqa: E402
+from uvms_jax import plan as planning  # noqa: E402
 from uvms_jax.files import refuse_used_folder  # noqa: E402
 from uvms_jax.pipeline import RETRY, RUN_FILES, PipelineSettings, run_pipeline  # noqa: E402
 from uvms_jax.settings import SettingsError, check_keys, from_mapping  # noqa: E402
@@ -62,16 +63,55 @@ def _stage_config(name: str, overrides, **merge) -> dict:
     return cfg
 
 
+def check_scenarios(c: dict) -> None:
+    """Check the scenario and the baseline's against the scenario schema
+    (:func:`uvms_jax.plan.check_scenario`): every bad key in one message that names the file.
+
+    Raises:
+      SettingsError: ``<file>: <key path>: <what is allowed>, got <value>``, for every bad key.
+    """
+    errors = []
+    for key, group in (("scenario", "scenario"), ("baseline", "scenario@baseline")):
+        if c.get(key):
+            try:
+                planning.SceneSpec.from_mapping(c[key], key)
+            except SettingsError as e:
+                errors.append(f"{_cli.config_file(group)}: {e}")
+    if errors:
+        raise SettingsError("; ".join(errors))
+
+
+def check_arm(settings: PipelineSettings) -> None:
+    """The scenario's arm loads (quietly: the run loads it again and logs what it found), and
+    the scenario's and the baseline's start configurations fit it (call inside a Hydra context).
+
+    Raises:
+      SettingsError: ``<file>: <key path>: <what is wrong>``.
+    """
+    try:
+        with _cli.quiet("uvms_jax.robot"):
+            robot = planning.scenario_robot(settings.scenario)
+    except SettingsError as e:
+        raise SettingsError(f"{_cli.config_file('scenario')}: {e}") from None
+    if settings.baseline is not None:
+        try:
+            planning.check_start_q(robot, settings.baseline.get("start_q"), "baseline.start_q")
+        except SettingsError as e:
+            raise SettingsError(f"{_cli.config_file('scenario@baseline')}: {e}") from None
+
+
 def settings_of(cfg: DictConfig) -> PipelineSettings:
     """Typed settings of the composed pipeline config (call inside a Hydra context): every
     stage's settings are checked here, before any stage runs, whichever stages run.
 
     Raises:
       SettingsError: an unknown key, or values out of range (every one, named by its key path
-        as this config writes it, e.g. ``ga.mutation_rate``).
+        as this config writes it, e.g. ``ga.mutation_rate``); a scenario's bad keys
+        (:func:`check_scenarios`) come alone, the other sections are checked once they pass.
     """
     c = OmegaConf.to_container(cfg, resolve=True)
     check_keys(c, KEYS)
+    check_scenarios(c)
     for section, keys in SECTION_KEYS.items():
         check_keys(c[section], keys, section)
     stages = c["stages"]
@@ -117,6 +157,8 @@ def main(cfg: DictConfig) -> dict:
         settings = settings_of(cfg)
         if "schedule" in settings.stages:
             _cli.reject_unused_weights(settings.sched.source.kind)
+        if settings.scenario:
+            check_arm(settings)
         out = Path(HydraConfig.get().runtime.output_dir)
         if not cfg.overwrite:  # a multirun's job folder (a run's: the callback checked it already)
             refuse_used_folder(out, RUN_FILES, RETRY)
