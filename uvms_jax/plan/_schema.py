@@ -11,6 +11,7 @@ docs/scenarios.md lists the keys and their ranges.
 from __future__ import annotations
 
 import dataclasses
+import re
 from collections.abc import Mapping
 from typing import Any
 
@@ -25,6 +26,9 @@ Vec3 = tuple[float, float, float]
 MAX_DENSITY = 25_000.0  # [kg/m³]
 MAX_WATER_DENSITY = 1_300.0  # [kg/m³]
 MAX_GRAVITY = 25.0  # [m/s²]
+# Names of tables, objects, bases and obstacles: they name MuJoCo geoms (and ':' joins a node's
+# number and name there).
+NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.\-]*")
 
 #: Keys of a scenario's ``arm`` mapping that place the arm in the scene; the others are the
 #: arm's own settings (:func:`uvms_jax.robot.robot_from_config`: ``card``, ``description``, …).
@@ -173,6 +177,11 @@ class ScenarioKeys:
         for x in (*self.objects, *self.bases):
             if x.table not in tables:
                 raise ValueError(f"{x.name!r}: table {x.table!r} is not one of the tables {tables}")
+        names = [*tables, *(x.name for x in (*self.obstacles, *self.objects, *self.bases))]
+        bad = [n for n in names if not NAME.fullmatch(n)]
+        if bad:
+            raise ValueError(f"names {bad}: expected letters, digits, '_', '.' and '-', starting with a letter, "
+                             "digit or '_'")
         _unique("table and obstacle", [*tables, *(o.name for o in self.obstacles)])
         _unique("object and base", [x.name for x in (*self.objects, *self.bases)])
         nodes = node_numbers(self)
