@@ -4,7 +4,9 @@ Every job folder of a sweep (a folder holding ``.hydra/overrides.yaml``) gives o
 number, its overrides (one column per overridden key) and the scalars of its JSON result,
 flattened with dotted keys (``solvers.exact.cost``). Lists of scalars are joined with ``;``;
 lists of objects (e.g. a GRASP sweep) are left out. A job without its result file is reported
-with ``status = missing`` (a crashed job is never silently dropped).
+with ``status = missing`` (a crashed job is never silently dropped); a job whose result file or
+overrides cannot be read (truncated, garbled) with ``status = broken`` and one line on stderr
+naming the file; the other jobs are gathered. Exit status 1 when any job is missing or broken.
 
 Writes ``gathered.csv`` (every column) and ``gathered.md`` into the sweep folder (or ``--out``)
 and prints the markdown: the overrides that differ between jobs plus the chosen columns
@@ -34,6 +36,8 @@ from pathlib import Path
 from typing import Any
 
 import yaml
+
+from uvms_jax.settings import load_yaml
 
 DEFAULT_FILES = ("results.json", "summary.json", "report.json")
 FIXED = ("job", "status")
@@ -73,7 +77,7 @@ def job_dirs(root: Path) -> list[Path]:
 
 def overrides_of(job: Path) -> dict[str, str]:
     """``key=value`` overrides of a job (``hydra.*`` ones left out)."""
-    items = yaml.safe_load((job / ".hydra" / "overrides.yaml").read_text()) or []
+    items = load_yaml((job / ".hydra" / "overrides.yaml").read_text()) or []
     out = {}
     for item in items:
         key, _, value = str(item).partition("=")
@@ -94,12 +98,24 @@ def gather(root: Path, file: str | None = None) -> tuple[list[dict[str, Any]], l
             raise FileNotFoundError(f"{root}: no job has any of {DEFAULT_FILES}; pass --file")
     rows, override_keys = [], []
     for job in jobs:
-        ov = overrides_of(job)
+        try:
+            ov = overrides_of(job)
+        except (OSError, UnicodeDecodeError, yaml.YAMLError) as e:
+            print(f"gather: {job / '.hydra' / 'overrides.yaml'}: unreadable ({' '.join(str(e).split())}); "
+                  "gathered as broken", file=sys.stderr)
+            rows.append({"job": str(job.relative_to(root)), "status": "broken"})
+            continue
         override_keys += [k for k in ov if k not in override_keys]
         row: dict[str, Any] = {"job": str(job.relative_to(root)), "status": "ok", **ov}
         path = job / file
         if path.exists():
-            row.update({k: v for k, v in flatten(json.loads(path.read_text())).items() if k not in row})
+            try:
+                result = json.loads(path.read_text())
+            except (OSError, UnicodeDecodeError, ValueError) as e:  # a truncated or garbled file
+                print(f"gather: {path}: unreadable ({' '.join(str(e).split())}); gathered as broken", file=sys.stderr)
+                row["status"] = "broken"
+            else:
+                row.update({k: v for k, v in flatten(result).items() if k not in row})
         else:
             row["status"] = "missing"
         rows.append(row)
@@ -172,8 +188,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     csv_path, md_path = write(rows, keys, args.out or args.sweep_dir, args.columns)
     print(md_path.read_text(), end="")
     missing = sum(r["status"] == "missing" for r in rows)
-    print(f"{len(rows)} jobs ({missing} missing results) → {csv_path}, {md_path}", file=sys.stderr)
-    return 1 if missing else 0
+    broken = sum(r["status"] == "broken" for r in rows)
+    print(f"{len(rows)} jobs ({missing} missing results, {broken} broken) → {csv_path}, {md_path}", file=sys.stderr)
+    return 1 if missing or broken else 0
 
 
 if __name__ == "__main__":

@@ -16,6 +16,12 @@ and ``summary.md`` (the chain at a glance, every stage's tables, links to every 
     python experiments/pipeline.py                      # the demo (< 10 min on 2 CPU cores)
     python experiments/pipeline.py experiment=tiny      # smoke run
     python experiments/pipeline.py 'stages=[schedule,hw]' hw.plan=examples/thesis_plan.json
+    python experiments/pipeline.py hydra.run.dir=outputs/mine --overwrite   # rerun into a used folder
+
+A folder that holds an earlier run (results.json, summary.md, or the RUNNING marker of a run that
+did not end) is refused (exit 2, one line naming the marker's run and when it started) unless
+``--overwrite``; SIGTERM stops a run as Ctrl-C does (partial results marked ``interrupted``,
+exit 143; Ctrl-C: 130).
 
 The docking and schedule stages take their experiment's own config (``configs/<name>.yaml``)
 composed with ``<stage>.overrides``; ``ga``, ``seed`` and ``sched.weights`` of this config are
@@ -36,14 +42,16 @@ from hydra.core.hydra_config import HydraConfig  # noqa: E402
 from omegaconf import DictConfig, OmegaConf  # noqa: E402
 
 from uvms_jax import evo  # noqa: E402
-from uvms_jax.pipeline import PipelineSettings, run_pipeline  # noqa: E402
+from uvms_jax import plan as planning  # noqa: E402
+from uvms_jax.files import refuse_used_folder  # noqa: E402
+from uvms_jax.pipeline import RETRY, RUN_FILES, PipelineSettings, run_pipeline  # noqa: E402
 from uvms_jax.settings import SettingsError, check_keys, from_mapping  # noqa: E402
 
 EXAMPLE_PLAN = Path(__file__).resolve().parents[1] / "examples" / "thesis_plan.json"
 # The keys of configs/pipeline.yaml (anything else, e.g. a `+foo=1` override, is an error), and
 # of its sections that are not settings dataclasses themselves.
-KEYS = ("seed", "stages", "reach", "ga", "docking", "docking_fitness", "scenario", "baseline", "plan", "sched", "hw",
-        "hover")
+KEYS = ("overwrite", "seed", "stages", "reach", "ga", "docking", "docking_fitness", "scenario", "baseline", "plan",
+        "sched", "hw", "hover")
 SECTION_KEYS = {"docking": ("overrides",), "sched": ("planner", "overrides", "weights")}
 
 
@@ -55,16 +63,55 @@ def _stage_config(name: str, overrides, **merge) -> dict:
     return cfg
 
 
+def check_scenarios(c: dict) -> None:
+    """Check the scenario and the baseline's against the scenario schema
+    (:func:`uvms_jax.plan.check_scenario`): every bad key in one message that names the file.
+
+    Raises:
+      SettingsError: ``<file>: <key path>: <what is allowed>, got <value>``, for every bad key.
+    """
+    errors = []
+    for key, group in (("scenario", "scenario"), ("baseline", "scenario@baseline")):
+        if c.get(key):
+            try:
+                planning.SceneSpec.from_mapping(c[key], key)
+            except SettingsError as e:
+                errors.append(f"{_cli.config_file(group)}: {e}")
+    if errors:
+        raise SettingsError("; ".join(errors))
+
+
+def check_arm(settings: PipelineSettings) -> None:
+    """The scenario's arm loads (quietly: the run loads it again and logs what it found), and
+    the scenario's and the baseline's start configurations fit it (call inside a Hydra context).
+
+    Raises:
+      SettingsError: ``<file>: <key path>: <what is wrong>``.
+    """
+    try:
+        with _cli.quiet("uvms_jax.robot"):
+            robot = planning.scenario_robot(settings.scenario)
+    except SettingsError as e:
+        raise SettingsError(f"{_cli.config_file('scenario')}: {e}") from None
+    if settings.baseline is not None:
+        try:
+            planning.check_start_q(robot, settings.baseline.get("start_q"), "baseline.start_q")
+        except SettingsError as e:
+            raise SettingsError(f"{_cli.config_file('scenario@baseline')}: {e}") from None
+
+
 def settings_of(cfg: DictConfig) -> PipelineSettings:
     """Typed settings of the composed pipeline config (call inside a Hydra context): every
     stage's settings are checked here, before any stage runs, whichever stages run.
 
     Raises:
       SettingsError: an unknown key, or values out of range (every one, named by its key path
-        as this config writes it, e.g. ``ga.mutation_rate``).
+        as this config writes it, e.g. ``ga.mutation_rate``); a scenario's bad keys
+        (:func:`check_scenarios`) come alone, the other sections are checked once they pass.
     """
     c = OmegaConf.to_container(cfg, resolve=True)
     check_keys(c, KEYS)
+    check_scenarios(c)
     for section, keys in SECTION_KEYS.items():
         check_keys(c[section], keys, section)
     stages = c["stages"]
@@ -105,10 +152,17 @@ def main(cfg: DictConfig) -> dict:
     # float64; the docking GA and all timings ask for float32 explicitly.
     jax.config.update("jax_enable_x64", True)
     with _cli.config_errors():
+        if not isinstance(cfg.overwrite, bool):
+            raise SettingsError(f"overwrite: expected true/false, got {cfg.overwrite!r}")
         settings = settings_of(cfg)
         if "schedule" in settings.stages:
             _cli.reject_unused_weights(settings.sched.source.kind)
-    return run_pipeline(settings, Path(HydraConfig.get().runtime.output_dir), OmegaConf.to_yaml(cfg))
+        if settings.scenario:
+            check_arm(settings)
+        out = Path(HydraConfig.get().runtime.output_dir)
+        if not cfg.overwrite:  # a multirun's job folder (a run's: the callback checked it already)
+            refuse_used_folder(out, RUN_FILES, RETRY)
+    return run_pipeline(settings, out, OmegaConf.to_yaml(cfg), overwrite=cfg.overwrite)
 
 
 if __name__ == "__main__":

@@ -7,6 +7,13 @@
 * :data:`RUNNING`: the marker a run folder carries while a run writes into it
   (:func:`mark_running`, :func:`clear_running`). A folder that still has it after its process
   is gone holds a run that was killed (SIGKILL, power loss): its results, if any, are partial.
+* :func:`used_run_folder`: why a folder must not take a new run (it holds an earlier run's
+  results or a marker), in one line naming the marker's run and when it started; every runner
+  (``uvms-hw run``, the pipeline) refuses such a folder unless told to overwrite it
+  (:func:`refuse_used_folder`).
+* :func:`sigterm_as_interrupt`: SIGTERM, which batch schedulers send before they kill a job,
+  stops a run the way Ctrl-C (SIGINT) does: partial results marked ``interrupted``, exit
+  :data:`EXIT_TERMINATED`.
 """
 
 from __future__ import annotations
@@ -14,15 +21,25 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import signal
 import sys
 import tempfile
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 
-__all__ = ["RUNNING", "atomic_path", "clear_running", "mark_running", "write_atomic"]
+__all__ = ["EXIT_INTERRUPTED", "EXIT_TERMINATED", "RUNNING", "UsedFolderError", "atomic_path", "clear_running",
+           "mark_running", "marker_summary", "refuse_used_folder", "sigterm_as_interrupt", "used_run_folder",
+           "write_atomic"]
 
 RUNNING = "RUNNING"  # the marker file's name in a run folder
+# Exit statuses of a run stopped by a signal: 128 + the signal's number, as shells report them.
+EXIT_INTERRUPTED = 128 + signal.SIGINT  # 130: Ctrl-C
+EXIT_TERMINATED = 128 + signal.SIGTERM  # 143: a batch scheduler's (or `kill`'s) SIGTERM
+
+
+class UsedFolderError(FileExistsError):
+    """A run folder that holds an earlier run (:func:`used_run_folder`'s one line)."""
 
 
 @contextlib.contextmanager
@@ -73,3 +90,62 @@ def mark_running(folder: Path | str, **info) -> Path:
 def clear_running(folder: Path | str) -> None:
     """Remove ``folder``'s :data:`RUNNING` marker (no error if it has none)."""
     (Path(folder) / RUNNING).unlink(missing_ok=True)
+
+
+def marker_summary(folder: Path | str) -> str:
+    """The :data:`RUNNING` marker of ``folder`` in words: the process that wrote it, when it
+    started, its command line and, for a run that stopped, its status and stage (one line)."""
+    try:
+        body = json.loads((Path(folder) / RUNNING).read_text())
+        if not isinstance(body, dict):
+            raise ValueError("not a JSON object")
+    except (OSError, UnicodeDecodeError, ValueError) as e:
+        return f"an unreadable marker ({type(e).__name__})"
+    argv = body.get("argv")
+    command = " ".join(map(str, argv)) if isinstance(argv, list) else "?"
+    status = f", {body['status']} in stage {body.get('stage')}" if body.get("status") else ", no status (killed?)"
+    return f"the run of pid {body.get('pid', '?')} started {body.get('started', '?')} (`{command}`){status}"
+
+
+def used_run_folder(folder: Path | str, names: Sequence[str], retry: str) -> str | None:
+    """Why ``folder`` must not take a new run, or None when it may: it holds any of ``names``
+    (an earlier run's results, or its :data:`RUNNING` marker, whose run is named by
+    :func:`marker_summary`). ``retry`` says what to do instead, e.g. ``"choose another --out
+    or pass --overwrite"``. One line."""
+    found = [name for name in names if (Path(folder) / name).exists()]
+    if not found:
+        return None
+    marker = f"; the marker is {marker_summary(folder)}" if RUNNING in found else ""
+    return f"{folder} already holds a run ({', '.join(found)}{marker}): {retry}"
+
+
+def refuse_used_folder(folder: Path | str, names: Sequence[str], retry: str) -> None:
+    """Raise :class:`UsedFolderError` with :func:`used_run_folder`'s line if ``folder`` holds any
+    of ``names``."""
+    refusal = used_run_folder(folder, names, retry)
+    if refusal is not None:
+        raise UsedFolderError(refusal)
+
+
+@contextlib.contextmanager
+def sigterm_as_interrupt() -> Iterator[Callable[[], bool]]:
+    """Within the block, SIGTERM raises ``KeyboardInterrupt`` as SIGINT does, so a run stops the
+    way Ctrl-C stops it (the arm told to hold, partial results written and marked
+    ``interrupted``). Yields a function telling whether SIGTERM arrived: the caller then exits
+    with :data:`EXIT_TERMINATED` instead of :data:`EXIT_INTERRUPTED`. Outside the main thread
+    (where no handler can be set) SIGTERM keeps its default."""
+    received: list[int] = []
+
+    def handler(signum, frame):
+        received.append(signum)
+        raise KeyboardInterrupt("SIGTERM")
+
+    try:
+        previous = signal.signal(signal.SIGTERM, handler)
+    except ValueError:  # not the main thread
+        yield lambda: False
+        return
+    try:
+        yield lambda: bool(received)
+    finally:
+        signal.signal(signal.SIGTERM, previous)

@@ -75,15 +75,21 @@ the file suffix, and :func:`load_plan` tells the two formats apart by their keys
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import json
 import math
+import re
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 import yaml
 
+from uvms_jax.settings import load_yaml
+
 __all__ = [
+    "MAX_MOTION_S",
+    "MAX_NESTING",
     "PLAN_VERSION",
     "Plan",
     "PlanError",
@@ -98,6 +104,13 @@ __all__ = [
 ]
 
 PLAN_VERSION = 1
+# Sanity limit on a plan's total motion time (the sum of its segments' planned times) [s]: a
+# pick-and-place intervention of the thesis plans a few minutes; a plan of more than an hour is
+# a unit or typing error (1e9 s), never a plan to run unattended.
+MAX_MOTION_S = 3600.0
+# Deepest nesting of objects and lists in a plan file (plan.json has 4: plan → segments → q →
+# row); deeper files are refused before they are parsed.
+MAX_NESTING = 16
 
 
 class PlanError(ValueError):
@@ -143,6 +156,10 @@ class Plan:
     def __post_init__(self) -> None:
         if self.arm is not None:  # checked, and kept as plan.json holds it
             object.__setattr__(self, "arm", parse_arm(self.arm, self.joint_names))
+        total = sum(s.t[-1] - s.t[0] for s in self.segments if s.t)
+        if not total <= MAX_MOTION_S:  # NaN too
+            raise PlanError(f"plan: total planned motion time {total:g} s is not within the sanity limit of "
+                            f"{MAX_MOTION_S:g} s (planfile.MAX_MOTION_S)")
 
     def waypoints(self) -> list[tuple[int, int, tuple[float, ...]]]:
         """All ``(segment index, waypoint index, q)`` in execution order."""
@@ -165,7 +182,7 @@ def parse_plan(obj: Mapping[str, Any]) -> Plan:
     if not isinstance(obj, Mapping):
         raise PlanError(f"plan must be a JSON object, got {type(obj).__name__}")
     version = obj.get("version", PLAN_VERSION)
-    if version != PLAN_VERSION:
+    if isinstance(version, bool) or version != PLAN_VERSION:  # true == 1 in Python, not in a plan
         raise PlanError(f"unsupported plan version {version!r} (expected {PLAN_VERSION})")
     unknown = set(obj) - {"version", "joint_names", "segments", "base_rpy", "arm", "meta"}
     if unknown:
@@ -289,15 +306,39 @@ def load_plan(path: str | Path, gripper: Any = None) -> Plan:
     a JointTrajectory (:func:`from_joint_trajectory`); a ``plan.json`` records its own.
 
     Raises:
-      PlanError: unreadable file, malformed YAML/JSON, or a malformed plan or trajectory.
+      PlanError: unreadable file, malformed YAML/JSON, a key repeated in an object (the last
+        would win without a word), nesting deeper than :data:`MAX_NESTING`, or a malformed plan
+        or trajectory; one line.
     """
     path = Path(path)
     try:
         text = path.read_text()
-        obj = yaml.safe_load(text) if path.suffix.lower() in _YAML_SUFFIXES else json.loads(text)
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError, yaml.YAMLError) as e:
-        raise PlanError(f"cannot read plan {path}: {e}") from e
+        if path.suffix.lower() in _YAML_SUFFIXES:
+            obj = load_yaml(text)  # bounded: repeated keys, aliases, nesting
+        else:
+            _check_nesting(text)
+            obj = json.loads(text, object_pairs_hook=_unique_keys)
+    except (OSError, UnicodeDecodeError, ValueError, yaml.YAMLError) as e:  # JSONDecodeError is a ValueError
+        raise PlanError(f"cannot read plan {path}: {' '.join(str(e).split())}") from e
     return from_joint_trajectory(obj, gripper) if _is_joint_trajectory(obj) else parse_plan(obj)
+
+
+def _check_nesting(text: str) -> None:
+    """Raise ValueError for JSON ``text`` nested deeper than :data:`MAX_NESTING` (brackets
+    outside strings), before a recursive parser meets it."""
+    brackets = re.findall(r"[\[\]{}]", re.sub(r'"(?:[^"\\]|\\.)*"', "", text))
+    depth = max(itertools.accumulate(1 if b in "[{" else -1 for b in brackets), default=0)
+    if depth > MAX_NESTING:
+        raise ValueError(f"nested {depth} levels deep; a plan has at most {MAX_NESTING}")
+
+
+def _unique_keys(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    """A JSON object's dict; ValueError for a key that it repeats."""
+    keys = [k for k, _ in pairs]
+    dup = sorted({k for k in keys if keys.count(k) > 1})
+    if dup:
+        raise ValueError(f"repeated keys {dup} in one object (which one counts?)")
+    return dict(pairs)
 
 
 def save_plan(plan: Plan, path: str | Path, *, joint_trajectory: bool = False,

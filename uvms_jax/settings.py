@@ -30,15 +30,25 @@ ga.population_size: expected a value >= 1, got -8
 from __future__ import annotations
 
 import dataclasses
+import math
 import os
 import types
 import typing
 from collections.abc import Mapping
 from typing import Any, TypeVar
 
-__all__ = ["Check", "SettingsError", "check_fields", "check_keys", "from_mapping", "setting"]
+import yaml
+
+__all__ = ["MAX_YAML_DEPTH", "MAX_YAML_NODES", "Check", "SettingsError", "bounded_yaml_loader", "check_fields", "check_keys",
+           "from_mapping", "load_yaml", "setting"]
 
 T = TypeVar("T")
+
+# The most nodes a YAML document may hold with every alias expanded: a settings file has a few
+# hundred; an alias bomb (nested anchors, each repeating the one before) has billions and would
+# fill the memory of whatever expands it (a config library copying every alias).
+MAX_YAML_NODES = 100_000
+MAX_YAML_DEPTH = 64  # nested mappings and lists (a settings file has < 10; far below Python's recursion limit)
 
 
 class SettingsError(ValueError):
@@ -225,6 +235,8 @@ def _convert(tp: Any, value: Any, where: str) -> Any:
     if tp is float:
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise SettingsError(f"{where}: expected a number, got {value!r}")
+        if not math.isfinite(value):  # no setting means "unbounded" by inf, or anything by NaN
+            raise SettingsError(f"{where}: expected a finite number, got {value!r}")
         return float(value)
     if tp is str:
         if not isinstance(value, str):
@@ -237,7 +249,7 @@ def from_mapping(cls: type[T], mapping: Mapping[str, Any] | None, where: str = "
     """``cls`` (a dataclass) built from ``mapping``, converting nested mappings and lists.
 
     Keys absent from ``mapping`` take the dataclass defaults; unknown keys, missing required
-    keys, values of the wrong type, values outside a field's :class:`Check` (:func:`setting`)
+    keys, values of the wrong type (a float setting takes finite numbers only: never NaN or inf), values outside a field's :class:`Check` (:func:`setting`)
     and values that the dataclass's ``__post_init__`` rejects (``ValueError``) raise
     :class:`SettingsError` naming the key path (``where`` is the mapping's own, e.g. ``ga``).
     Every bad key of the mapping (and of its nested mappings) is named, in one message.
@@ -250,6 +262,9 @@ def from_mapping(cls: type[T], mapping: Mapping[str, Any] | None, where: str = "
     fields = {f.name: f for f in dataclasses.fields(cls) if f.init}
     check_keys(mapping, fields, where or cls.__name__)
     kwargs, errors = {}, []
+    for k, f in fields.items():
+        if k not in mapping and f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING:
+            errors.append(f"{where}.{k}: missing (required)" if where else f"{k}: missing (required)")
     for k, v in mapping.items():
         path = f"{where}.{k}" if where else k
         try:
@@ -268,3 +283,68 @@ def from_mapping(cls: type[T], mapping: Mapping[str, Any] | None, where: str = "
         raise
     except (TypeError, ValueError) as e:  # missing keys; checks of the dataclass's __post_init__
         raise SettingsError(f"{where or cls.__name__}: {e}") from e
+
+
+def _expanded_nodes(node: yaml.Node, memo: dict[int, int]) -> int:
+    """Nodes of ``node``'s tree with every alias expanded (an alias is the anchored node itself,
+    counted once per use, computed once: linear in the document); ``inf`` for an alias inside
+    its own anchor (a recursive document, endless when expanded)."""
+    if id(node) not in memo:
+        memo[id(node)] = math.inf  # met again before it is counted: an alias inside its own anchor
+        children = [c for pair in node.value for c in pair] if isinstance(node, yaml.MappingNode) else \
+            node.value if isinstance(node, yaml.SequenceNode) else []
+        memo[id(node)] = 1 + sum(_expanded_nodes(c, memo) for c in children)
+    return memo[id(node)]
+
+
+def bounded_yaml_loader(base: type = yaml.SafeLoader) -> type:
+    """A subclass of the YAML loader ``base`` (a ``yaml.SafeLoader``) that refuses a document
+    holding more than :data:`MAX_YAML_NODES` nodes with its aliases expanded (an alias bomb) and
+    a mapping with a repeated key (the last one would win without a word) and nesting deeper than
+    :data:`MAX_YAML_DEPTH`; each raises ``yaml.YAMLError`` naming the line, before anything is
+    built from the document."""
+
+    class BoundedLoader(base):
+        depth = 0
+
+        def compose_node(self, parent, index):
+            self.depth += 1
+            try:
+                if self.depth > MAX_YAML_DEPTH:
+                    raise yaml.composer.ComposerError(None, None, f"nested deeper than {MAX_YAML_DEPTH} levels",
+                                                      self.peek_event().start_mark)
+                return super().compose_node(parent, index)
+            finally:
+                self.depth -= 1
+
+        def compose_document(self):
+            node = super().compose_document()
+            if node is not None and _expanded_nodes(node, {}) > MAX_YAML_NODES:
+                raise yaml.composer.ComposerError(
+                    None, None, f"with its aliases expanded, the document holds more than {MAX_YAML_NODES} values "
+                    "or an alias inside its own anchor; write it without nested aliases", node.start_mark)
+            return node
+
+        def construct_mapping(self, node, deep=False):
+            seen = set()
+            for key_node, _ in node.value:
+                key = key_node.value if isinstance(key_node, yaml.ScalarNode) else None
+                if key is not None and key in seen:
+                    raise yaml.constructor.ConstructorError(None, None, f"found duplicate key {key!r}",
+                                                            key_node.start_mark)
+                seen.add(key)
+            return super().construct_mapping(node, deep=deep)
+
+    return BoundedLoader
+
+
+def load_yaml(text: str) -> Any:
+    """``text`` as YAML with the safe loader, bounded (:func:`bounded_yaml_loader`).
+
+    Raises:
+      yaml.YAMLError: malformed YAML, a repeated key, or an alias bomb (naming the line).
+    """
+    return yaml.load(text, Loader=_LOADER)  # noqa: S506  (a SafeLoader subclass)
+
+
+_LOADER = bounded_yaml_loader()

@@ -126,7 +126,9 @@ def test_killed_run_is_marked_and_its_folder_refused_without_overwrite(tmp_path,
     # Refused, one line, nothing touched:
     assert cli.main(["run", str(plan), "--sim", "--no-plot", "--out", str(out)]) == cli.EXIT_REFUSED
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "already holds a run (RUNNING)" in err[0] and "--overwrite" in err[0]
+    # The marker's run named: its process and when it started.
+    assert len(err) == 1 and f"already holds a run (RUNNING; the marker is the run of pid {proc.pid} started " \
+        in err[0] and "--overwrite" in err[0]
     assert json.loads((out / RUNNING).read_text()) == marker
     # With --overwrite the run goes ahead (here on the in-process link, as in the other CLI tests).
     real = cli.run_plan

@@ -61,6 +61,22 @@ def test_gather_default_columns_are_the_varying_ones(gather, tmp_path):
     assert "jax" not in head and "solvers.exact.path" not in head  # constant across jobs
 
 
+def test_gather_reports_a_broken_job_in_one_line_and_gathers_the_rest(gather, tmp_path, capsys):
+    _fake_sweep(tmp_path, n=3)
+    broken = tmp_path / "1" / "results.json"
+    broken.write_text(broken.read_text()[:40])  # a job killed while writing (before atomic writes)
+    (tmp_path / "2" / ".hydra" / "overrides.yaml").write_text("- a: &a [*a]\n")  # garbled
+    assert gather.main([str(tmp_path), "--out", str(tmp_path / "g")]) == 1
+    err = capsys.readouterr().err.splitlines()
+    assert err[0].startswith(f"gather: {broken}: unreadable (") and err[0].endswith("; gathered as broken")
+    assert err[1].startswith(f"gather: {tmp_path / '2' / '.hydra' / 'overrides.yaml'}: unreadable (")
+    assert err[2].startswith("3 jobs (0 missing results, 2 broken)")
+    with open(tmp_path / "g" / "gathered.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert [r["status"] for r in rows] == ["ok", "broken", "broken"]
+    assert rows[0]["solvers.exact.cost"] == "1" and rows[1]["solvers.exact.cost"] == ""
+
+
 def test_gather_refuses_a_folder_without_jobs(gather, tmp_path):
     assert gather.main([str(tmp_path)]) == 2
 

@@ -38,8 +38,8 @@ def two_stages(monkeypatch):
 
 def test_finished_run_has_results_and_no_marker(tmp_path, two_stages):
     settings, seen = two_stages()
-    (tmp_path / "results.json").write_text('{"stale": true}')  # an earlier run's
-    res = _run.run_pipeline(settings, tmp_path)
+    (tmp_path / "results.json").write_text('{"stale": true}')  # an earlier run's, overwritten
+    res = _run.run_pipeline(settings, tmp_path, overwrite=True)
     assert seen == [("one", True), ("two", True)]
     assert not (tmp_path / files.RUNNING).exists()
     assert json.loads((tmp_path / "results.json").read_text())["two"] == res["two"] == {"value": 2}
@@ -53,7 +53,7 @@ def test_stopped_run_keeps_a_marker_with_its_status(tmp_path, two_stages, fail, 
     settings, _ = two_stages(fail)
     (tmp_path / "results.json").write_text('{"stale": true}')  # must not stand for this run
     with pytest.raises(type(fail)):
-        _run.run_pipeline(settings, tmp_path)
+        _run.run_pipeline(settings, tmp_path, overwrite=True)
     marker = json.loads((tmp_path / files.RUNNING).read_text())
     assert marker["status"] == status and marker["stage"] == "two"
     assert marker["finished"] == {"one": {"value": 1}}  # the finished stage's results kept

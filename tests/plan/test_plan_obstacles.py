@@ -81,12 +81,13 @@ def test_cylinder_obstacle_contains_the_cylinder(raw):
 
 
 @pytest.mark.parametrize("obstacle, match", [
-    ({"name": "x", "shape": "cone", "pos": [0, 0, 0]}, "unknown shape 'cone'"),
-    ({"name": "x", "shape": "sphere", "pos": [0, 0, 0]}, "needs 'radius'"),
-    ({"name": "x", "shape": "sphere", "radius": -1.0, "pos": [0, 0, 0]}, "positive"),
-    ({"name": "x", "shape": "box", "size": [1, 1], "pos": [0, 0, 0]}, "needs 3 positive"),
-    ({"name": "x", "shape": "sphere", "radius": 0.1, "height": 1.0, "pos": [0, 0, 0]}, "unknown keys"),
-    ({"name": "x", "shape": "mesh", "file": "/nonexistent.stl", "pos": [0, 0, 0]}, "cannot read mesh file"),
+    ({"name": "x", "shape": "cone", "pos": [0, 0, 0]}, r"obstacles\[0\].shape: expected one of \['box', .*got 'cone'"),
+    ({"name": "x", "shape": "sphere", "pos": [0, 0, 0]}, r"obstacles\[0\]: obstacle shape 'sphere' takes radius; missing radius"),
+    ({"name": "x", "shape": "sphere", "radius": -1.0, "pos": [0, 0, 0]}, r"obstacles\[0\].radius: expected a value > 0"),
+    ({"name": "x", "shape": "box", "size": [1, 1], "pos": [0, 0, 0]}, r"obstacles\[0\].size: expected 3 values, got 2"),
+    ({"name": "x", "shape": "sphere", "radius": 0.1, "height": 1.0, "pos": [0, 0, 0]}, "takes radius; not height"),
+    ({"name": "x", "shape": "mesh", "file": "/nonexistent.stl", "pos": [0, 0, 0]}, "file: no such file"),
+    ({"name": "x", "shape": "sphere", "radius": 0.1, "pos": [0, float("nan"), 0]}, "expected a finite number, got nan"),
     ({"name": "mount", "shape": "sphere", "radius": 0.1, "pos": [0, 0, 0]}, "names must be unique"),
     ({"name": "start_left", "shape": "sphere", "radius": 0.1, "pos": [0, 0, 0]}, "names must be unique"),
 ])

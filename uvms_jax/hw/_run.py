@@ -15,7 +15,7 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
-from uvms_jax.files import RUNNING, clear_running, mark_running, write_atomic
+from uvms_jax.files import RUNNING, clear_running, mark_running, refuse_used_folder, used_run_folder, write_atomic
 from uvms_jax.planfile import Plan
 
 from ._check import PlanSummary, check_arm, check_plan
@@ -37,6 +37,7 @@ RUN_FILES = ("result.json", "run.csv", "run.png", RUNNING)
 # Simulated links by name: the arm in-process on a virtual clock (a run costs only its
 # computation), or behind a UDP socket on 127.0.0.1 in real time (the real arm's code path).
 SIM_LINKS = ("loopback", "udp")
+RETRY = "choose another --out or pass --overwrite"  # what a refused folder's user does instead
 
 
 @dataclasses.dataclass(frozen=True)
@@ -245,6 +246,12 @@ def existing_run_files(out: Path | str) -> list[str]:
     return [name for name in RUN_FILES if (Path(out) / name).exists()]
 
 
+def refuse_out(out: Path | str) -> str | None:
+    """Why ``out`` must not take a run (it holds a run's files: :func:`uvms_jax.files.used_run_folder`,
+    one line), or None."""
+    return used_run_folder(out, RUN_FILES, RETRY)
+
+
 def prepare_out(out: Path | str, *, overwrite: bool = False) -> Path:
     """Make ``out`` the folder of a run about to start: created, refused if it already holds a
     run's files (:data:`RUN_FILES`: results, or the marker of a run that did not end) unless
@@ -252,15 +259,14 @@ def prepare_out(out: Path | str, *, overwrite: bool = False) -> Path:
     until :func:`write_run` writes the results.
 
     Raises:
-      FileExistsError: ``out`` holds a run's files and ``overwrite`` is off (one line naming them).
+      UsedFolderError: ``out`` holds a run's files and ``overwrite`` is off (one line naming
+        them and the marker's run, :func:`refuse_out`).
     """
     out = Path(out)
-    found = existing_run_files(out)
-    if found and not overwrite:
-        raise FileExistsError(f"{out} already holds a run ({', '.join(found)}): choose another --out "
-                              "or pass --overwrite")
+    if not overwrite:
+        refuse_used_folder(out, RUN_FILES, RETRY)
     out.mkdir(parents=True, exist_ok=True)
-    for name in found:
+    for name in existing_run_files(out):
         (out / name).unlink()
     mark_running(out)
     return out

@@ -16,7 +16,8 @@ PLAN is a ``plan.json`` or a ``trajectory_msgs/JointTrajectory``-shaped file, YA
 its suffix (:mod:`uvms_jax.planfile`); ``export`` writes a plan as the latter.
 Exit status: 0 plan completed (or dry run passed, or exported); 1 run aborted safely (arm told
 to hold); 2 plan refused or bad arguments; 130 interrupted (Ctrl-C, SIGINT: the arm told to hold,
-the partial results written, ``result.json`` ``"status": "interrupted"``). Outputs in ``--out``
+the partial results written, ``result.json`` ``"status": "interrupted"``); 143 the same for
+SIGTERM. Outputs in ``--out``
 (default ``outputs/hw/<time>``; a folder that already holds a run is refused unless
 ``--overwrite``): ``run.csv`` (commanded vs measured), ``result.json`` and ``run.png``, each
 written atomically; the folder carries a ``RUNNING`` marker until they are written, so a run
@@ -37,14 +38,14 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from uvms_jax import __version__, progress
-from uvms_jax.files import clear_running, write_atomic
+from uvms_jax.files import EXIT_INTERRUPTED, EXIT_TERMINATED, clear_running, sigterm_as_interrupt, write_atomic
 from uvms_jax.planfile import PlanError, load_plan, save_plan
 
 from ._check import check_plan
 from ._client import ReachArm
 from ._config import HwConfig, SimConfig, config_from_mapping
 from ._executor import RunInterrupted
-from ._run import HwRun, existing_run_files, prepare_out, run_plan, write_run
+from ._run import HwRun, prepare_out, refuse_out, run_plan, write_run
 from ._joints import joint_specs
 from ._sim import SimArm
 from ._sim_link import SimServer
@@ -52,14 +53,15 @@ from ._transport import LinkError, SerialTransport, Transport, UdpTransport, par
 
 __all__ = ["build_parser", "main"]
 
-EXIT_OK, EXIT_ABORTED, EXIT_REFUSED, EXIT_INTERRUPTED = 0, 1, 2, 130  # 130 = 128 + SIGINT, as shells report it
+EXIT_OK, EXIT_ABORTED, EXIT_REFUSED = 0, 1, 2
 DEFAULT_ROBOT = "bravo7"  # the arm card used when --robot is not given
 
 _EPILOG = """exit status:
   0  plan completed, dry run passed or plan exported
   1  run aborted safely (the arm was told to hold)
   2  plan refused or bad arguments
-  130  interrupted (Ctrl-C): the arm was told to hold, partial results written"""
+  130  interrupted (Ctrl-C): the arm was told to hold, partial results written
+  143  the same for SIGTERM (a batch scheduler stopping the job)"""
 
 
 class _HelpFormatter(argparse.ArgumentDefaultsHelpFormatter, argparse.RawDescriptionHelpFormatter):
@@ -214,9 +216,7 @@ def _load_robot(name: str):
 
 def _refuse_out(out: Path | None, overwrite: bool) -> str | None:
     """The one-line refusal of ``--out`` when it holds a run and ``--overwrite`` is off."""
-    found = existing_run_files(out) if out is not None and not overwrite else []
-    return f"{out} already holds a run ({', '.join(found)}): choose another --out or pass --overwrite" if found \
-        else None
+    return None if out is None or overwrite else refuse_out(out)
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -324,8 +324,15 @@ def _serve(args: argparse.Namespace) -> int:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Console entry point; returns the exit status (see module docstring)."""
+    """Console entry point; returns the exit status (see module docstring). SIGTERM stops a run
+    as Ctrl-C does (:func:`uvms_jax.files.sigterm_as_interrupt`), with status 143."""
     args = build_parser().parse_args(argv)
+    with sigterm_as_interrupt() as terminated:
+        status = _command(args)
+    return EXIT_TERMINATED if status == EXIT_INTERRUPTED and terminated() else status
+
+
+def _command(args: argparse.Namespace) -> int:
     try:
         if args.command == "run":
             return _run(args)

@@ -9,7 +9,7 @@ path (fingers, other arms) are ignored.
 
 from __future__ import annotations
 
-import io
+import logging
 import os
 from dataclasses import dataclass
 
@@ -23,6 +23,14 @@ from uvms_jax.kin._chain import PRISMATIC, REVOLUTE, Chain, make_chain, prismati
 # [−π, π], which reach every angle once, so samplers and IK see each pose exactly once.
 CONTINUOUS_LIMITS = (-np.pi, np.pi)
 DEFAULT_SPEED = 1.0  # [rad/s or m/s] where the file gives no positive velocity limit
+
+# A chain loaded whose Jacobian has full rank (min(6, n)) at none of these many configurations,
+# uniform within the limits (fixed seed), is warned about: its dexterity index w is 0 wherever
+# it reaches (e.g. every axis parallel). Singular values below RANK_RTOL times the largest are 0.
+DEXTERITY_SAMPLES = 64
+RANK_RTOL = 1e-9
+
+log = logging.getLogger(__name__)
 
 # MuJoCo's enums as plain ints: the compiled model's arrays hold numpy integers.
 _J = mujoco.mjtJoint
@@ -60,6 +68,12 @@ def _build(joints: list[_Joint], T_base_tool0: np.ndarray, name: str) -> Chain:
     twists = [
         revolute_twist(j.axis, j.point) if j.kind == REVOLUTE else prismatic_twist(j.axis) for j in joints
     ]
+    rank = max_jacobian_rank(np.stack(twists), [j.lower for j in joints], [j.upper for j in joints])
+    if rank < min(6, len(joints)):
+        log.warning("arm %r: its Jacobian has rank %d at best over %d sampled configurations, below the %d of "
+                    "its %d joints (joint axes parallel or coupled?): the tool cannot move in every direction "
+                    "its joints promise, and the dexterity index w is 0 at every pose", name, rank,
+                    DEXTERITY_SAMPLES, min(6, len(joints)), len(joints))
     return make_chain(
         twists=np.stack(twists),
         T_base_tool0=T_base_tool0,
@@ -71,6 +85,40 @@ def _build(joints: list[_Joint], T_base_tool0: np.ndarray, name: str) -> Chain:
         velocity_limits=[j.speed for j in joints],
         name=name,
     )
+
+
+def _twist_pose(xi: np.ndarray, theta: float) -> np.ndarray:
+    """``exp(ξ̂ θ)`` ``(4, 4)`` of a unit twist ``ξ = [v, ω]`` (``ω`` unit or zero)."""
+    v, w = xi[:3], xi[3:]
+    T = np.eye(4)
+    if np.linalg.norm(w) < 0.5:  # prismatic
+        T[:3, 3] = v * theta
+        return T
+    W = np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
+    R = np.eye(3) + np.sin(theta) * W + (1 - np.cos(theta)) * W @ W  # Rodrigues
+    T[:3, :3], T[:3, 3] = R, (np.eye(3) - R) @ np.cross(w, v) + w * (w @ v) * theta
+    return T
+
+
+def max_jacobian_rank(twists: np.ndarray, lower, upper) -> int:
+    """The largest rank of the spatial Jacobian ``(6, n)`` of the chain of unit ``twists``
+    ``(n, 6)`` over :data:`DEXTERITY_SAMPLES` configurations uniform within ``lower``,
+    ``upper`` ``(n,)`` (a fixed seed); column i is ``Ad(e^{ξ₁q₁} ⋯ e^{ξᵢ₋₁qᵢ₋₁}) ξᵢ``
+    (Murray, Li & Sastry, eq. 3.54)."""
+    rng = np.random.default_rng(0)
+    best = 0
+    for q in rng.uniform(np.asarray(lower, float), np.asarray(upper, float), (DEXTERITY_SAMPLES, len(twists))):
+        T, columns = np.eye(4), []
+        for xi, theta in zip(twists, q):
+            R, p = T[:3, :3], T[:3, 3]
+            P = np.array([[0.0, -p[2], p[1]], [p[2], 0.0, -p[0]], [-p[1], p[0], 0.0]])
+            columns.append(np.concatenate([R @ xi[:3] + P @ R @ xi[3:], R @ xi[3:]]))
+            T = T @ _twist_pose(xi, theta)
+        sv = np.linalg.svd(np.stack(columns, axis=1), compute_uv=False)
+        best = max(best, int(np.sum(sv > RANK_RTOL * sv[0])))
+        if best >= min(6, len(twists)):
+            break
+    return best
 
 
 def _is_text(source) -> bool:
@@ -157,6 +205,8 @@ def strict_root(data: bytes, source: str, expected: str | None = None):
         root = etree.fromstring(data, parser=etree.XMLParser(recover=False, resolve_entities=False))
     except etree.XMLSyntaxError as err:
         raise ValueError(f"{source} is not well-formed XML: {' '.join(str(err).split())}") from None  # one line
+    if root.getroottree().docinfo.internalDTD is not None:  # entities: what another parser reads differently
+        raise ValueError(f"{source} declares a DTD (<!DOCTYPE ... [...]>: entities); a robot description takes none")
     if expected is not None and root.tag != expected:
         found = _FORMATS.get(root.tag)
         raise ValueError(f"{source} is {found + ' (<' + root.tag + '>)' if found else 'a <' + root.tag + '> file'}, "
@@ -228,12 +278,17 @@ def read_urdf(source):
     are errors that say where (:func:`strict_root`), never a lenient second try."""
     import yourdfpy  # the URDF parser; imported here, as only robot files need it
 
+    from lxml import etree
+
     data, label = _description_bytes(source, "URDF")
-    _check_urdf_tree(strict_root(data, label, "robot"), label)
-    # Well-formed bytes take yourdfpy's strict path (it recovers only from an XML error).
-    return yourdfpy.URDF.load(io.BytesIO(data), build_scene_graph=False, load_meshes=False,
-                              load_collision_meshes=False,
-                              mesh_dir=os.path.dirname(label) if label != "<text>" else "")
+    root = strict_root(data, label, "robot")
+    _check_urdf_tree(root, label)
+    # yourdfpy builds its model from this strictly parsed tree: its own loader (URDF.load)
+    # parses again and, where its parse fails, retries in recovery mode; that path is never taken.
+    etree.strip_tags(root, etree.Comment)
+    return yourdfpy.URDF(robot=yourdfpy.URDF._parse_robot(xml_element=root), build_scene_graph=False,
+                         load_meshes=False, load_collision_meshes=False,
+                         mesh_dir=os.path.dirname(label) if label != "<text>" else "")
 
 
 def urdf_path_joints(urdf, base_link: str | None, tip_link: str | None) -> tuple[list[_Joint], np.ndarray, str]:

@@ -12,11 +12,11 @@ configured stages and writes ``summary.md`` (the chain at a glance, every stage'
 
 from uvms_jax.pipeline._report import StageReport
 from uvms_jax.pipeline._report import md_table
-from uvms_jax.pipeline._run import run_pipeline
+from uvms_jax.pipeline._run import RETRY, RUN_FILES, run_pipeline
 from uvms_jax.pipeline._settings import STAGES
 from uvms_jax.pipeline._settings import HoverStageSettings
 from uvms_jax.pipeline._settings import HwStageSettings
 from uvms_jax.pipeline._settings import PipelineSettings
 from uvms_jax.pipeline._stages import docked_scene
 
-__all__ = ["STAGES", "HoverStageSettings", "HwStageSettings", "PipelineSettings", "StageReport", "docked_scene", "md_table", "run_pipeline"]
+__all__ = ["RETRY", "RUN_FILES", "STAGES", "HoverStageSettings", "HwStageSettings", "PipelineSettings", "StageReport", "docked_scene", "md_table", "run_pipeline"]

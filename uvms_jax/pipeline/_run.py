@@ -11,15 +11,21 @@ import jax
 
 from uvms_jax import plan as planning
 from uvms_jax import progress
-from uvms_jax.files import RUNNING, clear_running, mark_running, write_atomic
+from uvms_jax.files import RUNNING, clear_running, mark_running, refuse_used_folder, write_atomic
 from uvms_jax.pipeline._report import write_summary
 from uvms_jax.pipeline._settings import STAGES, PipelineSettings
 from uvms_jax.pipeline._stages import STAGE_FNS, Flow, chain
 
 log = logging.getLogger(__name__)
 
+# What a pipeline run writes into its folder (its results, and the marker it carries while it
+# runs): a folder holding any of them holds a run.
+RUN_FILES = ("results.json", "summary.md", RUNNING)
+# What a refused rerun is told to do instead (experiments/pipeline.py's options).
+RETRY = "choose another hydra.run.dir or pass --overwrite"
 
-def run_pipeline(settings: PipelineSettings, out: Path, config_text: str = "") -> dict:
+
+def run_pipeline(settings: PipelineSettings, out: Path, config_text: str = "", *, overwrite: bool = False) -> dict:
     """Run the configured stages into ``out`` (one folder per stage) and write ``summary.md``
     and ``results.json``; returns results.json's dict.
 
@@ -28,9 +34,10 @@ def run_pipeline(settings: PipelineSettings, out: Path, config_text: str = "") -
 
     The folder carries a ``RUNNING`` marker (:data:`uvms_jax.files.RUNNING`) from the start
     until results.json and summary.md are written (each atomically), so a killed run is
-    recognisable: it has the marker and no results.json (a results.json or summary.md left in
-    ``out`` by an earlier run is removed at the start). A run stopped by an exception or
-    Ctrl-C keeps the marker too, rewritten to say so: ``status`` (``interrupted`` or
+    recognisable: it has the marker and no results.json. A folder that holds an earlier run
+    (:data:`RUN_FILES`: its results or its marker) is refused, unless ``overwrite`` (then they
+    are removed at the start). A run stopped by an exception, Ctrl-C or SIGTERM keeps the
+    marker too, rewritten to say so: ``status`` (``interrupted`` or
     ``failed``), the stage it stopped in, the error, and the finished stages' results (their
     folders keep what they wrote); results.json is never written for it, so nothing reads a
     partial run as a finished one.
@@ -39,11 +46,18 @@ def run_pipeline(settings: PipelineSettings, out: Path, config_text: str = "") -
       settings: every stage's settings.
       out: the run directory.
       config_text: the config as YAML, copied into summary.md.
+      overwrite: run in a folder that holds an earlier run.
+
+    Raises:
+      UsedFolderError: ``out`` holds an earlier run and ``overwrite`` is off (one line naming
+        the files and the marker's run, :func:`uvms_jax.files.used_run_folder`); nothing written.
     """
     out = Path(out)
+    if not overwrite:
+        refuse_used_folder(out, RUN_FILES, RETRY)
     mark_running(out)
-    # A folder used before: its results are not this run's, and must not stand for it if this
-    # run stops early (it writes them anew at the end).
+    # A folder used before (overwrite): its results are not this run's, and must not stand for
+    # it if this run stops early (it writes them anew at the end).
     for name in ("results.json", "summary.md"):
         (out / name).unlink(missing_ok=True)
     done: dict = {}

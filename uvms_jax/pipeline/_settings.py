@@ -115,3 +115,8 @@ class PipelineSettings:
             raise ValueError("the hover stage needs the docking and schedule stages (a docked pose and a plan)")
         if "baseline" in self.stages and self.baseline is None:
             raise ValueError("the baseline stage needs a baseline scenario")
+        # The scenes against the scenario schema (SettingsError naming the key), before any stage.
+        if self.scenario:
+            planning.SceneSpec.from_mapping(self.scenario, "scenario")
+        if self.baseline is not None:
+            planning.SceneSpec.from_mapping(self.baseline, "baseline")

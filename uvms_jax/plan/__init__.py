@@ -8,8 +8,9 @@ as the thesis's test cage (thesis ch. 4–5).
   figures: :func:`plot_ee_paths`, :func:`plot_plan_joints`, :func:`render_frame`, :func:`render_frames`;
   video of an executed run: :func:`render_run_video` → :class:`VideoInfo` (MP4, offscreen
   MuJoCo, camera :func:`scene_camera`);
-* scene: :class:`SceneSpec` (from ``configs/scenario/*.yaml``; extra :class:`Obstacle` s —
-  box, cylinder, sphere, capsule, mesh file), :func:`scenario_robot` (the arm a scenario names), :func:`build_scene` (robot, spec) →
+* scene: :class:`SceneSpec` (from ``configs/scenario/*.yaml``, checked by :func:`check_scenario`
+  against the scenario schema, docs/scenarios.md; extra :class:`Obstacle` s —
+  box, cylinder, sphere, capsule, mesh file), :func:`scenario_robot` (the arm a scenario names; :func:`check_start_q`), :func:`build_scene` (robot, spec) →
   :class:`Scene` (MuJoCo model, object and base poses, grasp; the arm's base pose a parameter), :class:`Context`;
 * collision: :class:`CollisionChecker` (MuJoCo, the reference) — ``is_valid``, ``clearance``,
   their batched versions, ``path_is_valid``, ``min_clearance`` (exact, MuJoCo only where the sphere bounds leave it open); :func:`densify`; :class:`SphereChecker` (the arm
@@ -61,6 +62,8 @@ from uvms_jax.plan._spec import SceneSpec
 from uvms_jax.plan._spec import MOUNT_KEYS
 from uvms_jax.plan._scene import build_scene
 from uvms_jax.plan._spec import scenario_robot
+from uvms_jax.plan._spec import check_start_q
+from uvms_jax.plan._schema import check_scenario
 from uvms_jax.plan._settings import CHECKERS
 from uvms_jax.plan._settings import IkSettings
 from uvms_jax.plan._settings import PlanJsonSettings

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import dataclasses
 import xml.etree.ElementTree as ET
+from xml.sax.saxutils import quoteattr  # file names in XML: quoted and escaped
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -266,7 +267,8 @@ class Scene:
                 world.append(f'<geom name="{o.name}" type="capsule" size="{o.dims[0]!r} {o.dims[1] / 2!r}" {pose} {bits}/>')
             elif o.shape == "mesh":  # MuJoCo reads the file and collides with its convex hull
                 mname = f"m_obstacle_{o.name}"
-                assets.append(f'<mesh name="{mname}" file="{Path(o.file).resolve()}" scale="{_fmt([o.scale] * 3)}"/>')
+                assets.append(f'<mesh name="{mname}" file={quoteattr(str(Path(o.file).resolve()))} '
+                              f'scale="{_fmt([o.scale] * 3)}"/>')
                 world.append(f'<geom name="{o.name}" type="mesh" mesh="{mname}" {pose} {bits}/>')
             else:  # boxes and cylinders as convex meshes (see the module docstring)
                 mname = mesh(f"m_obstacle_{o.name}", o.hull_vertices())

@@ -18,8 +18,10 @@ import numpy as np
 
 from uvms_jax import frames
 from uvms_jax import robot as robots
+from uvms_jax.plan._schema import MOUNT_KEYS, check_scenario, node_numbers
+from uvms_jax.settings import SettingsError
 
-__all__ = ["MOUNT_KEYS", "Base", "Box", "Item", "Obstacle", "SceneSpec", "box_vertices", "scenario_robot"]
+__all__ = ["MOUNT_KEYS", "Base", "Box", "Item", "Obstacle", "SceneSpec", "box_vertices", "check_start_q", "scenario_robot"]
 
 _CYLINDER_SIDES = 32  # inscribed polygon: radius error r(1 - cos(π/32)) ≈ 0.2 mm for r = 40 mm
 
@@ -158,23 +160,11 @@ class Obstacle:
                 raise ValueError(f"obstacle {self.name!r}: cannot read mesh file {self.file!r} (no such file)")
 
     @staticmethod
-    def from_mapping(m: Mapping[str, Any]) -> "Obstacle":
-        shape = str(m.get("shape"))
-        if shape not in _OBSTACLE_DIMS:
-            raise ValueError(f"obstacle {m.get('name')!r}: unknown shape {shape!r} ({', '.join(_OBSTACLE_DIMS)})")
-        known = {"name", "shape", "pos", "rpy", "file", "scale", *_OBSTACLE_DIMS[shape]}
-        extra = sorted(set(m) - known)
-        if extra:
-            raise ValueError(f"obstacle {m.get('name')!r}: unknown keys {extra} for a {shape} (keys: {sorted(known)})")
-        dims: list[float] = []
-        for key in _OBSTACLE_DIMS[shape]:
-            if key not in m:
-                raise ValueError(f"obstacle {m.get('name')!r}: a {shape} needs {key!r}")
-            v = m[key]
-            dims += [float(x) for x in v] if isinstance(v, (list, tuple)) else [float(v)]
-        return Obstacle(str(m["name"]), shape, tuple(float(x) for x in m["pos"]),
-                        tuple(float(x) for x in m.get("rpy", (0.0, 0.0, 0.0))), tuple(dims),
-                        str(m.get("file", "")), float(m.get("scale", 1.0)))
+    def from_keys(keys) -> "Obstacle":
+        """From an obstacle's checked scenario keys (:class:`uvms_jax.plan._schema.ObstacleKeys`)."""
+        dims = [float(x) for k in _OBSTACLE_DIMS[keys.shape] for x in (keys.size if k == "size" else [getattr(keys, k)])]
+        return Obstacle(keys.name, keys.shape, keys.pos, keys.rpy, tuple(dims), keys.file or "",
+                        1.0 if keys.scale is None else keys.scale)
 
     @property
     def T_world(self) -> np.ndarray:
@@ -246,52 +236,36 @@ class SceneSpec:
                                    mount_rpy=tuple(float(v) for v in rpy))
 
     @staticmethod
-    def from_mapping(m: Mapping[str, Any]) -> "SceneSpec":
-        """Build from the scenario mapping (a plain dict, e.g. ``OmegaConf.to_container(cfg)``)."""
-        t = lambda x: tuple(float(v) for v in x)  # noqa: E731
-        objects = []
-        # Nodes: the given numbers, or by default the objects 1 … k and the bases k + 1 … in the
-        # file's order (the task graph's start is 0, its goal one past the last base).
-        auto = {str(x["name"]): i + 1 for i, x in enumerate([*m["objects"], *m["bases"]])}
-        node_of = lambda x: int(x["node"]) if x.get("node") is not None else auto[str(x["name"])]  # noqa: E731
-        names = {str(o["name"]): node_of(o) for o in m["objects"]}
+    def from_mapping(m: Mapping[str, Any], where: str = "scenario") -> "SceneSpec":
+        """Build from the scenario mapping (a plain dict, e.g. ``OmegaConf.to_container(cfg)``),
+        checked against the scenario schema first (:func:`uvms_jax.plan.check_scenario`).
 
-        def fits(b) -> tuple[int, ...]:  # objects by name or node number
-            unknown = [f for f in b["fits"] if isinstance(f, str) and f not in names]
-            if unknown:
-                raise ValueError(f"base {b.get('name')!r} fits unknown objects {unknown} (objects: {sorted(names)})")
-            return tuple(names[f] if isinstance(f, str) else int(f) for f in b["fits"])
-
-        for o in m["objects"]:
-            dims = {"box": lambda: o["size"], "cylinder": lambda: (o["radius"], o["height"]),
-                    "hex_prism": lambda: (o["edge"], o["height"])}
-            if o["shape"] not in dims:
-                raise ValueError(f"object {o.get('name')!r}: unknown shape {o['shape']!r}")
-            objects.append(Item(node_of(o), str(o["name"]), str(o["shape"]), t(dims[o["shape"]]()),
-                                str(o["table"]), t(o["at"]), float(o.get("yaw", 0.0))))
-        grasp = m.get("grasp", {})
-        cage = m.get("cage")
+        Raises:
+          SettingsError: every bad key, named by its key path under ``where``, in one message.
+        """
+        keys = check_scenario(m, where)
+        nodes = node_numbers(keys)
+        objects = {o.name: nodes[o.name] for o in keys.objects}
+        arm, cage = keys.arm, keys.cage
         spec = SceneSpec(
-            cage_size=None if cage is None else t(cage["size"]),
-            profile=0.0 if cage is None else float(cage["profile"]),
-            ceiling_thickness=0.0 if cage is None else float(cage["ceiling_thickness"]),
-            mount_pos=t(m["arm"]["mount_pos"]),
-            mount_rpy=t(m["arm"]["mount_rpy"]),
-            mount_size=t(m["arm"]["mount_size"]),
-            jaws_open=float(m["arm"]["jaws_open"]),
-            tables=tuple(Box(str(b["name"]), t(b["pos"]), t(b["size"]), t(b.get("rpy", (0, 0, 0)))) for b in m["tables"]),
-            objects=tuple(objects),
-            bases=tuple(Base(node_of(b), str(b["name"]), t(b["size"]), str(b["table"]), t(b["at"]),
-                             float(b.get("yaw", 0.0)), fits(b)) for b in m["bases"]),
-            object_density=float(m["object_density"]),
-            water_density=float(m["water_density"]),
-            gravity=float(m["gravity"]),
-            start_q=None if m.get("start_q") is None else t(m["start_q"]),
-            grasp_standoff=float(grasp.get("standoff", 0.05)),
-            approach=float(grasp.get("approach", 0.08)),
-            obstacles=tuple(Obstacle.from_mapping(o) for o in m.get("obstacles", ()) or ()),
+            cage_size=None if cage is None else cage.size,
+            profile=0.0 if cage is None else cage.profile,
+            ceiling_thickness=0.0 if cage is None else cage.ceiling_thickness,
+            mount_pos=_floats(arm["mount_pos"]), mount_rpy=_floats(arm["mount_rpy"]),
+            mount_size=_floats(arm["mount_size"]), jaws_open=float(arm["jaws_open"]),
+            tables=tuple(Box(b.name, b.pos, b.size, b.rpy) for b in keys.tables),
+            objects=tuple(Item(nodes[o.name], o.name, o.shape, _object_dims(o), o.table, o.at, o.yaw)
+                          for o in keys.objects),
+            bases=tuple(Base(nodes[b.name], b.name, b.size, b.table, b.at, b.yaw,
+                             tuple(objects[f] if isinstance(f, str) else f for f in b.fits)) for b in keys.bases),
+            object_density=keys.object_density, water_density=keys.water_density, gravity=keys.gravity,
+            start_q=keys.start_q, grasp_standoff=keys.grasp.standoff, approach=keys.grasp.approach,
+            obstacles=tuple(Obstacle.from_keys(o) for o in keys.obstacles),
         )
-        spec.validate()
+        try:
+            spec.validate()
+        except ValueError as e:
+            raise SettingsError(f"{where}: {e}") from None
         return spec
 
     def validate(self) -> None:
@@ -318,20 +292,52 @@ class SceneSpec:
             raise ValueError(f"start_q must be finite joint values, got {self.start_q}")
 
 
+def _floats(values) -> tuple[float, ...]:
+    return tuple(float(v) for v in values)
+
+
+def _object_dims(o) -> tuple[float, ...]:
+    """An object's dims (:class:`Item`) from its schema keys."""
+    return {"box": lambda: o.size, "cylinder": lambda: (o.radius, o.height),
+            "hex_prism": lambda: (o.edge, o.height)}[o.shape]()
+
+
 def box_vertices(size) -> np.ndarray:
     h = np.asarray(size, dtype=float) / 2.0
     return np.array([[sx * h[0], sy * h[1], sz * h[2]] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
 
 
-#: Keys of a scenario's ``arm`` mapping that place the arm in the scene; the others are the
-#: arm's own settings (:func:`uvms_jax.robot.robot_from_config`: ``card``, ``description``, …).
-MOUNT_KEYS = ("mount_pos", "mount_rpy", "mount_size", "jaws_open")
-
-
-def scenario_robot(scenario: Mapping[str, Any]) -> robots.Robot:
+def scenario_robot(scenario: Mapping[str, Any], where: str = "scenario") -> robots.Robot:
     """The arm a scenario names: its ``arm`` mapping less the mount keys (:data:`MOUNT_KEYS`),
-    e.g. ``{card: NAME}`` (a shipped arm) or ``{description: my_arm.urdf, tip: tool0, link_radius: 0.05}``."""
+    e.g. ``{card: NAME}`` (a shipped arm) or ``{description: my_arm.urdf, tip: tool0, link_radius: 0.05}``;
+    the scenario's ``start_q``, if any, is checked against it (:func:`check_start_q`).
+
+    Raises:
+      SettingsError: no ``arm`` mapping, an arm that does not load (the loader's reason), or a
+        ``start_q`` that does not fit it; named by the key path under ``where``.
+    """
     arm = scenario.get("arm")
     if not isinstance(arm, Mapping):
-        raise ValueError("the scenario needs an `arm` mapping: the arm (card or description) and its mount")
-    return robots.robot_from_config({k: v for k, v in arm.items() if k not in MOUNT_KEYS})
+        raise SettingsError(f"{where}.arm: expected a mapping: the arm (card or description) and its mount")
+    try:
+        robot = robots.robot_from_config({k: v for k, v in arm.items() if k not in MOUNT_KEYS})
+    except ValueError as e:
+        raise SettingsError(f"{where}.arm: {' '.join(str(e).split())}") from None
+    check_start_q(robot, scenario.get("start_q"), f"{where}.start_q")
+    return robot
+
+
+def check_start_q(robot: robots.Robot, start_q: Any, where: str = "scenario.start_q") -> None:
+    """Raise :class:`SettingsError` unless ``start_q`` is None or one finite angle per joint of
+    ``robot`` [rad], each within its joint's limits; ``where`` is its key path."""
+    if start_q is None:
+        return
+    q = np.asarray(start_q, dtype=float)
+    if q.shape != (robot.n_joints,):
+        raise SettingsError(f"{where}: expected {robot.n_joints} joint angles {list(robot.joint_names)} [rad], "
+                            f"got {list(start_q)}")
+    lo, hi = np.asarray(robot.lower, float), np.asarray(robot.upper, float)
+    bad = [f"{where}[{i}] ({robot.joint_names[i]}): {q[i]:g} is outside [{lo[i]:g}, {hi[i]:g}]"
+           for i in range(len(q)) if not lo[i] <= q[i] <= hi[i]]
+    if bad:
+        raise SettingsError("; ".join(bad) + " rad (the arm's joint limits)")

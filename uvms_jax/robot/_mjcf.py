@@ -15,6 +15,7 @@ the tool's x axis, reaching forward along its z axis.
 from __future__ import annotations
 
 import itertools
+from xml.sax.saxutils import quoteattr  # file names in XML: quoted and escaped
 
 import mujoco
 import numpy as np
@@ -78,7 +79,7 @@ def mjcf_assets(robot: Robot) -> list[str]:
     assets = []
     for s, name in zip(robot.shapes, _shape_names(robot)):
         if s.kind == "mesh" and s.file:
-            assets.append(f'<mesh name="m_{name}" file="{s.file}" scale="{_fmt(s.scale)}"/>')
+            assets.append(f'<mesh name="m_{name}" file={quoteattr(s.file)} scale="{_fmt(s.scale)}"/>')
         elif s.kind == "mesh":
             assets.append(f'<mesh name="m_{name}" vertex="{_fmt(s.vertices)}"/>')
         elif s.kind in ("box", "cylinder"):
