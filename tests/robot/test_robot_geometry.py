@@ -269,27 +269,30 @@ def test_capsules_on_request_and_for_the_bravo7(tmp_path):
 
 @pytest.fixture(scope="module")
 def panda():
-    return robot.load_robot(PANDA, tip="panda_hand_tcp", link_radius=0.05,
-                            gripper={"joint": "jaws", "lower": 0.0, "upper": 0.1, "velocity": 0.1})
+    """The Panda with its own hand (the gripper joint of its URDF)."""
+    return robot.load_robot(PANDA, tip="panda_hand_tcp", link_radius=0.05, gripper="panda_finger_joint1",
+                            gripper_velocity=0.1)
 
 
 def test_panda_loads_its_stl_meshes(panda):
     links = [f"panda_link{i}" for i in range(8)] + ["panda_hand"]
-    assert [s.link for s in panda.shapes] == links  # the fingers, moved by their own joints, left out
+    assert [s.link for s in panda.shapes] == links  # the fingers are the hand's (Robot.fingers)
     assert all(s.kind == "mesh" and Path(s.file).is_file() and s.file.endswith(".stl") for s in panda.shapes)
     assert all(Path(s.file).is_relative_to(Path(ROBOTS).resolve()) for s in panda.shapes)  # package://example-robot-data
+    assert [len(f.shapes) for f in panda.fingers] == [4, 4]  # screw mount, sledge, diagonal, rubber tip
     pairs = robot.self_collision_pairs(panda, n_samples=50)
     assert len(pairs["adjacent"]) == 7 and ("panda_link0", "panda_link1") in pairs["adjacent"]
-    sim = sim_spec(panda).compile()  # the simulated arm: the same meshes, as assets
-    assert sim.nmesh == 9 and all(sim.body_mass[1:] > 0)
+    sim = sim_spec(panda).compile()  # the simulated arm: the same meshes (fingers' boxes as convex meshes)
+    assert sim.nmesh == 9 + 8 and all(sim.body_mass[1:] > 0)
 
 
 def test_panda_scene_and_sphere_checker(panda):
-    scene = build_scene(panda, {**SCENARIO, "start_q": None})
+    arm = {**SCENARIO["arm"], "jaws_open": 0.04}  # the Panda's fingers slide 4 cm each
+    scene = build_scene(panda, {**SCENARIO, "arm": arm, "start_q": None})
     m = scene.model
     arm_meshes = [g for g in range(m.ngeom) if m.geom(g).name.startswith("geom_panda")
                   or m.geom(g).name.startswith("geom_base")]
-    assert len(arm_meshes) == 9 and all(m.geom_type[g] == mujoco.mjtGeom.mjGEOM_MESH for g in arm_meshes)
+    assert len(arm_meshes) == 9 + 8 and all(m.geom_type[g] == mujoco.mjtGeom.mjGEOM_MESH for g in arm_meshes)
     reference = CollisionChecker(scene)
     ctx = Context()
     assert reference.is_valid(scene.start_q, ctx)
