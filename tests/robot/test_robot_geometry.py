@@ -269,27 +269,30 @@ def test_capsules_on_request_and_for_the_bravo7(tmp_path):
 
 @pytest.fixture(scope="module")
 def panda():
-    return robot.load_robot(PANDA, tip="panda_hand_tcp", link_radius=0.05,
-                            gripper={"joint": "jaws", "lower": 0.0, "upper": 0.1, "velocity": 0.1})
+    """The Panda with its own hand (the gripper joint of its URDF)."""
+    return robot.load_robot(PANDA, tip="panda_hand_tcp", link_radius=0.05, gripper="panda_finger_joint1",
+                            gripper_velocity=0.1)
 
 
 def test_panda_loads_its_stl_meshes(panda):
     links = [f"panda_link{i}" for i in range(8)] + ["panda_hand"]
-    assert [s.link for s in panda.shapes] == links  # the fingers, moved by their own joints, left out
+    assert [s.link for s in panda.shapes] == links  # the fingers are the hand's (Robot.fingers)
     assert all(s.kind == "mesh" and Path(s.file).is_file() and s.file.endswith(".stl") for s in panda.shapes)
     assert all(Path(s.file).is_relative_to(Path(ROBOTS).resolve()) for s in panda.shapes)  # package://example-robot-data
+    assert [len(f.shapes) for f in panda.fingers] == [4, 4]  # screw mount, sledge, diagonal, rubber tip
     pairs = robot.self_collision_pairs(panda, n_samples=50)
     assert len(pairs["adjacent"]) == 7 and ("panda_link0", "panda_link1") in pairs["adjacent"]
-    sim = sim_spec(panda).compile()  # the simulated arm: the same meshes, as assets
-    assert sim.nmesh == 9 and all(sim.body_mass[1:] > 0)
+    sim = sim_spec(panda).compile()  # the simulated arm: the same meshes (fingers' boxes as convex meshes)
+    assert sim.nmesh == 9 + 8 and all(sim.body_mass[1:] > 0)
 
 
 def test_panda_scene_and_sphere_checker(panda):
-    scene = build_scene(panda, {**SCENARIO, "start_q": None})
+    arm = {**SCENARIO["arm"], "jaws_open": 0.04}  # the Panda's fingers slide 4 cm each
+    scene = build_scene(panda, {**SCENARIO, "arm": arm, "start_q": None})
     m = scene.model
     arm_meshes = [g for g in range(m.ngeom) if m.geom(g).name.startswith("geom_panda")
                   or m.geom(g).name.startswith("geom_base")]
-    assert len(arm_meshes) == 9 and all(m.geom_type[g] == mujoco.mjtGeom.mjGEOM_MESH for g in arm_meshes)
+    assert len(arm_meshes) == 9 + 8 and all(m.geom_type[g] == mujoco.mjtGeom.mjGEOM_MESH for g in arm_meshes)
     reference = CollisionChecker(scene)
     ctx = Context()
     assert reference.is_valid(scene.start_q, ctx)
@@ -304,3 +307,66 @@ def test_panda_scene_and_sphere_checker(panda):
     for q0, q1 in zip(starts[:-1], starts[1:]):
         q1 = q0 + 0.2 * (q1 - q0)
         assert fast.motion_is_valid(q0, q1, ctx, 0.02) == reference.path_is_valid(np.stack([q0, q1]), ctx, 0.02)
+
+
+def _yourdfpy_panda():
+    import yourdfpy
+
+    return yourdfpy.URDF.load(str(PANDA), load_meshes=False, build_collision_scene_graph=False)
+
+
+def _box_corners(size, T) -> np.ndarray:
+    corners = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]) * np.asarray(size) / 2
+    return corners @ T[:3, :3].T + T[:3, 3]
+
+
+def test_panda_fingers_load_from_its_urdf(panda):
+    assert [(f.link, f.joint, f.body, f.multiplier, f.offset) for f in panda.fingers] == [
+        ("panda_leftfinger", "panda_finger_joint1", 6, 1.0, 0.0), ("panda_rightfinger", "panda_finger_joint2", 6, 1.0, 0.0)]
+    assert (panda.gripper.joint, panda.gripper.lower, panda.gripper.upper) == ("panda_finger_joint1", 0.0, 0.04)
+    T_link7_hand = _yourdfpy_panda().get_transform("panda_hand", "panda_link7")
+    for f, sign in zip(panda.fingers, (1, -1)):  # the URDF's axes: ±y of the hand
+        np.testing.assert_allclose(T_link7_hand[:3, :3].T @ f.axis, [0, sign, 0], atol=ATOL)
+        assert [(s.kind, s.link) for s in f.shapes] == [("box", f.link)] * 4 and all(s.body == 6 for s in f.shapes)
+    # Settings that name a gripper joint the file lacks keep the card's finger boxes.
+    jaws = robot.load_robot(PANDA, tip="panda_hand_tcp", link_radius=0.05,
+                            gripper={"joint": "jaws", "lower": 0.0, "upper": 0.1, "velocity": 0.1})
+    assert jaws.fingers == ()
+    with pytest.raises(ValueError, match="outside the gripper's limits"):
+        robot.robot_mjcf(panda, jaws_open=0.05)
+
+
+def test_panda_fingers_sit_where_yourdfpy_puts_them(panda):
+    """Oracle: yourdfpy's forward kinematics of the URDF (its mimic joint included)."""
+    urdf = _yourdfpy_panda()
+    link_of = {link.name: link for link in urdf.robot.links}
+    rng = np.random.default_rng(3)
+    sim = sim_spec(panda, dynamics=False).compile()
+    sim_data = mujoco.MjData(sim)
+    for opening in (0.0, 0.013, 0.04):
+        model, data = _model_at(panda, opening)
+        for q in rng.uniform(panda.lower, panda.upper, (3, panda.n_joints)):
+            data.qpos[:] = q
+            mujoco.mj_kinematics(model, data)
+            urdf.update_cfg({**dict(zip(panda.joint_names, q)), "panda_finger_joint1": opening})
+            for name, v in zip(panda.joint_names + ("panda_finger_joint1", "panda_finger_joint2"), (*q, opening, opening)):
+                sim_data.qpos[sim.joint(name).qposadr[0]] = v  # the simulated arm: fingers on their slide joints
+            mujoco.mj_kinematics(sim, sim_data)
+            for f in panda.fingers:
+                T_link = urdf.get_transform(f.link, "panda_link0")
+                for k, c in enumerate(link_of[f.link].collisions):
+                    expected = _box_corners(c.geometry.box.size, T_link @ c.origin)
+                    for m, d in ((model, data), (sim, sim_data)):
+                        assert _same_points(_world_vertices(m, d, f"geom_{f.joint}_{k}"), expected, 1e-6), (f.link, k)
+    # The mimic follows the gripper joint in the simulation (a joint equality).
+    mujoco.mj_resetData(sim, sim_data)
+    sim_data.qpos[sim.joint("panda_finger_joint1").qposadr[0]] = 0.03
+    for _ in range(500):
+        mujoco.mj_step(sim, sim_data)
+    q1, q2 = (sim_data.qpos[sim.joint(j).qposadr[0]] for j in ("panda_finger_joint1", "panda_finger_joint2"))
+    assert q2 == pytest.approx(q1, abs=1e-3)  # soft constraint: within a millimetre
+
+
+def _model_at(arm: robot.Robot, opening: float):
+    model = mujoco.MjModel.from_xml_string(robot.robot_mjcf(arm, jaws_open=opening))
+    return model, mujoco.MjData(model)

@@ -3,7 +3,8 @@
 The bodies, joints, capsules and the tool site are :func:`uvms_jax.robot.mjcf_body`'s (with the
 robot's mass properties where ``dynamics`` is on); this module adds what only the simulator
 needs: gravity along the world's -z turned into the base frame (:func:`world_up`), no contacts,
-rotor inertia and damping on every joint, the jaws as one slide joint at the tool frame, and two
+rotor inertia and damping on every joint, the jaws (the description's fingers on their slide
+joints, the mimics tied to the gripper joint; or one slide joint at the tool frame), and two
 actuators per joint — a velocity servo ``v_<joint>`` and an integral-torque motor ``i_<joint>``
 (:class:`~uvms_jax.hw.SimArm` drives both).
 """
@@ -86,7 +87,7 @@ def sim_spec(robot, kv: float = KV, physics_dt: float = SimConfig.physics_dt, dy
     xml = (f'<mujoco model="{robot.name}_hw_sim"><compiler angle="radian"/>'
            '<default><geom contype="0" conaffinity="0" density="1000"/></default>'
            f"<asset>{''.join(mjcf_assets(robot))}</asset>"
-           f"<worldbody>{mjcf_body(robot, inertial=inertial)}</worldbody></mujoco>")
+           f"<worldbody>{mjcf_body(robot, inertial=inertial, finger_joints=bool(robot.fingers))}</worldbody></mujoco>")
     spec = mujoco.MjSpec.from_string(xml)
     spec.option.timestep = physics_dt
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
@@ -98,6 +99,10 @@ def add_drives(spec: mujoco.MjSpec, robot, kv: float = KV, dynamics: bool = True
     """Add what the simulated device needs to the model ``spec`` holding ``robot``'s body tree
     (as :func:`uvms_jax.robot.mjcf_body` names it; anywhere in the world, e.g. under a vehicle):
     the jaws' slide joint, and a velocity actuator and an integral-torque motor on every joint.
+    Where the body tree holds the description's fingers on their joints (``mjcf_body(...,
+    finger_joints=True)``), the gripper joint's finger is the jaws and each mimic follows it by
+    a joint equality (``finger = multiplier · opening + offset``); otherwise the jaws are a
+    slide body at the tool frame.
 
     Bodies without mass properties (all of them without ``dynamics``, or for an arm whose
     description has none, e.g. the Reach Alpha 5) are gravity compensated: such an arm is
@@ -123,15 +128,36 @@ def add_drives(spec: mujoco.MjSpec, robot, kv: float = KV, dynamics: bool = True
         joint.range = [j.lower, j.upper]
         joint.armature = _HINGE_ARMATURE
         joint.damping[0] = _HINGE_DAMPING  # [linear, (polynomial terms)]
-    tool = spec.site(TOOL_SITE)
     jaws_spec = specs[-1]
-    jaws = spec.body(robot.link_names[-1]).add_body(name=JAWS_BODY, pos=tool.pos, quat=tool.quat, gravcomp=1.0)
-    jaws.add_joint(name=jaws_spec.name, type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[1.0, 0.0, 0.0],
-                   range=[jaws_spec.lower * _MM, jaws_spec.upper * _MM], limited=mujoco.mjtLimited.mjLIMITED_TRUE,
-                   armature=_JAWS_ARMATURE, damping=_JAWS_DAMPING)
-    jaws.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=_JAWS_HALF_SIZE, mass=_JAWS_MASS)
+    if robot.fingers and spec.joint(jaws_spec.name) is not None:
+        _tie_fingers(spec, robot, jaws_spec)
+    else:
+        tool = spec.site(TOOL_SITE)
+        jaws = spec.body(robot.link_names[-1]).add_body(name=JAWS_BODY, pos=tool.pos, quat=tool.quat, gravcomp=1.0)
+        jaws.add_joint(name=jaws_spec.name, type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[1.0, 0.0, 0.0],
+                       range=[jaws_spec.lower * _MM, jaws_spec.upper * _MM], limited=mujoco.mjtLimited.mjLIMITED_TRUE,
+                       armature=_JAWS_ARMATURE, damping=_JAWS_DAMPING)
+        jaws.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=_JAWS_HALF_SIZE, mass=_JAWS_MASS)
     for j in specs:
         act = spec.add_actuator(name=f"v_{j.name}", target=j.name, trntype=mujoco.mjtTrn.mjTRN_JOINT)
         act.set_to_velocity(kv=kv)
         spec.add_actuator(name=f"i_{j.name}", target=j.name, trntype=mujoco.mjtTrn.mjTRN_JOINT)
     return spec
+
+
+def _tie_fingers(spec: mujoco.MjSpec, robot, jaws_spec) -> None:
+    """The description's fingers as the jaws: the gripper joint driven (the hardware path's
+    limits, the device's rotor inertia and damping), every other finger tied to it."""
+    import mujoco
+
+    for f in robot.fingers:
+        spec.body(f.link).gravcomp = 1.0
+        joint = spec.joint(f.joint)
+        joint.armature = _JAWS_ARMATURE
+        joint.damping[0] = _JAWS_DAMPING
+        if f.joint == jaws_spec.name:
+            joint.range = [jaws_spec.lower * _MM, jaws_spec.upper * _MM]
+            continue
+        tie = spec.add_equality(type=mujoco.mjtEq.mjEQ_JOINT, objtype=mujoco.mjtObj.mjOBJ_JOINT, name1=f.joint,
+                                name2=jaws_spec.name)
+        tie.data[:5] = [f.offset, f.multiplier, 0.0, 0.0, 0.0]  # joint1 = offset + multiplier · joint2

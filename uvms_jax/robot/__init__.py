@@ -3,8 +3,9 @@
 ``load_robot`` reads a URDF or MJCF description (the format told by its content) into a
 :class:`Robot`: the kinematic chain with its limits, the bodies' mass properties, the
 collision shapes of the description (:class:`Shape`; capsules along the links where it has
-none or they cannot be read), the gripper
-and, for a real arm, its hardware profile. An arm card (YAML: the description file and what no
+none or they cannot be read), the gripper and its fingers (:class:`Finger`, where the description
+has a hand) and, for a real arm, its hardware profile. ``collision_spheres`` fits few spheres to
+that collision model (:class:`RobotSpheres`) for a sphere collision checker. An arm card (YAML: the description file and what no
 description format holds) names the rest: ``load_arm("bravo7")`` loads a shipped card
 (:func:`shipped_arms`), ``robot_from_config`` a card with overrides or settings alone. ``mjcf_body`` (with ``mjcf_assets``, the meshes its geoms use) builds the one MuJoCo model of the arm that the
 planning scene and the simulated arm both use; ``self_collision_pairs`` finds the link pairs
@@ -21,13 +22,17 @@ from uvms_jax.robot._load import shipped_arms
 from uvms_jax.robot._mjcf import TOOL_SITE
 from uvms_jax.robot._mjcf import base_body
 from uvms_jax.robot._mjcf import geom_name
+from uvms_jax.robot._mjcf import link_capsules
 from uvms_jax.robot._mjcf import mjcf_assets
 from uvms_jax.robot._mjcf import mjcf_body
 from uvms_jax.robot._mjcf import robot_mjcf
 from uvms_jax.robot._mjcf import self_collision_pairs
 from uvms_jax.robot._model import BASE
 from uvms_jax.robot._model import BodyInertial
+from uvms_jax.robot._model import Finger
 from uvms_jax.robot._model import Gripper
 from uvms_jax.robot._model import Hardware
 from uvms_jax.robot._model import Robot
 from uvms_jax.robot._model import Shape
+from uvms_jax.robot._spheres import RobotSpheres
+from uvms_jax.robot._spheres import collision_spheres

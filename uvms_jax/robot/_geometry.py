@@ -5,8 +5,12 @@ MJCF collision geoms (``contype`` or ``conaffinity`` not 0: box, cylinder, capsu
 ellipsoid as its bounding box, mesh) are folded into the moving body they are fixed to, as the
 inertials are (:mod:`uvms_jax.robot._load`): body ``-1`` the base link, ``i`` the link moved by
 joint ``i``, poses at ``q = 0`` in that body's frame (``chain.T_base_joint0[i]``). Fixed links
-are folded; links moved by a joint off the chain (a gripper's fingers, whose opening the
-:class:`~uvms_jax.robot.Gripper`'s finger boxes stand for) are left out.
+are folded. The hand: the link the gripper joint moves and those moved by its mimics (URDF
+``<mimic>``, MJCF ``<equality><joint>`` with a linear polynomial), each a prismatic/slide joint
+hanging from a body of the arm, are the robot's fingers (:class:`~uvms_jax.robot.Finger`), their
+shapes (and those of links fixed to them) in the arm body's frame at finger joint value 0; where
+the description has none, or the arm is capsules, the :class:`~uvms_jax.robot.Gripper`'s finger
+boxes stand for them. Other links moved by joints off the chain are left out.
 
 Mesh files are found relative to the description file, as absolute paths (``file://`` too), or
 as ``package://NAME/rest``: the nearest ancestor folder of the description named ``NAME``, then
@@ -170,46 +174,140 @@ def fixed_to(name: str, parent_of: Mapping[str, str], bodies: Mapping[str, int],
     return bodies[name]
 
 
+class _NoHand(Exception):
+    """The description's fingers cannot be used (the message says why): the finger boxes stand for them."""
+
+
+def _unit(v) -> tuple[float, float, float]:
+    v = np.asarray(v, dtype=float)
+    return tuple(float(x) for x in v / np.linalg.norm(v))
+
+
+def _members(fingers: list[dict], parent_of: Mapping[str, str], moves: Mapping[str, bool],
+             names) -> dict[str, int]:
+    """Link/body name → finger index, for each finger's link and those fixed below it."""
+    own = {f["link"]: k for k, f in enumerate(fingers)}
+    members = {}
+    for name in names:
+        k = fixed_to(name, parent_of, own, moves)
+        if k is not None:
+            members[name] = k
+    return members
+
+
+def _finger(link: str, joint: str, parent: str, axis, multiplier, offset, parent_of, moves, bodies, frames,
+            body_frames) -> dict:
+    body = fixed_to(parent, parent_of, bodies, moves)
+    if body is None or link not in frames:
+        raise _NoHand(f"finger {link!r} does not hang from a body of the arm (its parent is {parent!r})")
+    R = (np.linalg.inv(body_frames[body]) @ frames[link])[:3, :3]
+    return {"link": link, "joint": joint, "body": body, "axis": _unit(R @ np.asarray(axis, float)),
+            "multiplier": float(multiplier), "offset": float(offset)}
+
+
+def _urdf_fingers(robot, gripper: str | None, parent_of, moves, bodies, frames, body_frames) -> list[dict]:
+    """The fingers (:class:`~uvms_jax.robot.Finger` fields, no shapes) of the URDF's gripper joint."""
+    if gripper is None:
+        return []
+    joints = [j for j in robot.joints if j.name == gripper]
+    joints += [j for j in robot.joints if j.mimic is not None and j.mimic.joint == gripper]
+    fingers = []
+    for j in joints:
+        if j.type != "prismatic":
+            raise _NoHand(f"joint {j.name!r} mimics the gripper joint but is {j.type}, not prismatic")
+        mult, off = (1.0, 0.0) if j.mimic is None else (
+            1.0 if j.mimic.multiplier is None else j.mimic.multiplier, j.mimic.offset or 0.0)
+        axis = (1.0, 0.0, 0.0) if j.axis is None else j.axis
+        fingers.append(_finger(j.child, j.name, j.parent, axis, mult, off, parent_of, moves, bodies, frames,
+                               body_frames))
+    return fingers
+
+
 def _urdf_shapes(urdf, folder: Path | None, bodies: Mapping[str, int], frames: Mapping[str, np.ndarray],
-                 body_frames: Mapping[int, np.ndarray]) -> tuple[list[Shape], list[str]]:
+                 body_frames: Mapping[int, np.ndarray], gripper: str | None = None
+                 ) -> tuple[list[Shape], list[dict], list[str]]:
     robot = urdf.robot
     parent_of = {j.child: j.parent for j in robot.joints}
     moves = {j.child: j.type != "fixed" for j in robot.joints}
+    try:
+        fingers = _urdf_fingers(robot, gripper, parent_of, moves, bodies, frames, body_frames)
+    except _NoHand as why:
+        log.info("arm %s: the gripper's finger boxes stand for its fingers: %s", robot.name, why)
+        fingers = []
+    member = _members(fingers, parent_of, moves, [link.name for link in robot.links])
     shapes, off_chain = [], []
+    for f in fingers:
+        f["shapes"] = []
     for link in robot.links:
         if not link.collisions:
             continue
-        body = fixed_to(link.name, parent_of, bodies, moves)
+        k = member.get(link.name)
+        body = fixed_to(link.name, parent_of, bodies, moves) if k is None else fingers[k]["body"]
         if body is None or link.name not in frames:
             off_chain.append(link.name)
             continue
         T_body_link = np.linalg.inv(body_frames[body]) @ frames[link.name]
+        into = shapes if k is None else fingers[k]["shapes"]
         for c in link.collisions:
             T = T_body_link @ (np.eye(4) if c.origin is None else np.asarray(c.origin, float))
             g = c.geometry
             if g.box is not None:
-                shapes.append(Shape(body, "box", _pose(T), tuple(float(v) for v in g.box.size), link=link.name))
+                into.append(Shape(body, "box", _pose(T), tuple(float(v) for v in g.box.size), link=link.name))
             elif g.cylinder is not None:
-                shapes.append(Shape(body, "cylinder", _pose(T), (float(g.cylinder.radius), float(g.cylinder.length)),
-                                    link=link.name))
+                into.append(Shape(body, "cylinder", _pose(T), (float(g.cylinder.radius), float(g.cylinder.length)),
+                                  link=link.name))
             elif g.sphere is not None:
-                shapes.append(Shape(body, "sphere", _pose(T), (float(g.sphere.radius),), link=link.name))
+                into.append(Shape(body, "sphere", _pose(T), (float(g.sphere.radius),), link=link.name))
             elif g.mesh is not None:
-                shapes.append(_mesh(g.mesh.filename, g.mesh.scale, body, T, link.name, folder))
+                into.append(_mesh(g.mesh.filename, g.mesh.scale, body, T, link.name, folder))
             else:
                 raise _Fallback(f"link {link.name!r} has a collision element without a box, cylinder, sphere or mesh")
-    return shapes, off_chain
+    return shapes, fingers, off_chain
 
 
 def _mat(pos, quat) -> np.ndarray:
     return pose(quat_matrix(quat), pos)
 
 
+def _mjcf_fingers(model: mujoco.MjModel, names, gripper: str | None, parent_of, moves, bodies, frames,
+                  body_frames) -> list[dict]:
+    """The fingers (:class:`~uvms_jax.robot.Finger` fields, no shapes) of the MJCF's gripper
+    joint: its body and those whose slide joint an ``<equality><joint>`` ties to it linearly
+    (``joint1 = polycoef[0] + polycoef[1] · gripper``, references 0)."""
+    if gripper is None:
+        return []
+    jg = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, gripper)
+    ties = [(jg, 1.0, 0.0)]
+    for e in range(model.neq):
+        if model.eq_type[e] == mujoco.mjtEq.mjEQ_JOINT and model.eq_obj2id[e] == jg:
+            coef = np.asarray(model.eq_data[e, :5], float)
+            if np.any(coef[2:] != 0):
+                raise _NoHand(f"equality {e} ties a joint to the gripper joint by a polynomial, not linearly")
+            ties.append((int(model.eq_obj1id[e]), coef[1], coef[0]))
+    fingers = []
+    for j, mult, off in ties:
+        b = int(model.jnt_bodyid[j])
+        if model.jnt_type[j] != mujoco.mjtJoint.mjJNT_SLIDE or model.body_jntnum[b] != 1:
+            raise _NoHand(f"body {names[b]!r} moves with the gripper but not by one slide joint")
+        fingers.append(_finger(names[b], model.joint(j).name, parent_of[names[b]], model.jnt_axis[j], mult, off,
+                               parent_of, moves, bodies, frames, body_frames))
+    return fingers
+
+
 def _mjcf_shapes(spec: mujoco.MjSpec, model: mujoco.MjModel, folder: Path | None, bodies: Mapping[str, int],
-                 frames: Mapping[str, np.ndarray], body_frames: Mapping[int, np.ndarray]) -> tuple[list[Shape], list[str]]:
+                 frames: Mapping[str, np.ndarray], body_frames: Mapping[int, np.ndarray], gripper: str | None = None
+                 ) -> tuple[list[Shape], list[dict], list[str]]:
     names = [model.body(b).name or f"body{b}" for b in range(model.nbody)]
     parent_of = {names[b]: names[int(model.body_parentid[b])] for b in range(1, model.nbody)}
     moves = {names[b]: bool(model.body_jntnum[b]) for b in range(1, model.nbody)}
+    try:
+        fingers = _mjcf_fingers(model, names, gripper, parent_of, moves, bodies, frames, body_frames)
+    except _NoHand as why:
+        log.info("arm %s: the gripper's finger boxes stand for its fingers: %s", spec.modelname, why)
+        fingers = []
+    member = _members(fingers, parent_of, moves, names)
+    for f in fingers:
+        f["shapes"] = []
     mesh_dir = folder / spec.meshdir if folder is not None and spec.meshdir else folder
     spec_meshes = list(spec.meshes)
     G = mujoco.mjtGeom
@@ -218,40 +316,45 @@ def _mjcf_shapes(spec: mujoco.MjSpec, model: mujoco.MjModel, folder: Path | None
         if not (model.geom_contype[g] or model.geom_conaffinity[g]):
             continue  # a visual geom
         name = names[int(model.geom_bodyid[g])]
-        body = fixed_to(name, parent_of, bodies, moves)
+        k = member.get(name)
+        body = fixed_to(name, parent_of, bodies, moves) if k is None else fingers[k]["body"]
         if body is None or name not in frames:
             off_chain.append(name)
             continue
+        into = shapes if k is None else fingers[k]["shapes"]
         T = np.linalg.inv(body_frames[body]) @ frames[name] @ _mat(model.geom_pos[g], model.geom_quat[g])
         t, size = int(model.geom_type[g]), np.asarray(model.geom_size[g], float)
         if t == G.mjGEOM_BOX:
-            shapes.append(Shape(body, "box", _pose(T), tuple(2 * size), link=name))
+            into.append(Shape(body, "box", _pose(T), tuple(2 * size), link=name))
         elif t == G.mjGEOM_ELLIPSOID:  # its bounding box: never smaller
-            shapes.append(Shape(body, "box", _pose(T), tuple(2 * size), link=name))
+            into.append(Shape(body, "box", _pose(T), tuple(2 * size), link=name))
         elif t in (G.mjGEOM_CYLINDER, G.mjGEOM_CAPSULE):
             kind = "cylinder" if t == G.mjGEOM_CYLINDER else "capsule"
-            shapes.append(Shape(body, kind, _pose(T), (float(size[0]), 2 * float(size[1])), link=name))
+            into.append(Shape(body, kind, _pose(T), (float(size[0]), 2 * float(size[1])), link=name))
         elif t == G.mjGEOM_SPHERE:
-            shapes.append(Shape(body, "sphere", _pose(T), (float(size[0]),), link=name))
+            into.append(Shape(body, "sphere", _pose(T), (float(size[0]),), link=name))
         elif t == G.mjGEOM_MESH:
-            k = int(model.geom_dataid[g])
-            mesh = spec.mesh(model.mesh(k).name) if model.mesh(k).name else spec_meshes[k]
+            m = int(model.geom_dataid[g])
+            mesh = spec.mesh(model.mesh(m).name) if model.mesh(m).name else spec_meshes[m]
             if mesh.file:  # the compiled geom pose includes MuJoCo's re-centring of the mesh: undo it
-                T_file = T @ np.linalg.inv(_mat(model.mesh_pos[k], model.mesh_quat[k]))
-                shapes.append(_mesh(mesh.file, tuple(mesh.scale), body, T_file, name, mesh_dir))
+                T_file = T @ np.linalg.inv(_mat(model.mesh_pos[m], model.mesh_quat[m]))
+                into.append(_mesh(mesh.file, tuple(mesh.scale), body, T_file, name, mesh_dir))
             else:  # an inline mesh: its compiled vertices in the compiled geom's frame
-                a, n = int(model.mesh_vertadr[k]), int(model.mesh_vertnum[k])
+                a, n = int(model.mesh_vertadr[m]), int(model.mesh_vertnum[m])
                 vertices = tuple(map(float, model.mesh_vert[a:a + n].ravel()))
-                shapes.append(Shape(body, "mesh", _pose(T), vertices=vertices, link=name))
+                into.append(Shape(body, "mesh", _pose(T), vertices=vertices, link=name))
         else:  # a plane, height field or SDF: scenery, not a link
             off_chain.append(f"{name} ({G(t).name.removeprefix('mjGEOM_').lower()})")
-    return shapes, off_chain
+    return shapes, fingers, off_chain
 
 
 def description_shapes(name: str, fmt: str, parsed, bodies: Mapping[str, int], frames: Mapping[str, np.ndarray],
-                       body_frames: Mapping[int, np.ndarray], link_radius: float) -> tuple[Shape, ...]:
+                       body_frames: Mapping[int, np.ndarray], link_radius: float, gripper: str | None = None
+                       ) -> tuple[tuple[Shape, ...], tuple[dict, ...]]:
     """The description's collision shapes folded into the robot's bodies, or ``()`` (the
-    capsules along the links) where it has none or one cannot be used; logs which, once.
+    capsules along the links) where it has none or one cannot be used; and its fingers (the
+    fields of :class:`~uvms_jax.robot.Finger`, shapes included; ``()`` with capsules). Logs
+    which, once.
 
     Args:
       name: the arm's name (for the log).
@@ -262,21 +365,24 @@ def description_shapes(name: str, fmt: str, parsed, bodies: Mapping[str, int], f
       frames: every link's/body's frame in the base frame at ``q = 0``.
       body_frames: body number → its frame in the base frame at ``q = 0``.
       link_radius: the capsules' radius (for the log).
+      gripper: the gripper joint's name in the description (None: no hand to read).
     """
     try:
         if fmt == "urdf":
-            shapes, off_chain = _urdf_shapes(*parsed, bodies, frames, body_frames)
+            shapes, fingers, off_chain = _urdf_shapes(*parsed, bodies, frames, body_frames, gripper)
         else:
-            shapes, off_chain = _mjcf_shapes(*parsed, bodies, frames, body_frames)
+            shapes, fingers, off_chain = _mjcf_shapes(*parsed, bodies, frames, body_frames, gripper)
     except _Fallback as why:
         log.warning("arm %s: collision model of capsules along the links (radius %g m): %s", name, link_radius, why)
-        return ()
+        return (), ()
     if not shapes:
         log.info("arm %s: the description has no collision geometry on the chain: capsules along the links "
                  "(radius %g m)", name, link_radius)
-        return ()
+        return (), ()
     left = (f"; left out (above the base, moved by joints off the chain, or not a link shape): "
             f"{sorted(set(off_chain))}" if off_chain else "")
-    log.info("arm %s: collision model from the description: %d shapes (%d meshes)%s", name, len(shapes),
-             sum(s.kind == "mesh" for s in shapes), left)
-    return tuple(shapes)
+    hand = (f"; hand: fingers {[f['link'] for f in fingers]} with {sum(len(f['shapes']) for f in fingers)} shapes"
+            if fingers else "")
+    log.info("arm %s: collision model from the description: %d shapes (%d meshes)%s%s", name, len(shapes),
+             sum(s.kind == "mesh" for s in shapes), hand, left)
+    return tuple(shapes), tuple({**f, "shapes": tuple(f["shapes"])} for f in fingers)

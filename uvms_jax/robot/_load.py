@@ -25,7 +25,7 @@ import yaml
 from uvms_jax.frames import pose
 from uvms_jax.kin import _import
 from uvms_jax.robot._geometry import description_shapes, fixed_to
-from uvms_jax.robot._model import BASE, BodyInertial, Gripper, Hardware, Robot
+from uvms_jax.robot._model import BASE, BodyInertial, Finger, Gripper, Hardware, Robot
 from uvms_jax.settings import check_keys
 
 __all__ = ["DESCRIPTIONS", "load_arm", "load_robot", "robot_from_config", "shipped_arms"]
@@ -163,7 +163,8 @@ def load_robot(
         gripper itself: ``{"joint": NAME, "lower": m, "upper": m, "velocity": m/s}`` (the
         fingers then hang from the tip). None: no gripper.
       gripper_velocity: the gripper's speed limit [m/s]; default: the file's (an MJCF has none).
-      finger_size: full edges of one finger box [m] (the fingers' collision shape).
+      finger_size: full edges of one finger box [m] (the fingers' collision shape where the
+        description has no hand: see :attr:`Robot.fingers`).
       link_radius: capsule radius of the links' collision model [m] (required: the capsules
         along the links are the collision model where the description's is not used).
       buoyancy: link/body name → ``{"volume": m³, "cob": [x, y, z] m in that link's frame}``.
@@ -202,9 +203,10 @@ def load_robot(
         raise ValueError(f"buoyancy of links {sorted(buoyancy)}: the description gives them no mass properties")
     if collision not in ("description", "capsules"):
         raise ValueError(f"collision must be 'description' or 'capsules', got {collision!r}")
-    shapes = ()
+    shapes, fingers = (), ()
     if collision == "description":
-        shapes = description_shapes(chain.name, fmt, parsed, bodies, frames, body_frames, float(link_radius))
+        shapes, fingers = description_shapes(chain.name, fmt, parsed, bodies, frames, body_frames, float(link_radius),
+                                             in_file)
     else:
         log.info("arm %s: collision model of capsules along the links (radius %g m), as asked", chain.name,
                  float(link_radius))
@@ -239,6 +241,7 @@ def load_robot(
         hardware=hw,
         source=source,
         digest=hashlib.sha256(data).hexdigest(),
+        fingers=tuple(Finger(**f) for f in fingers),
     )
 
 

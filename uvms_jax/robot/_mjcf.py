@@ -8,8 +8,13 @@ first joint's. A robot whose description gives collision geometry (``robot.shape
 shapes instead of the capsules: spheres and capsules as MuJoCo primitives, boxes and cylinders
 as convex meshes (8 vertices; a prism of 32 sides around the cylinder), mesh files as ``<mesh
 file=...>`` assets (:func:`mjcf_assets` gives the ``<asset>`` entries every model of the arm
-needs). A site ``tool`` marks the tool frame; a gripper adds two finger boxes, the opening along
-the tool's x axis, reaching forward along its z axis.
+needs). A site ``tool`` marks the tool frame. The hand: a robot whose description has fingers
+(``robot.fingers``) gets their shapes, named ``geom_<finger joint>_<k>``: fixed to the body they
+hang from at the opening asked for (a kinematic model: the planning scene, the self-collision
+pairs), or, with ``finger_joints``, as finger bodies named as the description names them, each
+on its slide joint (the simulated arm, which ties the mimics to the gripper joint:
+:func:`uvms_jax.hw.add_drives`). Without fingers a gripper adds two finger boxes, the opening
+along the tool's x axis, reaching forward along its z axis.
 """
 
 from __future__ import annotations
@@ -25,7 +30,8 @@ from uvms_jax.kin._chain import REVOLUTE
 from uvms_jax.robot._geometry import Shape
 from uvms_jax.robot._model import BASE, Robot
 
-__all__ = ["TOOL_SITE", "base_body", "geom_name", "mjcf_assets", "mjcf_body", "robot_mjcf", "self_collision_pairs"]
+__all__ = ["TOOL_SITE", "base_body", "geom_name", "link_capsules", "mjcf_assets", "mjcf_body", "robot_mjcf",
+           "self_collision_pairs"]
 
 TOOL_SITE = "tool"
 _COINCIDENT = 1e-9  # [m] joint origins closer than this make a sphere, not a capsule
@@ -61,6 +67,33 @@ def _shape_names(robot: Robot) -> list[str]:
     return names
 
 
+def _finger_shape_names(robot: Robot) -> list[list[str]]:
+    """Geom names of each finger's shapes: ``geom_<finger joint>_<k>``."""
+    return [[f"geom_{f.joint}_{k}" for k in range(len(f.shapes))] for f in robot.fingers]
+
+
+def _all_shapes(robot: Robot) -> list[tuple[Shape, str]]:
+    """Every shape of the arm and its fingers with its geom name."""
+    named = list(zip(robot.shapes, _shape_names(robot)))
+    for f, names in zip(robot.fingers, _finger_shape_names(robot)):
+        named += list(zip(f.shapes, names))
+    return named
+
+
+def link_capsules(robot: Robot) -> list[tuple[int, np.ndarray]]:
+    """The links' capsules (the collision model where ``robot.shapes`` is empty): ``(body, end)``
+    per body, the capsule of radius ``robot.link_radius`` from the body's origin to ``end (3,)``
+    [m] in its frame (the next joint's origin, the last body's the tool frame; a sphere where
+    ``end`` is the origin)."""
+    T_joint = np.asarray(robot.chain.T_base_joint0, dtype=np.float64)
+    tool = np.asarray(robot.chain.T_base_tool0, dtype=np.float64)
+    n = robot.n_joints
+    ends = [(BASE, T_joint[0, :3, 3])]
+    for i in range(n):
+        ends.append((i, (np.linalg.inv(T_joint[i]) @ (T_joint[i + 1] if i + 1 < n else tool))[:3, 3]))
+    return ends
+
+
 def _hull_vertices(shape: Shape) -> np.ndarray:
     """``(k, 3)`` convex mesh vertices of a box or cylinder shape in its frame (a cylinder: the
     circumscribed prism, never smaller)."""
@@ -75,9 +108,9 @@ def _hull_vertices(shape: Shape) -> np.ndarray:
 
 def mjcf_assets(robot: Robot) -> list[str]:
     """The ``<mesh>`` entries of an ``<asset>`` element that :func:`mjcf_body`'s geoms use
-    (none for a robot of capsules). Mesh names are ``m_<geom name>``."""
+    (none for a robot of capsules), its fingers' included. Mesh names are ``m_<geom name>``."""
     assets = []
-    for s, name in zip(robot.shapes, _shape_names(robot)):
+    for s, name in _all_shapes(robot):
         if s.kind == "mesh" and s.file:
             assets.append(f'<mesh name="m_{name}" file={quoteattr(s.file)} scale="{_fmt(s.scale)}"/>')
         elif s.kind == "mesh":
@@ -87,8 +120,8 @@ def mjcf_assets(robot: Robot) -> list[str]:
     return assets
 
 
-def _shape_geom(shape: Shape, name: str) -> str:
-    T = shape.T
+def _shape_geom(shape: Shape, name: str, T_move: np.ndarray | None = None) -> str:
+    T = shape.T if T_move is None else T_move @ shape.T
     pose = f'pos="{_fmt(T[:3, 3])}" quat="{_fmt(frames.matrix_quat(T[:3, :3]))}"'
     if shape.kind == "sphere":
         return f'<geom name="{name}" type="sphere" size="{shape.size[0]!r}" {pose}/>'
@@ -102,6 +135,24 @@ def _body_geoms(robot: Robot, body: int, end: np.ndarray) -> list[str]:
     if not robot.shapes:
         return [_link_geom(geom_name(robot, body), end, robot.link_radius)]
     return [_shape_geom(s, n) for s, n in zip(robot.shapes, _shape_names(robot)) if s.body == body]
+
+
+def _finger_lines(robot: Robot, body: int, opening: float, finger_joints: bool) -> list[str]:
+    """The fingers hanging from ``body``: their geoms at ``opening`` [m] fixed to it, or (with
+    ``finger_joints``) finger bodies on slide joints whose range the gripper's limits give."""
+    lines = []
+    g = robot.gripper
+    for f, names in zip(robot.fingers, _finger_shape_names(robot)):
+        if f.body != body:
+            continue
+        if not finger_joints:
+            lines += [_shape_geom(s, n, f.T(opening)) for s, n in zip(f.shapes, names)]
+            continue
+        lo, hi = sorted((f.value(g.lower), f.value(g.upper)))
+        lines += [f'<body name="{f.link}">', "  " + _NO_MASS,
+                  f'  <joint name="{f.joint}" type="slide" axis="{_fmt(f.axis)}" range="{lo!r} {hi!r}" limited="true"/>',
+                  *["  " + _shape_geom(s, n) for s, n in zip(f.shapes, names)], "</body>"]
+    return lines
 
 
 def _link_geom(name: str, end: np.ndarray, radius: float) -> str:
@@ -127,27 +178,39 @@ def _inertial(robot: Robot, body: int) -> str:
 
 
 def mjcf_body(robot: Robot, pos=(0.0, 0.0, 0.0), quat=(1.0, 0.0, 0.0, 0.0), jaws_open: float | None = None,
-              inertial: bool = False) -> str:
+              inertial: bool = False, finger_joints: bool = False) -> str:
     """MJCF ``<body>`` tree of the robot (radians), for a ``<worldbody>`` whose
     ``<compiler angle="radian"/>`` is set.
 
     Args:
       robot: the arm.
       pos, quat: the base link's pose in the parent frame [m], ``(w, x, y, z)``.
-      jaws_open: gap between the fingers [m] (default: the gripper's largest); ignored without
-        a gripper.
+      jaws_open: the gripper's opening [m], its joint's value (the gap between the finger
+        boxes; the description's fingers slide by :meth:`~uvms_jax.robot.Finger.value` of it);
+        default: the gripper's largest; ignored without a gripper.
       inertial: write the bodies' mass properties (a simulation needs them; collision
-        queries do not).
+        queries do not). The fingers' masses stay folded into the body they hang from.
+      finger_joints: the description's fingers as bodies on their slide joints (at value 0:
+        ``jaws_open`` is not used) rather than fixed at ``jaws_open``.
+
+    Raises:
+      ValueError: ``jaws_open`` outside the gripper's limits for a robot with fingers.
     """
+    g = robot.gripper
+    opening = None if g is None else (g.upper if jaws_open is None else float(jaws_open))
+    if robot.fingers and not g.lower <= opening <= g.upper:
+        raise ValueError(f"jaws_open {opening} m is outside the gripper's limits [{g.lower}, {g.upper}] m")
     chain = robot.chain
     T_joint = np.asarray(chain.T_base_joint0, dtype=np.float64)
     twists = np.asarray(chain.twists, dtype=np.float64)
     tool = np.asarray(chain.T_base_tool0, dtype=np.float64)
     n = robot.n_joints
+    ends = dict(link_capsules(robot))
     lines = [f'<body name="{base_body(robot)}" pos="{_fmt(pos)}" quat="{_fmt(quat)}">']
     if inertial and _inertial(robot, BASE):
         lines.append("  " + _inertial(robot, BASE))
-    lines += ["  " + g for g in _body_geoms(robot, BASE, T_joint[0, :3, 3])]
+    lines += ["  " + g for g in _body_geoms(robot, BASE, ends[BASE])]
+    lines += ["  " + g for g in _finger_lines(robot, BASE, opening, finger_joints)]
     previous = np.eye(4)
     for i in range(n):
         pad = "  " * (i + 1)
@@ -156,7 +219,7 @@ def mjcf_body(robot: Robot, pos=(0.0, 0.0, 0.0), quat=(1.0, 0.0, 0.0, 0.0), jaws
         axis = R.T @ (twists[i, 3:] if chain.kinds[i] == REVOLUTE else twists[i, :3])
         lines.append(f'{pad}<body name="{robot.link_names[i]}" pos="{_fmt(local[:3, 3])}" '
                      f'quat="{_fmt(frames.matrix_quat(local[:3, :3]))}">')
-        geoms = _body_geoms(robot, i, (np.linalg.inv(T_joint[i]) @ (T_joint[i + 1] if i + 1 < n else tool))[:3, 3])
+        geoms = _body_geoms(robot, i, ends[i])
         if inertial and _inertial(robot, i):
             lines.append(f"{pad}  " + _inertial(robot, i))
         elif not geoms:
@@ -164,18 +227,16 @@ def mjcf_body(robot: Robot, pos=(0.0, 0.0, 0.0), quat=(1.0, 0.0, 0.0, 0.0), jaws
         kind = "hinge" if chain.kinds[i] == REVOLUTE else "slide"
         lines.append(f'{pad}  <joint name="{robot.joint_names[i]}" type="{kind}" axis="{_fmt(axis)}" '
                      f'range="{float(chain.lower[i])!r} {float(chain.upper[i])!r}" limited="true"/>')
-        lines += [f"{pad}  " + g for g in geoms]
+        lines += [f"{pad}  " + g for g in geoms + _finger_lines(robot, i, opening, finger_joints)]
         previous = T_joint[i]
     pad = "  " * (n + 1)
     T_link_tool = np.linalg.inv(T_joint[-1]) @ tool
     tool_quat = _fmt(frames.matrix_quat(T_link_tool[:3, :3]))
     lines.append(f'{pad}<site name="{TOOL_SITE}" pos="{_fmt(T_link_tool[:3, 3])}" quat="{tool_quat}" size="0.01"/>')
-    g = robot.gripper
-    if g is not None:
-        gap = g.upper if jaws_open is None else jaws_open
+    if g is not None and not robot.fingers:
         fx, fy, fz = g.finger_size
         for side, sign in (("left", 1.0), ("right", -1.0)):
-            p = T_link_tool @ np.array([sign * (gap / 2.0 + fx / 2.0), 0.0, fz / 2.0, 1.0])
+            p = T_link_tool @ np.array([sign * (opening / 2.0 + fx / 2.0), 0.0, fz / 2.0, 1.0])
             lines.append(f'{pad}<geom name="geom_jaw_{side}" type="box" pos="{_fmt(p[:3])}" quat="{tool_quat}" '
                          f'size="{_fmt(np.array(g.finger_size) / 2)}"/>')
     for d in range(n, -1, -1):

@@ -8,6 +8,8 @@ the gripper and the hardware profile say how the arm is driven. Every stage rece
 Bodies are numbered along the chain: ``-1`` the base link (fixed), ``i`` the link moved by
 joint ``i`` (its frame is ``chain.T_base_joint0[i]`` at ``q = 0``). The tool frame is fixed to
 body ``n - 1``.
+A gripper's fingers read from the description (:class:`Finger`) hang from an arm body and slide
+with the gripper's opening.
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ import numpy as np
 from uvms_jax import kin
 from uvms_jax.robot._geometry import Shape
 
-__all__ = ["BodyInertial", "Gripper", "Hardware", "Robot", "Shape", "BASE"]
+__all__ = ["BodyInertial", "Finger", "Gripper", "Hardware", "Robot", "Shape", "BASE"]
 
 BASE = -1  # body number of the base link
 
@@ -74,6 +76,54 @@ class Gripper:
             raise ValueError(f"gripper {self.joint!r}: finger_size needs 3 positive edges [m], got {self.finger_size}")
 
 
+_UNIT = 1e-6  # tolerance on a finger axis's length (a unit vector written with 10 digits)
+
+
+@dataclasses.dataclass(frozen=True)
+class Finger:
+    """A link moved by the gripper's opening: its prismatic joint (or a mimic of the gripper joint).
+
+    Attributes:
+      link: the description's link (URDF) or body (MJCF) name.
+      joint: its prismatic (URDF) or slide (MJCF) joint: the gripper joint itself, or one that
+        mimics it.
+      body: the arm body it hangs from (robot body number, usually ``n - 1``).
+      axis: ``(3,)`` unit slide axis in that body's frame.
+      multiplier, offset: the finger joint's value is ``multiplier * opening + offset`` [m], the
+        opening being the gripper joint's value (1 and 0 for the gripper joint's own finger).
+      shapes: its collision shapes (and those of links fixed to it), ``Shape.body == body``,
+        poses in the body's frame at finger joint value 0.
+    """
+
+    link: str
+    joint: str
+    body: int
+    axis: tuple[float, float, float]
+    multiplier: float = 1.0
+    offset: float = 0.0
+    shapes: tuple[Shape, ...] = ()
+
+    def __post_init__(self) -> None:
+        if len(self.axis) != 3 or abs(float(np.linalg.norm(self.axis)) - 1.0) > _UNIT:
+            raise ValueError(f"finger {self.link!r}: axis must be a unit 3-vector, got {self.axis}")
+        if not (np.isfinite(self.multiplier) and np.isfinite(self.offset)):
+            raise ValueError(f"finger {self.link!r}: multiplier and offset must be finite")
+        bad = sorted({s.body for s in self.shapes} - {self.body})
+        if bad:
+            raise ValueError(f"finger {self.link!r}: shapes on bodies {bad}, not its body {self.body}")
+
+    def value(self, opening: float) -> float:
+        """The finger joint's value [m] at the gripper's ``opening`` [m]."""
+        return self.multiplier * float(opening) + self.offset
+
+    def T(self, opening: float) -> np.ndarray:
+        """``(4, 4)`` the finger's displacement in its body's frame at ``opening`` [m]: its
+        shapes' poses are ``T(opening) @ shape.T``."""
+        T = np.eye(4)
+        T[:3, 3] = self.value(opening) * np.asarray(self.axis, dtype=float)
+        return T
+
+
 @dataclasses.dataclass(frozen=True)
 class Hardware:
     """How the real arm is addressed: its wire protocol and one device id per actuator.
@@ -118,6 +168,8 @@ class Robot:
         ``link_radius`` along the links (the description has no collision geometry, or a mesh
         of it cannot be read, or the caller asked for capsules).
       gripper: the gripper at the tool frame, or None.
+      fingers: the gripper's fingers read from the description (with the collision model read
+        from it); empty: the gripper's ``finger_size`` boxes stand for them.
       hardware: the real arm's wire profile, or None (simulation only).
       source: where the description came from (a path, or ``"<text>"``).
       digest: SHA-256 of the description's bytes (a plan records it).
@@ -135,6 +187,7 @@ class Robot:
     hardware: Hardware | None = None
     source: str = "<text>"
     digest: str = ""
+    fingers: tuple[Finger, ...] = ()
 
     def __post_init__(self) -> None:
         n = self.chain.n_joints
@@ -146,6 +199,11 @@ class Robot:
         bad = sorted({s.body for s in self.shapes} - set(range(BASE, n)))
         if bad:
             raise ValueError(f"robot {self.name!r}: shapes on bodies {bad}, not -1 … {n - 1}")
+        if self.fingers and self.gripper is None:
+            raise ValueError(f"robot {self.name!r}: fingers without a gripper")
+        bad = sorted({f.body for f in self.fingers} - set(range(BASE, n)))
+        if bad:
+            raise ValueError(f"robot {self.name!r}: fingers on bodies {bad}, not -1 … {n - 1}")
         if self.gripper is not None and self.gripper.joint in self.joint_names:
             raise ValueError(f"robot {self.name!r}: gripper joint {self.gripper.joint!r} is also an arm joint")
         if self.hardware is not None:
