@@ -96,3 +96,13 @@ from uvms_jax.plan._world import sphere_world
 from uvms_jax.plan._world import vehicle_obstacles
 from uvms_jax.plan._write import write_plan
 from uvms_jax.plan._write import write_task_graph
+from uvms_jax.plan._moveit import MotionRequest
+from uvms_jax.plan._moveit import load_moveit_request
+from uvms_jax.plan._moveit import load_moveit_scene
+from uvms_jax.plan._vector import ExactChecker
+from uvms_jax.plan._query import QueryResult
+from uvms_jax.plan._query import plan_query
+from uvms_jax.plan._vector import LIMIT_TOL
+from uvms_jax.plan._vector import VectorChecker
+from uvms_jax.plan._worlds import World
+from uvms_jax.plan._vector import check_in_limits

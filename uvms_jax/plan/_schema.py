@@ -122,12 +122,14 @@ _OBSTACLE_DIMS = {"box": ("size",), "cylinder": ("radius", "height"), "sphere": 
 class ObstacleKeys:
     """One of ``obstacles`` (:class:`uvms_jax.plan.Obstacle`): ``shape`` box (``size``),
     cylinder (``radius``, ``height``), sphere (``radius``), capsule (``radius``, ``length``) or
-    mesh (``file``, times ``scale``) [m], at ``pos`` [m], ``rpy`` [rad]."""
+    mesh (``file``, times ``scale``) [m], at ``pos`` [m], ``rpy`` [rad] or ``quat`` (a unit
+    quaternion w, x, y, z)."""
 
     name: str
     shape: str = setting(choices=tuple(_OBSTACLE_DIMS))
     pos: Vec3
     rpy: Vec3 = (0.0, 0.0, 0.0)
+    quat: tuple[float, float, float, float] | None = None
     size: Vec3 | None = setting(None, gt=0)
     radius: float | None = setting(None, gt=0)
     height: float | None = setting(None, gt=0)
@@ -140,6 +142,9 @@ class ObstacleKeys:
         _needs("obstacle", self.shape, {k: getattr(self, k) for k in dims}, _OBSTACLE_DIMS[self.shape], dims)
         if self.scale is not None and self.shape != "mesh":
             raise ValueError(f"obstacle shape {self.shape!r} takes no scale (a mesh's)")
+        if self.quat is not None and (abs(sum(v * v for v in self.quat) - 1.0) > 1e-6 or any(self.rpy)):
+            raise ValueError(f"obstacle {self.name!r}: quat must be a unit quaternion (w, x, y, z), given instead "
+                             f"of rpy; got {list(self.quat)}")
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)

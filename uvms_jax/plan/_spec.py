@@ -119,6 +119,7 @@ class Base:
     fits: tuple[int, ...]
 
 
+_QUAT_TOL = 1e-6  # |q| − 1 allowed in a given quaternion: files carry 6–17 significant digits
 _OBSTACLE_DIMS = {"box": ("size",), "cylinder": ("radius", "height"), "sphere": ("radius",),
                   "capsule": ("radius", "length"), "mesh": ()}
 
@@ -136,6 +137,7 @@ class Obstacle:
         hull).
       pos, rpy: pose of its centre (the mesh file's origin).
       dims: the numbers of ``shape`` above, in that order.
+      quat: its orientation as a unit quaternion ``(w, x, y, z)`` instead of ``rpy`` (None: rpy).
     """
 
     name: str
@@ -145,8 +147,14 @@ class Obstacle:
     dims: tuple[float, ...] = ()
     file: str = ""
     scale: float = 1.0
+    quat: tuple[float, float, float, float] | None = None
 
     def __post_init__(self) -> None:
+        if self.quat is not None and (len(self.quat) != 4 or not np.all(np.isfinite(self.quat))
+                                      or abs(np.linalg.norm(self.quat) - 1.0) > _QUAT_TOL):
+            raise ValueError(f"obstacle {self.name!r}: quat must be a unit quaternion (w, x, y, z), got {self.quat}")
+        if self.quat is not None and any(self.rpy):
+            raise ValueError(f"obstacle {self.name!r}: give its orientation as rpy or as quat, not both")
         if self.shape not in _OBSTACLE_DIMS:
             raise ValueError(f"obstacle {self.name!r}: unknown shape {self.shape!r} ({', '.join(_OBSTACLE_DIMS)})")
         n = 3 if self.shape == "box" else len(_OBSTACLE_DIMS[self.shape])
@@ -164,11 +172,12 @@ class Obstacle:
         """From an obstacle's checked scenario keys (:class:`uvms_jax.plan._schema.ObstacleKeys`)."""
         dims = [float(x) for k in _OBSTACLE_DIMS[keys.shape] for x in (keys.size if k == "size" else [getattr(keys, k)])]
         return Obstacle(keys.name, keys.shape, keys.pos, keys.rpy, tuple(dims), keys.file or "",
-                        1.0 if keys.scale is None else keys.scale)
+                        1.0 if keys.scale is None else keys.scale, keys.quat)
 
     @property
     def T_world(self) -> np.ndarray:
-        return frames.pose(frames.rpy_matrix(self.rpy), self.pos)
+        R = frames.rpy_matrix(self.rpy) if self.quat is None else frames.quat_matrix(self.quat)
+        return frames.pose(R, self.pos)
 
     def hull_vertices(self) -> np.ndarray:
         """``(k, 3)`` vertices of the convex mesh standing for a box or a cylinder, in its frame

@@ -36,3 +36,4 @@ from uvms_jax.robot._model import Robot
 from uvms_jax.robot._model import Shape
 from uvms_jax.robot._spheres import RobotSpheres
 from uvms_jax.robot._spheres import collision_spheres
+from uvms_jax.robot._spheres import inscribed_spheres

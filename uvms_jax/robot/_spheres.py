@@ -39,7 +39,7 @@ from uvms_jax.robot._geometry import Shape
 from uvms_jax.robot._mjcf import _hull_vertices, link_capsules
 from uvms_jax.robot._model import Robot
 
-__all__ = ["RobotSpheres", "SURFACE_STEP", "collision_spheres", "shape_vertices", "spheres_cache_dir"]
+__all__ = ["RobotSpheres", "SURFACE_STEP", "collision_spheres", "inscribed_spheres", "shape_vertices", "spheres_cache_dir"]
 
 #: Spacing of the surface samples every sphere set must cover [m]: 4 mm leaves a point between
 #: samples at most ~3 mm from one, well inside the spheres' 1 cm excess scale.
@@ -314,3 +314,46 @@ def collision_spheres(robot: Robot, max_excess: float = 0.01) -> RobotSpheres:
     path.parent.mkdir(parents=True, exist_ok=True)
     write_atomic(path, buffer.getvalue())
     return spheres
+
+
+_INSCRIBED = 8  # inscribed spheres per shape, at most
+
+
+def _inscribed(shape: Shape, count: int) -> tuple[np.ndarray, np.ndarray]:
+    """Up to ``count`` spheres inside a shape's convex hull (centre ``(k, 3)``, radius ``(k,)``
+    [m], in its body's frame): the deepest candidate centre first, then each next the deepest
+    one outside the spheres taken so far."""
+    solid = _solid(shape)
+    if solid is None:
+        return shape.T[None, :3, 3], np.array([float(shape.size[0])])
+    _, depth, candidates = solid
+    d = depth(candidates)
+    inside = d > 0
+    candidates, d = candidates[inside], d[inside]
+    centres, radii = [], []
+    while len(centres) < count and len(d):
+        k = int(np.argmax(d))
+        centres.append(candidates[k])
+        radii.append(float(d[k]))
+        away = np.linalg.norm(candidates - candidates[k], axis=1) > d[k]
+        candidates, d = candidates[away], d[away]
+    return np.array(centres).reshape(-1, 3), np.array(radii)
+
+
+def inscribed_spheres(robot: Robot, per_shape: int = _INSCRIBED) -> RobotSpheres:
+    """Spheres inside the robot's collision shapes (and its fingers'), at most ``per_shape``
+    each: an obstacle that reaches one of them certainly touches the robot (where
+    :func:`collision_spheres` only says it may). ``max_excess`` is 0: they reach nowhere outside."""
+    if per_shape < 1:
+        raise ValueError(f"per_shape must be >= 1, got {per_shape}")
+    shapes = [(-1, s) for s in (robot.shapes or _capsule_shapes(robot))]
+    shapes += [(k, s) for k, f in enumerate(robot.fingers) for s in f.shapes]
+    body, finger, centre, radius = [], [], [], []
+    for k, s in shapes:
+        c, r = _inscribed(s, per_shape)
+        body += [s.body] * len(r)
+        finger += [k] * len(r)
+        centre.append(c)
+        radius.append(r)
+    return RobotSpheres(np.array(body, dtype=int), np.array(finger, dtype=int), np.concatenate(centre),
+                        np.concatenate(radius), 0.0)

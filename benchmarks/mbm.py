@@ -1,0 +1,170 @@
+"""MotionBenchMaker benchmark: the Franka Panda with its own hand and fingers (from its URDF) in
+the 7 MBM families (700 problems), the query path (:func:`uvms_jax.plan.plan_query`: compiled
+RRT-Connect on the fitted spheres, then MuJoCo's exact check of every returned path) beside the
+peer in the same process: OMPL's RRT-Connect with MuJoCo's exact state checks and OMPL's
+state-by-state motion checks (the project's MuJoCo planning path), on the same robot model,
+worlds and budget.
+
+Per family and planner: problems valid in the model, solved, the median and p95 time per
+problem (planning + simplification, the budgeted part; MuJoCo's final check reported apart),
+and the returned paths re-checked exactly (MuJoCo, the real fingers, densified to 0.01 rad).
+Problems invalid in the model are counted by reason. The requests hold the fingers at 0.065 m,
+past the URDF's 0.04 m limit: every problem is planned with the fingers at 0.04 m. Prints one
+JSON object and writes it to ``--out``.
+
+The problems: MotionBenchMaker's Panda set (Chamzas et al., RA-L 2022), as distributed with the
+VAMP planner's resources (``problems/<family>_panda/{scene,request}NNNN.yaml``).
+
+    .venv/bin/python benchmarks/mbm.py --problems PATH/problems [--budget 1.0] [--per-family 100]
+        [--peer] [--out benchmarks/results/mbm_cpu.json]
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.metadata
+import json
+import platform
+import time
+from pathlib import Path
+
+import numpy as np
+
+from uvms_jax import plan as P
+from uvms_jax import robot as R
+from uvms_jax.plan._collision import densify
+
+FAMILIES = ("table_pick", "table_under_pick", "box", "bookshelf_small", "bookshelf_tall", "bookshelf_thin", "cage")
+OPENING = 0.04  # [m] the URDF's largest finger opening (the requests' 0.065 m is past it)
+RECHECK = 0.01  # [rad] densification of the exact re-check of every returned path
+
+
+def panda() -> R.Robot:
+    """The Panda of the example-robot-data wheel, its hand and fingers from the URDF."""
+    robots = importlib.metadata.distribution("example-robot-data").locate_file(
+        "cmeel.prefix/share/example-robot-data/robots")
+    return R.load_robot(robots / "panda_description/urdf/panda.urdf", tip="panda_hand_tcp", link_radius=0.05,
+                        gripper="panda_finger_joint1")
+
+
+def _ompl_mujoco(exact: P.ExactChecker, robot: R.Robot, start, goal, budget_s: float) -> tuple[bool, float, np.ndarray]:
+    """The peer: OMPL RRT-Connect, MuJoCo's state checks, OMPL's motion checks at 0.01 rad."""
+    from ompl import base as ob
+    from ompl import geometric as og
+
+    n = robot.n_joints
+    space = ob.RealVectorStateSpace(n)
+    bounds = ob.RealVectorBounds(n)
+    for i in range(n):
+        bounds.setLow(i, float(robot.lower[i]))
+        bounds.setHigh(i, float(robot.upper[i]))
+    space.setBounds(bounds)
+    ss = og.SimpleSetup(space)
+    si = ss.getSpaceInformation()
+    ss.setStateValidityChecker(lambda s: not exact.contacts(np.array([[s[i] for i in range(n)]])))
+    si.setStateValidityCheckingResolution(RECHECK / space.getMaximumExtent())
+    ss.setPlanner(og.RRTConnect(si))
+    a, b = space.allocState(), space.allocState()
+    a[0:n], b[0:n] = list(start), list(goal)
+    ss.setStartAndGoalStates(a, b)
+    t0 = time.perf_counter()
+    solved = bool(ss.solve(budget_s)) and ss.haveExactSolutionPath()
+    path = np.zeros((0, n))
+    if solved:
+        ss.simplifySolution(max(1e-3, budget_s - (time.perf_counter() - t0)))
+        path = np.array([[s[i] for i in range(n)] for s in ss.getSolutionPath().getStates()])
+    spent = time.perf_counter() - t0
+    del ss, si
+    return solved, spent, path
+
+
+def _summary(times: list[float], solved: int, valid: int, recheck_ok: int) -> dict:
+    t = np.array(times) if times else np.array([np.nan])
+    return {"valid": valid, "solved": solved, "success_rate": solved / valid if valid else None,
+            "median_ms": float(np.median(t) * 1e3), "p95_ms": float(np.percentile(t, 95) * 1e3),
+            "max_ms": float(np.max(t) * 1e3), "rechecked_free": recheck_ok}
+
+
+def run(problems: Path, budget_s: float, per_family: int, peer: bool) -> dict:
+    robot = panda()
+    P.seed_ompl(0)
+    # Compile the kernels before any timing (Numba's cache makes later runs load them): a query
+    # in an empty world runs every compiled function once.
+    t0 = time.perf_counter()
+    mid = (robot.lower + robot.upper) / 2
+    P.plan_query(robot, P.World(), mid, mid + 0.1, opening=OPENING, budget_s=budget_s)
+    compile_s = time.perf_counter() - t0
+    families, invalid, records = {}, {}, []
+    for family in FAMILIES:
+        folder = problems / f"{family}_panda"
+        rows = {"query": ([], 0, 0), "ompl_mujoco": ([], 0, 0)}
+        valid = 0
+        for k in range(1, per_family + 1):
+            world = P.load_moveit_scene(folder / f"scene{k:04d}.yaml")
+            req = P.load_moveit_request(folder / f"request{k:04d}.yaml", robot)
+            reason = None
+            try:
+                start = P.check_in_limits(robot, req.start, "start")
+                goal = P.check_in_limits(robot, req.goal, "goal")
+            except ValueError as err:
+                reason = "start outside the limits" if str(err).startswith("start") else "goal outside the limits"
+            checker = P.VectorChecker(robot, world, OPENING)
+            exact = checker.exact
+            if reason is None:
+                start, goal = np.clip(start, robot.lower, robot.upper), np.clip(goal, robot.lower, robot.upper)
+                if exact.contacts(start[None]):
+                    reason = "start in collision"
+                elif exact.contacts(goal[None]):
+                    reason = "goal in collision"
+            if reason is not None:
+                invalid[reason] = invalid.get(reason, 0) + 1
+                records.append({"family": family, "problem": k, "invalid": reason})
+                continue
+            valid += 1
+            res = P.plan_query(robot, world, start, goal, opening=OPENING, budget_s=budget_s, checker=checker)
+            rec = {"family": family, "problem": k, "query_ms": res.time_s * 1e3, "query_reason": res.reason,
+                   "query_exact_ms": res.exact_s * 1e3, "iterations": res.iterations}
+            times, solved, ok = rows["query"]
+            # A failure counts at the whole budget it was given (or what it spent, if more).
+            times.append(res.time_s if res.success else max(budget_s, res.time_s))
+            rows["query"] = (times, solved + res.success, ok + (res.success and not exact.contacts(
+                densify(res.path, RECHECK))))
+            if peer:
+                done, spent, path = _ompl_mujoco(exact, robot, start, goal, budget_s)
+                free = done and not exact.contacts(densify(path, RECHECK))
+                times, solved, ok = rows["ompl_mujoco"]
+                times.append(spent if done else max(budget_s, spent))
+                rows["ompl_mujoco"] = (times, solved + done, ok + free)
+                rec.update(ompl_mujoco_ms=spent * 1e3, ompl_mujoco_solved=done)
+            records.append(rec)
+        families[family] = {name: _summary(t, s, valid, ok) for name, (t, s, ok) in rows.items()
+                            if name == "query" or peer}
+    return {"families": families, "invalid": invalid, "compile_s": compile_s, "records": records}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--problems", type=Path, required=True, help="the MBM 'problems' folder")
+    ap.add_argument("--budget", type=float, default=1.0, help="time budget per problem [s]")
+    ap.add_argument("--per-family", type=int, default=100)
+    ap.add_argument("--peer", action="store_true", help="also run OMPL with MuJoCo's checks")
+    ap.add_argument("--out", type=Path, default=Path(__file__).parent / "results" / "mbm_cpu.json")
+    args = ap.parse_args()
+    result = run(args.problems, args.budget, args.per_family, args.peer)
+    all_query = [r for r in result["records"] if "query_ms" in r]
+    result.update({
+        "benchmark": "mbm", "device": f"{platform.machine()} CPU, Python {platform.python_version()}",
+        "budget_s": args.budget, "opening_m": OPENING, "request_opening_m": 0.065, "recheck_rad": RECHECK,
+        "problems": sum(1 for _ in result["records"]),
+        "query_total": _summary([r["query_ms"] / 1e3 for r in all_query],
+                                sum(r["query_reason"] == "solved" for r in all_query), len(all_query),
+                                sum(f["query"]["rechecked_free"] for f in result["families"].values())),
+        "command": "python benchmarks/mbm.py --problems PROBLEMS" + (" --peer" if args.peer else ""),
+    })
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(json.dumps(result, indent=1) + "\n")
+    print(json.dumps({k: v for k, v in result.items() if k != "records"}, indent=1))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,181 @@
+"""The query path (uvms_jax.plan.plan_query) on MoveIt worlds: the compiled kernels against
+MuJoCo (body poses, primitive distances), motions against their samples one by one, the spheres
+never calling a state free that MuJoCo finds in contact, the MoveIt import, the hard budget, and
+errors that name the joint.
+
+The worlds are MotionBenchMaker problems (Chamzas et al., RA-L 2022) for the Franka Panda with
+its own hand and fingers: ``tests/plan/data/mbm/<family>_{scene,request}.yaml``."""
+
+from __future__ import annotations
+
+import importlib.metadata
+from pathlib import Path
+
+import mujoco
+import numpy as np
+import pytest
+
+from uvms_jax import frames
+from uvms_jax import plan as P
+from uvms_jax.plan import _vector_kernels as K
+from uvms_jax.plan._collision import densify
+from uvms_jax.robot import base_body, load_robot, robot_mjcf
+
+DATA = Path(__file__).parent / "data" / "mbm"
+FAMILIES = ("box", "bookshelf_thin", "cage", "table_pick")
+ROBOTS = importlib.metadata.distribution("example-robot-data").locate_file(
+    "cmeel.prefix/share/example-robot-data/robots")
+OPENING = 0.04  # [m] the Panda URDF's largest finger opening
+POSE_ATOL = 1e-9  # [m] float64 chain products against MuJoCo's
+BUDGET_SLACK = 0.01  # [s] the clock is read every few iterations; a loaded CI machine preempts
+DIST_ATOL = 1e-6  # [m] MuJoCo's distances of convex primitives (its GJK/MPR stops at ~1e-10 relative)
+
+
+@pytest.fixture(scope="module")
+def panda():
+    return load_robot(ROBOTS / "panda_description/urdf/panda.urdf", tip="panda_hand_tcp", link_radius=0.05,
+                      gripper="panda_finger_joint1")
+
+
+@pytest.fixture(scope="module")
+def problems(panda):
+    return {f: (P.load_moveit_scene(DATA / f"{f}_scene.yaml"),
+                P.load_moveit_request(DATA / f"{f}_request.yaml", panda)) for f in FAMILIES}
+
+
+def test_body_poses_match_mujoco(panda):
+    model = mujoco.MjModel.from_xml_string(robot_mjcf(panda))
+    data = mujoco.MjData(model)
+    side = P.VectorChecker(panda, P.World(), OPENING).side
+    R, t = np.empty((panda.n_joints, 3, 3)), np.empty((panda.n_joints, 3))
+    for q in np.random.default_rng(0).uniform(panda.lower, panda.upper, (20, panda.n_joints)):
+        data.qpos[[model.joint(j).qposadr[0] for j in panda.joint_names]] = q
+        mujoco.mj_kinematics(model, data)
+        K.pose_bodies(q, side.kin, R, t)
+        for i, link in enumerate(panda.link_names):
+            np.testing.assert_allclose(t[i], data.body(link).xpos, atol=POSE_ATOL)
+            np.testing.assert_allclose(R[i], data.body(link).xmat.reshape(3, 3), atol=POSE_ATOL)
+
+
+@pytest.mark.parametrize("shape,dims", [("box", (0.3, 0.1, 0.05)), ("sphere", (0.1,)), ("capsule", (0.05, 0.3)),
+                                        ("cylinder", (0.08, 0.2))])
+def test_primitive_distances_match_mujoco(shape, dims):
+    rng = np.random.default_rng(1)
+    quat = frames.matrix_quat(frames.rpy_matrix(rng.uniform(-np.pi, np.pi, 3)))
+    obstacle = P.Obstacle("o", shape, (0.1, -0.2, 0.3), dims=dims, quat=tuple(quat))
+    rows, planes = P._worlds.obstacle_rows([obstacle])
+    spec = mujoco.MjSpec()
+    P._worlds.add_obstacles(spec, [obstacle])
+    probe = spec.worldbody.add_body(name="probe", mocap=True)
+    probe.add_geom(type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[1e-4, 0, 0])
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    for p in obstacle.T_world[:3, 3] + rng.uniform(-0.4, 0.4, (200, 3)):
+        data.mocap_pos[0] = p
+        mujoco.mj_kinematics(model, data)
+        mine = K.sphere_obstacle_distance(*p, rows[0], planes)
+        theirs = mujoco.mj_geomDistance(model, data, 0, 1, 1.0, None) + 1e-4
+        if shape == "box":  # a convex mesh in MuJoCo: exact outside, inside a penetration depth
+            if mine > 0:
+                assert mine == pytest.approx(theirs, abs=DIST_ATOL)
+            else:
+                assert theirs <= 1e-4
+        elif theirs < 1.0 and mine < 1.0 - 1e-4:
+            assert mine == pytest.approx(theirs, abs=DIST_ATOL)
+
+
+def test_motion_is_free_exactly_when_every_sample_is(panda, problems):
+    world, _ = problems["bookshelf_thin"]
+    checker = P.VectorChecker(panda, world, OPENING)
+    rng = np.random.default_rng(2)
+    free = rng.uniform(panda.lower, panda.upper, (2000, panda.n_joints))
+    free = free[checker.states_free(free)]
+    verdicts = set()
+    for q0, q1 in zip(free[:-1:2], free[1::2]):
+        for resolution in (0.01, 0.05):
+            samples = densify(np.stack([q0, q1]), resolution)[1:]
+            expected = bool(checker.states_free(samples).all())
+            assert checker.motion_free(q0, q1, resolution) == expected
+            verdicts.add(expected)
+    assert verdicts == {True, False}
+
+
+def test_spheres_never_call_free_a_state_in_contact(panda, problems):
+    """The oracle is MuJoCo on the description's own meshes and the fingers at the opening."""
+    rng = np.random.default_rng(3)
+    for family, (world, _) in problems.items():
+        checker = P.VectorChecker(panda, world, OPENING)
+        exact = P.ExactChecker(checker.side, world)
+        Q = rng.uniform(panda.lower, panda.upper, (1500, panda.n_joints))
+        status = checker.states_status(Q)
+        in_contact = {i for i, *_ in exact.contacts(Q)}
+        # FREE by the covering spheres: never in contact; HIT by the inscribed ones: always.
+        assert not in_contact & set(np.flatnonzero(status == K.FREE)), family
+        assert set(np.flatnonzero(status == K.HIT)) <= in_contact, family
+        assert {K.FREE, K.HIT, K.MAYBE} <= set(status.tolist()), family
+        # With MuJoCo settling the MAYBE states the verdicts are MuJoCo's.
+        np.testing.assert_array_equal(checker.states_free(Q), [i not in in_contact for i in range(len(Q))])
+
+
+def test_moveit_scene_and_request(panda):
+    world = P.load_moveit_scene(DATA / "box_scene.yaml")
+    names = {o.name for o in world.obstacles}
+    assert {"base", "side_back", "side_cap", "side_front", "side_left", "side_right"} <= names
+    cap = next(o for o in world.obstacles if o.name == "side_cap")
+    # The file's quaternion is x, y, z, w; an Obstacle's is w, x, y, z.
+    import yaml
+    raw = next(c for c in yaml.safe_load((DATA / "box_scene.yaml").read_text())["world"]["collision_objects"]
+               if c["id"] == "side_cap")
+    x, y, z, w = raw["primitive_poses"][0]["orientation"]
+    np.testing.assert_allclose(np.abs(np.dot(cap.quat, [w, x, y, z])), 1.0, atol=1e-12)
+    assert cap.dims == tuple(raw["primitives"][0]["dimensions"])
+    assert world.allows("panda_hand", "panda_leftfinger") and not world.allows("panda_link0", "panda_hand")
+    req = P.load_moveit_request(DATA / "box_request.yaml", panda)
+    assert req.start.shape == req.goal.shape == (7,) and req.opening == pytest.approx(0.065)
+
+
+def test_moveit_files_with_errors_are_refused_in_one_line(panda, tmp_path):
+    bad = tmp_path / "scene.yaml"
+    bad.write_text("world:\n  collision_objects:\n    - id: c\n      primitives: [{type: cone, dimensions: [1, 2]}]\n"
+                   "      primitive_poses: [{position: [0, 0, 0], orientation: [0, 0, 0, 1]}]\n")
+    with pytest.raises(ValueError, match="cone"):
+        P.load_moveit_scene(bad)
+    req = tmp_path / "request.yaml"
+    req.write_text("start_state: {joint_state: {name: [panda_joint1], position: [0]}}\n")
+    with pytest.raises(ValueError, match="no value for joints"):
+        P.load_moveit_request(req, panda)
+
+
+def test_limits_are_compared_in_float64_and_errors_name_the_joint(panda, problems):
+    world, req = problems["box"]
+    goal = req.goal.copy()
+    goal[3] = float(panda.upper[3]) + 2e-8  # float32 rounding of the limit: accepted
+    P.plan_query(panda, world, req.start, goal, opening=OPENING, budget_s=0.5, exact=False)
+    goal[3] = float(panda.upper[3]) + 0.05
+    with pytest.raises(ValueError, match=r"goal: joint 'panda_joint4' at .* outside its limits \[.*\]"):
+        P.plan_query(panda, world, req.start, goal, opening=OPENING)
+    with pytest.raises(ValueError, match="panda_finger_joint1"):
+        P.plan_query(panda, world, req.start, req.goal, opening=0.065)
+
+
+def test_budget_is_hard(panda, problems):
+    """A budget spent before the first iteration ends the query there; a query never runs past
+    its budget by more than one iteration (microseconds) plus the clock's granularity."""
+    world, req = problems["bookshelf_thin"]
+    checker = P.VectorChecker(panda, world, OPENING)
+    assert not checker.motion_free(req.start, req.goal, 0.05)  # the planner has to search
+    result = P.plan_query(panda, world, req.start, req.goal, opening=OPENING, budget_s=1e-6, checker=checker)
+    assert (result.success, result.reason) == (False, "timeout")
+    for seed in range(3):
+        result = P.plan_query(panda, world, req.start, req.goal, opening=OPENING, budget_s=0.002, seed=seed,
+                              checker=checker, exact=False)
+        assert result.time_s < 0.002 + BUDGET_SLACK
+
+
+def test_a_planned_path_passes_mujoco_on_every_family(panda, problems):
+    for family, (world, req) in problems.items():
+        result = P.plan_query(panda, world, req.start, req.goal, opening=OPENING, budget_s=5.0)
+        assert result.success, (family, result.reason)
+        np.testing.assert_array_equal(result.path[[0, -1]], np.stack([req.start, req.goal]))
+        exact = P.ExactChecker(P.VectorChecker(panda, world, OPENING).side, world)
+        assert not exact.contacts(densify(result.path, 0.01)), family

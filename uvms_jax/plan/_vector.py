@@ -1,0 +1,315 @@
+"""The fast collision checker of a robot in a :class:`~uvms_jax.plan.World`: the robot's fitted
+spheres (:func:`uvms_jax.robot.collision_spheres`) on its chain, the world's primitives, one
+compiled call per batch of states or per motion (VAMP's approach: Thomason et al., "Motions in
+Microseconds via Vectorized Sampling-Based Planning", ICRA 2024).
+
+The spheres contain the robot's geometry, so a state the checker calls free is free for the
+exact geometry too (up to the sphere fit's coverage, checked by the tests); the reverse does
+not hold (a sphere bulges past its shape by at most the fit's stated excess).
+
+Self-collision: the robot's links form groups (a moving body with the fixed links folded into
+it; each finger on its own). A pair of groups is skipped when they are adjacent (a link and its
+parent, a finger and its hand, the two fingers of one opening), when their spheres touch in
+every sampled pose (MoveIt's "always in collision"), or when the world's allowed collision
+matrix allows every link pair between them.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import itertools
+
+import mujoco
+import numpy as np
+from scipy.cluster.vq import kmeans2
+
+from uvms_jax.plan._vector_kernels import MAYBE, FREE, make_scratch, motion_free, pairs_touching, resolving, states_status
+from uvms_jax.plan._worlds import World, add_obstacles, obstacle_rows
+from uvms_jax.robot import BASE, Robot, RobotSpheres, base_body, collision_spheres, inscribed_spheres, robot_mjcf
+
+__all__ = ["LIMIT_TOL", "ExactChecker", "RobotSpheresModel", "VectorChecker", "check_in_limits", "robot_spheres_model"]
+
+#: A joint value this close outside a limit counts as at the limit [rad or m]: the chain keeps
+#: limits in float32, which rounds a limit such as 2.8973 rad by up to 2.4e-7.
+LIMIT_TOL = 1e-6
+_CLUSTER = 8  # spheres per cluster (on average): the bound tested before them
+_ALWAYS_SAMPLES = 200  # poses of the "touching in every pose" test (as MoveIt's setup assistant)
+
+
+def check_in_limits(robot: Robot, q, label: str) -> np.ndarray:
+    """``q (n,)`` [rad/m] as float64, within the limits up to :data:`LIMIT_TOL`; a ValueError
+    naming the joint, its value and its limit otherwise."""
+    q = np.asarray(q, dtype=np.float64)
+    if q.shape != (robot.n_joints,):
+        raise ValueError(f"{label} has {q.size} values, the arm {robot.name!r} has {robot.n_joints} joints")
+    for name, v, lo, hi in zip(robot.joint_names, q, robot.lower, robot.upper):
+        if not np.isfinite(v):
+            raise ValueError(f"{label}: joint {name!r} is {v}")
+        if v < lo - LIMIT_TOL or v > hi + LIMIT_TOL:
+            raise ValueError(f"{label}: joint {name!r} at {v:.6g} is outside its limits [{lo:.6g}, {hi:.6g}] "
+                             f"(tolerance {LIMIT_TOL:g})")
+    return q
+
+
+def _kin_rows(robot: Robot) -> np.ndarray:
+    """``(n, 16)``: each joint's fixed pose in its parent body, its axis in its own body, its kind."""
+    chain = robot.chain
+    T0 = np.asarray(chain.T_base_joint0, dtype=np.float64)
+    twists = np.asarray(chain.twists, dtype=np.float64)
+    rows = np.zeros((robot.n_joints, 16))
+    parent = np.eye(4)
+    for i in range(robot.n_joints):
+        F = np.linalg.inv(parent) @ T0[i]
+        R, p = T0[i][:3, :3], T0[i][:3, 3]
+        v, w = twists[i, :3], twists[i, 3:]
+        prismatic = chain.kinds[i] == "prismatic"
+        if not prismatic and np.linalg.norm(v + np.cross(w, p)) > 1e-6:
+            raise ValueError(f"joint {robot.joint_names[i]!r}: its axis does not pass through its body's origin")
+        rows[i, :9], rows[i, 9:12] = F[:3, :3].reshape(9), F[:3, 3]
+        rows[i, 12:15], rows[i, 15] = R.T @ (v if prismatic else w), float(prismatic)
+        parent = T0[i]
+    return rows
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class RobotSpheresModel:
+    """A robot's side of the checker at one finger opening: the compiled arrays and its groups.
+
+    Attributes:
+      robot: the robot.
+      opening: the gripper joint's value the fingers are posed at [m] (0 without a gripper).
+      kin: ``(n, 16)`` joint rows; groups: ``(G, 11)``; spheres: ``(S, 4)``; clusters:
+        ``(C, 6)``; inner: ``(I, 4)`` inscribed spheres (:mod:`uvms_jax.plan._vector_kernels`).
+      group_links: per group, the description's links in it.
+      group_bodies: per group, the moving body it belongs to (``-1`` the base) and its finger
+        (``-1`` none).
+      skipped: group pairs never checked against each other, with the reason
+        (``"adjacent"`` or ``"always"``).
+    """
+
+    robot: Robot
+    opening: float
+    kin: np.ndarray
+    groups: np.ndarray
+    spheres: np.ndarray
+    clusters: np.ndarray
+    inner: np.ndarray
+    group_links: tuple[frozenset[str], ...]
+    group_bodies: tuple[tuple[int, int], ...]
+    skipped: dict[tuple[int, int], str]
+
+    def pairs(self, world: World) -> np.ndarray:
+        """``(P, 2)`` group pairs checked in ``world``: every pair not skipped and not allowed by
+        its collision matrix for every link pair between the two groups."""
+        out = [(a, b) for a, b in itertools.combinations(range(len(self.groups)), 2)
+               if (a, b) not in self.skipped
+               and not all(world.allows(x, y) for x in self.group_links[a] for y in self.group_links[b])]
+        return np.array(out, dtype=np.int64).reshape(-1, 2)
+
+    def model(self, world: World, margin: float = 0.0, resolve: bool = True) -> tuple:
+        """The compiled checker's arrays for this robot in ``world`` with ``margin`` [m];
+        ``resolve``: undecided states go to the exact checker (else they count as collisions)."""
+        rows, planes = obstacle_rows(world.obstacles)
+        # Obstacles beyond every pose's reach never meet a sphere: left out of the loops.
+        # A body's origin is at most max_reach from the base's; its group within |centre| + radius.
+        reach = self.robot.max_reach + float(np.max(np.linalg.norm(self.groups[:, 3:6], axis=1) + self.groups[:, 6]))
+        near = np.linalg.norm(rows[:, 16:19], axis=1) - rows[:, 19] <= reach + float(margin)
+        return (self.kin, self.groups, self.spheres, rows[near], planes, self.pairs(world), float(margin),
+                self.clusters, self.inner, int(resolve))
+
+
+def _bound(c: np.ndarray, r: np.ndarray) -> list[float]:
+    """A sphere ``[x, y, z, radius]`` containing the spheres ``c (k, 3)``, ``r (k,)``."""
+    mid = (c.min(0) + c.max(0)) / 2
+    return [*mid, float(np.max(np.linalg.norm(c - mid, axis=1) + r))]
+
+
+def _clusters(c: np.ndarray) -> list[np.ndarray]:
+    """Index sets of neighbouring centres ``c (k, 3)``, about :data:`_CLUSTER` each (k-means,
+    seeded: the same clusters every time)."""
+    k = int(np.ceil(len(c) / _CLUSTER))
+    if k <= 1:
+        return [np.arange(len(c))]
+    _, label = kmeans2(c, k, seed=0, minit="++")
+    return [np.flatnonzero(label == j) for j in range(k) if np.any(label == j)]
+
+
+def _posed(robot: Robot, spheres: RobotSpheres, opening: float) -> np.ndarray:
+    """``(S, 3)`` sphere centres in their bodies' frames, the fingers' slid to ``opening`` [m]."""
+    centre = np.asarray(spheres.centre, dtype=np.float64).copy()
+    for k, f in enumerate(robot.fingers):
+        centre[spheres.finger == k] += np.asarray(f.axis) * f.value(opening)
+    return centre
+
+
+def _opening(robot: Robot, opening: float | None) -> float:
+    g = robot.gripper
+    if g is None:
+        if opening not in (None, 0.0):
+            raise ValueError(f"robot {robot.name!r} has no gripper: opening must be None, got {opening}")
+        return 0.0
+    value = g.upper if opening is None else float(opening)
+    if not (g.lower - LIMIT_TOL <= value <= g.upper + LIMIT_TOL):
+        raise ValueError(f"gripper joint {g.joint!r} at {value:.6g} is outside its limits [{g.lower:.6g}, "
+                         f"{g.upper:.6g}] (tolerance {LIMIT_TOL:g})")
+    return value
+
+
+@functools.lru_cache(maxsize=16)
+def robot_spheres_model(robot: Robot, opening: float | None = None,
+                        spheres: RobotSpheres | None = None) -> RobotSpheresModel:
+    """The robot's side of the checker at a finger ``opening`` [m] (default: the gripper's
+    largest), from ``spheres`` (default: :func:`uvms_jax.robot.collision_spheres`). Cached."""
+    opening = _opening(robot, opening)
+    spheres = collision_spheres(robot) if spheres is None else spheres
+    n = robot.n_joints
+    fingers = robot.fingers
+    keys = [(BASE, -1)] + [(b, -1) for b in range(n)] + [(f.body, k) for k, f in enumerate(fingers)]
+    links = [{robot.base_link}] + [{robot.link_names[b]} for b in range(n)] + [{f.link} for f in fingers]
+    for s in robot.shapes:
+        links[s.body + 1].add(s.link)
+    inner = inscribed_spheres(robot)
+    centre, inner_centre = (_posed(robot, sp, opening) for sp in (spheres, inner))
+    rows, cluster_rows, inner_rows, group_rows, group_links, group_bodies = [], [], [], [], [], []
+    for key, link_set in zip(keys, links):
+        sel = (spheres.body == key[0]) & (spheres.finger == key[1])
+        if not np.any(sel):
+            continue
+        c, r = centre[sel], np.asarray(spheres.radius, dtype=np.float64)[sel]
+        first_sphere, first_cluster, first_inner = len(rows), len(cluster_rows), len(inner_rows)
+        for members in _clusters(c):
+            cluster_rows.append([len(rows), len(rows) + len(members), *_bound(c[members], r[members])])
+            rows += [[*c[i], r[i]] for i in members]
+        own = (inner.body == key[0]) & (inner.finger == key[1])
+        inner_rows += [[*ci, ri] for ci, ri in zip(inner_centre[own], inner.radius[own])]
+        group_rows.append([first_sphere, len(rows), key[0], *_bound(c, r), first_cluster, len(cluster_rows),
+                           first_inner, len(inner_rows)])
+        group_links.append(frozenset(link_set))
+        group_bodies.append(key)
+    kin, groups, sphere_rows = _kin_rows(robot), np.array(group_rows, dtype=np.float64), np.array(rows)
+    clusters = np.array(cluster_rows, dtype=np.float64)
+    inner_rows = np.array(inner_rows, dtype=np.float64).reshape(-1, 4)
+    skipped = {}
+    for a, b in itertools.combinations(range(len(groups)), 2):
+        (ba, fa), (bb, fb) = group_bodies[a], group_bodies[b]
+        if (fa < 0 and fb < 0 and (bb == ba + 1)) or ((fa >= 0 or fb >= 0) and ba == bb):
+            skipped[(a, b)] = "adjacent"
+    candidates = np.array([p for p in itertools.combinations(range(len(groups)), 2) if p not in skipped],
+                          dtype=np.int64).reshape(-1, 2)
+    Q = np.random.default_rng(0).uniform(robot.lower, robot.upper, (_ALWAYS_SAMPLES, n))
+    model = (kin, groups, sphere_rows, np.zeros((0, 20)), np.zeros((0, 4)), np.zeros((0, 2), np.int64), 0.0, clusters,
+             inner_rows, 0)
+    touching = pairs_touching(Q, model, candidates)
+    for (a, b), always in zip(candidates, np.all(touching, axis=0)):
+        if always:
+            skipped[(int(a), int(b))] = "always"
+    return RobotSpheresModel(robot, opening, kin, groups, sphere_rows, clusters, inner_rows, tuple(group_links),
+                             tuple(group_bodies), skipped)
+
+
+class ExactChecker:
+    """MuJoCo's collision test of the robot's own geometry (meshes, primitives, the fingers at
+    the opening) against the world's, with the same skipped and allowed pairs as the spheres
+    (MuJoCo excludes body pairs: a body pair is checked where any of its group pairs is).
+
+    Args:
+      side: the robot's sphere model (its robot, opening and group pairs).
+      world: the world.
+    """
+
+    def __init__(self, side: RobotSpheresModel, world: World):
+        robot = side.robot
+        spec = mujoco.MjSpec.from_string(robot_mjcf(robot, jaws_open=side.opening if robot.gripper else None))
+        add_obstacles(spec, world.obstacles)
+        # The fingers are geoms of their arm body in this model, fixed at the opening: a body
+        # pair is left out only where every group pair between the two bodies is.
+        bodies = [base_body(robot), *robot.link_names]
+        on = [bodies[body + 1] for body, _ in side.group_bodies]
+        checked = {(on[a], on[b]) for a, b in side.pairs(world)}
+        checked |= {(b, a) for a, b in checked}
+        for a, b in itertools.combinations(bodies, 2):
+            if (a, b) not in checked:
+                spec.add_exclude(bodyname1=a, bodyname2=b)
+        self.model = spec.compile()
+        self.data = mujoco.MjData(self.model)
+        self._arm = np.array([self.model.joint(j).qposadr[0] for j in robot.joint_names])
+
+    def free(self, q) -> bool:
+        """Whether ``q (n,)`` [rad] is free of penetrating contacts."""
+        m, d = self.model, self.data
+        d.qpos[self._arm] = q
+        mujoco.mj_kinematics(m, d)
+        mujoco.mj_collision(m, d)
+        return not (d.ncon and np.any(d.contact.dist < 0))
+
+    def contacts(self, Q) -> list[tuple[int, str, str, float]]:
+        """Penetrating contacts at the rows of ``Q (k, n)`` [rad]: ``(row, geom, geom, depth [m])``."""
+        m, d = self.model, self.data
+        out = []
+        for i, q in enumerate(np.atleast_2d(Q)):
+            d.qpos[self._arm] = q
+            mujoco.mj_kinematics(m, d)
+            mujoco.mj_collision(m, d)
+            if d.ncon:
+                dist, geom = d.contact.dist, d.contact.geom
+                for k in np.flatnonzero(dist < 0):
+                    out.append((i, m.geom(geom[k, 0]).name, m.geom(geom[k, 1]).name, float(-dist[k])))
+        return out
+
+
+class VectorChecker:
+    """The compiled sphere checker of a robot in a world (see the module docstring).
+
+    Args:
+      robot: the robot.
+      world: its world.
+      opening: the finger opening [m] (default: the gripper's largest).
+      margin: safety distance [m] added to every sphere.
+      spheres: the robot's spheres (default: :func:`uvms_jax.robot.collision_spheres`).
+    """
+
+    def __init__(self, robot: Robot, world: World, opening: float | None = None, margin: float = 0.0,
+                 spheres: RobotSpheres | None = None):
+        if not (np.isfinite(margin) and margin >= 0):
+            raise ValueError(f"margin must be finite and >= 0 [m], got {margin}")
+        self.robot, self.world = robot, world
+        self.side = robot_spheres_model(robot, opening, spheres)
+        self.model = self.side.model(world, margin)
+        self.lower, self.upper = robot.lower, robot.upper
+        self._scratch = make_scratch(self.model)
+
+    @functools.cached_property
+    def exact(self) -> "ExactChecker":
+        """MuJoCo's check of the same robot, opening and world (built on first use)."""
+        return ExactChecker(self.side, self.world)
+
+    def states_status(self, Q) -> np.ndarray:
+        """``(k,)`` uint8 FREE / HIT / MAYBE of the rows of ``Q (k, n)`` [rad] by the spheres
+        alone (see :func:`~uvms_jax.plan._vector_kernels.state_status`), in one compiled call
+        over the CPU's threads."""
+        Q = np.ascontiguousarray(np.atleast_2d(Q), dtype=np.float64)
+        if Q.ndim != 2 or Q.shape[1] != self.robot.n_joints:
+            raise ValueError(f"Q must have shape (k, {self.robot.n_joints}), got {Q.shape}")
+        return states_status(Q, self.model)
+
+    def states_free(self, Q) -> np.ndarray:
+        """``(k,)`` bool: rows of ``Q (k, n)`` [rad] where the robot touches nothing (limits not
+        checked): the spheres' verdict, MuJoCo's where the spheres cannot tell."""
+        status = self.states_status(Q)
+        free = status == FREE
+        for i in np.flatnonzero(status == MAYBE):
+            free[i] = self.exact.free(np.asarray(Q, dtype=np.float64).reshape(len(status), -1)[i])
+        return free
+
+    def motion_free(self, q0, q1, resolution: float) -> bool:
+        """Whether the straight motion ``q0 → q1`` is free at every sample ``resolution`` [rad]
+        apart on every joint (``q0`` itself not checked)."""
+        with self.resolving():
+            return bool(motion_free(np.asarray(q0, dtype=np.float64), np.asarray(q1, dtype=np.float64),
+                                    float(resolution), self.model, self._scratch))
+
+    def resolving(self):
+        """A block within which compiled checks on :attr:`model` settle undecided states with
+        this checker's MuJoCo model."""
+        return resolving(self.exact.free)

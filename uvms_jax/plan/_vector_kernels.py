@@ -1,0 +1,365 @@
+"""Compiled kernels of the fast query path: a robot as spheres on a serial chain against a world
+of primitives, state by state and motion by motion.
+
+Everything is a flat array so that Numba compiles one loop per kernel:
+
+* ``kin``: per joint ``(n, 16)``: the fixed pose of the joint's body in its parent's frame at
+  ``q = 0`` (rotation row-major ``[0:9]``, translation ``[9:12]``), the unit axis in the body's
+  frame ``[12:15]`` and the kind ``[15]`` (0 revolute about the body origin, 1 prismatic);
+* ``groups``: per collision group ``(G, 11)``: first and last sphere, the body it moves with
+  (``-1`` the base), a bounding sphere in that body's frame (centre, radius), first and last
+  cluster, first and last inscribed sphere. A group is a link of the description (the fingers are groups of their own on the
+  hand's body);
+* ``clusters``: ``(C, 6)``: first and last sphere, bounding sphere (centre, radius) in the
+  body's frame: a few neighbouring spheres of one group, tested as one before their spheres;
+* ``spheres``: ``(S, 4)`` centre in the body frame and radius [m] of the covering spheres
+  (together they contain the robot's geometry); ``inner``: ``(I, 4)`` inscribed spheres (each
+  inside it);
+* ``obstacles``: ``(M, 20)`` rows of one kind each (:data:`BOX` … :data:`POLYTOPE`), with a
+  bounding sphere ``[16:20]`` for the broad phase;
+* ``planes``: ``(F, 4)`` face equations ``n·x + d ≤ 0`` of the polytopes;
+* ``pairs``: ``(P, 2)`` group pairs checked against each other (self-collision).
+
+The model tuple is ``(kin, groups, spheres, obstacles, planes, pairs, margin, clusters, inner,
+resolve)``; ``resolve`` 1: a MAYBE state is settled by the exact checker of :func:`resolving`.
+
+A sphere collides with an obstacle when its signed distance is below its radius plus the
+margin; a polytope's distance is bounded below by its largest face distance, so polytopes are
+tested conservatively (never a false "free"). A state whose covering spheres touch something
+but whose inscribed spheres do not is undecided by spheres (MAYBE): the exact geometry is
+within the covering spheres' excess of contact, and MuJoCo decides.
+"""
+
+from __future__ import annotations
+
+import contextlib
+from collections.abc import Callable
+
+import numba
+import numpy as np
+
+BOX, SPHERE, CAPSULE, CYLINDER, POLYTOPE = 0, 1, 2, 3, 4
+FREE, HIT, MAYBE = 0, 1, 2  # outcomes of state_status
+# The exact checkers that settle MAYBE states (Numba cannot hold a MuJoCo model): each a callable
+# ``q -> bool``, pushed for the duration of a check by :func:`resolving`, innermost last.
+_RESOLVERS: list = []
+
+
+@contextlib.contextmanager
+def resolving(free: Callable[[np.ndarray], bool]):
+    """Within this block, compiled checks settle MAYBE states with ``free(q) -> bool``."""
+    _RESOLVERS.append(free)
+    try:
+        yield
+    finally:
+        _RESOLVERS.pop()
+
+
+@numba.njit(cache=True, fastmath=False)
+def pose_bodies(q, kin, R_out, t_out) -> None:
+    """World poses of the chain's bodies at ``q (n,)``: ``R_out (n, 3, 3)``, ``t_out (n, 3)``
+    (body ``i`` is moved by joint ``i``; body ``i - 1`` is its parent, the base for ``i = 0``)."""
+    n = kin.shape[0]
+    for i in range(n):
+        k = kin[i]
+        # Joint motion in the body's own frame: a rotation about the axis through its origin,
+        # or a translation along it.
+        ax, ay, az = k[12], k[13], k[14]
+        if k[15] == 0.0:
+            c, s = np.cos(q[i]), np.sin(q[i])
+            v = 1.0 - c
+            m00 = c + ax * ax * v
+            m01 = ax * ay * v - az * s
+            m02 = ax * az * v + ay * s
+            m10 = ay * ax * v + az * s
+            m11 = c + ay * ay * v
+            m12 = ay * az * v - ax * s
+            m20 = az * ax * v - ay * s
+            m21 = az * ay * v + ax * s
+            m22 = c + az * az * v
+            dx = dy = dz = 0.0
+        else:
+            m00, m01, m02, m10, m11, m12, m20, m21, m22 = 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0
+            dx, dy, dz = ax * q[i], ay * q[i], az * q[i]
+        # Fixed offset then motion: R_pb = F · M, t_pb = F_t + F · d.
+        f = k
+        r00 = f[0] * m00 + f[1] * m10 + f[2] * m20
+        r01 = f[0] * m01 + f[1] * m11 + f[2] * m21
+        r02 = f[0] * m02 + f[1] * m12 + f[2] * m22
+        r10 = f[3] * m00 + f[4] * m10 + f[5] * m20
+        r11 = f[3] * m01 + f[4] * m11 + f[5] * m21
+        r12 = f[3] * m02 + f[4] * m12 + f[5] * m22
+        r20 = f[6] * m00 + f[7] * m10 + f[8] * m20
+        r21 = f[6] * m01 + f[7] * m11 + f[8] * m21
+        r22 = f[6] * m02 + f[7] * m12 + f[8] * m22
+        tx = f[9] + f[0] * dx + f[1] * dy + f[2] * dz
+        ty = f[10] + f[3] * dx + f[4] * dy + f[5] * dz
+        tz = f[11] + f[6] * dx + f[7] * dy + f[8] * dz
+        if i == 0:
+            R_out[0, 0, 0], R_out[0, 0, 1], R_out[0, 0, 2] = r00, r01, r02
+            R_out[0, 1, 0], R_out[0, 1, 1], R_out[0, 1, 2] = r10, r11, r12
+            R_out[0, 2, 0], R_out[0, 2, 1], R_out[0, 2, 2] = r20, r21, r22
+            t_out[0, 0], t_out[0, 1], t_out[0, 2] = tx, ty, tz
+        else:
+            P = R_out[i - 1]
+            for a in range(3):
+                R_out[i, a, 0] = P[a, 0] * r00 + P[a, 1] * r10 + P[a, 2] * r20
+                R_out[i, a, 1] = P[a, 0] * r01 + P[a, 1] * r11 + P[a, 2] * r21
+                R_out[i, a, 2] = P[a, 0] * r02 + P[a, 1] * r12 + P[a, 2] * r22
+                t_out[i, a] = t_out[i - 1, a] + P[a, 0] * tx + P[a, 1] * ty + P[a, 2] * tz
+
+
+@numba.njit(cache=True, inline="always")
+def _to_world(R, t, b, x, y, z):
+    if b < 0:
+        return x, y, z
+    return (R[b, 0, 0] * x + R[b, 0, 1] * y + R[b, 0, 2] * z + t[b, 0],
+            R[b, 1, 0] * x + R[b, 1, 1] * y + R[b, 1, 2] * z + t[b, 1],
+            R[b, 2, 0] * x + R[b, 2, 1] * y + R[b, 2, 2] * z + t[b, 2])
+
+
+@numba.njit(cache=True)
+def sphere_obstacle_distance(x, y, z, o, planes) -> float:
+    """Signed distance [m] of the point ``(x, y, z)`` to the obstacle row ``o (20,)`` (a lower
+    bound for a polytope)."""
+    kind = o[0]
+    if kind == BOX:  # o[1:4] centre, o[4:13] rotation row-major (columns: box axes), o[13:16] half edges
+        px, py, pz = x - o[1], y - o[2], z - o[3]
+        out2, inside = 0.0, -np.inf
+        for a in range(3):
+            u = px * o[4 + a] + py * o[7 + a] + pz * o[10 + a]
+            e = abs(u) - o[13 + a]
+            if e > inside:
+                inside = e
+            if e > 0.0:
+                out2 += e * e
+        return np.sqrt(out2) if out2 > 0.0 else inside
+    if kind == SPHERE:  # o[1:4] centre, o[4] radius
+        return np.sqrt((x - o[1]) ** 2 + (y - o[2]) ** 2 + (z - o[3]) ** 2) - o[4]
+    if kind == CAPSULE or kind == CYLINDER:  # o[1:4] centre, o[4:7] unit axis, o[7] half length, o[8] radius
+        px, py, pz = x - o[1], y - o[2], z - o[3]
+        along = px * o[4] + py * o[5] + pz * o[6]
+        rx, ry, rz = px - along * o[4], py - along * o[5], pz - along * o[6]
+        radial = np.sqrt(rx * rx + ry * ry + rz * rz)
+        if kind == CAPSULE:
+            a = min(max(along, -o[7]), o[7])
+            return np.sqrt(radial * radial + (along - a) ** 2) - o[8]
+        dr, dz = radial - o[8], abs(along) - o[7]
+        if dr > 0.0 and dz > 0.0:
+            return np.sqrt(dr * dr + dz * dz)
+        return max(dr, dz)
+    # POLYTOPE: o[1], o[2] first and end face row
+    best = -np.inf
+    for f in range(int(o[1]), int(o[2])):
+        d = planes[f, 0] * x + planes[f, 1] * y + planes[f, 2] * z + planes[f, 3]
+        if d > best:
+            best = d
+    return best
+
+
+@numba.njit(cache=True)
+def _hits_obstacle(g, o, model, R, t, cc) -> bool:
+    """Whether a sphere of group ``g`` is nearer than the margin to obstacle row ``o``: its
+    clusters' bounds (world centres ``cc (C, 3)``) first, then their spheres."""
+    groups, spheres, planes, margin, clusters = model[1], model[2], model[4], model[6], model[7]
+    b = int(groups[g, 2])
+    for c in range(int(groups[g, 7]), int(groups[g, 8])):
+        if sphere_obstacle_distance(cc[c, 0], cc[c, 1], cc[c, 2], o, planes) >= clusters[c, 5] + margin:
+            continue
+        for s in range(int(clusters[c, 0]), int(clusters[c, 1])):
+            x, y, z = _to_world(R, t, b, spheres[s, 0], spheres[s, 1], spheres[s, 2])
+            if sphere_obstacle_distance(x, y, z, o, planes) < spheres[s, 3] + margin:
+                return True
+    return False
+
+
+@numba.njit(cache=True)
+def _groups_touch(g1, g2, model, R, t, cc) -> bool:
+    """Whether a sphere of group ``g1`` is nearer than the margin to one of group ``g2``:
+    cluster bounds (world centres ``cc (C, 3)``) against cluster bounds, then their spheres."""
+    groups, spheres, margin, clusters = model[1], model[2], model[6], model[7]
+    b1, b2 = int(groups[g1, 2]), int(groups[g2, 2])
+    for c1 in range(int(groups[g1, 7]), int(groups[g1, 8])):
+        for c2 in range(int(groups[g2, 7]), int(groups[g2, 8])):
+            r = clusters[c1, 5] + clusters[c2, 5] + margin
+            if (cc[c1, 0] - cc[c2, 0]) ** 2 + (cc[c1, 1] - cc[c2, 1]) ** 2 + (cc[c1, 2] - cc[c2, 2]) ** 2 >= r * r:
+                continue
+            for s1 in range(int(clusters[c1, 0]), int(clusters[c1, 1])):
+                u1, v1, w1 = _to_world(R, t, b1, spheres[s1, 0], spheres[s1, 1], spheres[s1, 2])
+                for s2 in range(int(clusters[c2, 0]), int(clusters[c2, 1])):
+                    u2, v2, w2 = _to_world(R, t, b2, spheres[s2, 0], spheres[s2, 1], spheres[s2, 2])
+                    r = spheres[s1, 3] + spheres[s2, 3] + margin
+                    if (u1 - u2) ** 2 + (v1 - v2) ** 2 + (w1 - w2) ** 2 < r * r:
+                        return True
+    return False
+
+
+@numba.njit(cache=True)
+def _inner_hits_obstacle(g, o, model, R, t) -> bool:
+    """Whether an inscribed sphere of group ``g`` is certainly nearer than the margin to ``o``
+    (a polytope only when the centre is inside it, where its face bound is exact)."""
+    groups, planes, margin, inner = model[1], model[4], model[6], model[8]
+    b = int(groups[g, 2])
+    for s in range(int(groups[g, 9]), int(groups[g, 10])):
+        x, y, z = _to_world(R, t, b, inner[s, 0], inner[s, 1], inner[s, 2])
+        d = sphere_obstacle_distance(x, y, z, o, planes)
+        if d < inner[s, 3] + margin and (o[0] != POLYTOPE or d <= 0.0):
+            return True
+    return False
+
+
+@numba.njit(cache=True)
+def _inner_groups_touch(g1, g2, model, R, t) -> bool:
+    groups, margin, inner = model[1], model[6], model[8]
+    b1, b2 = int(groups[g1, 2]), int(groups[g2, 2])
+    for s1 in range(int(groups[g1, 9]), int(groups[g1, 10])):
+        x1, y1, z1 = _to_world(R, t, b1, inner[s1, 0], inner[s1, 1], inner[s1, 2])
+        for s2 in range(int(groups[g2, 9]), int(groups[g2, 10])):
+            x2, y2, z2 = _to_world(R, t, b2, inner[s2, 0], inner[s2, 1], inner[s2, 2])
+            r = inner[s1, 3] + inner[s2, 3] + margin
+            if (x1 - x2) ** 2 + (y1 - y2) ** 2 + (z1 - z2) ** 2 < r * r:
+                return True
+    return False
+
+
+@numba.njit(cache=True)
+def state_status(q, model, scratch) -> int:
+    """The robot at ``q (n,)`` against the world and itself: :data:`FREE` (no covering sphere
+    nearer than the margin [m] to an obstacle or to a sphere of a group it is paired with),
+    :data:`HIT` (an inscribed sphere is: certainly in contact) or :data:`MAYBE` (only covering
+    spheres are: the exact geometry decides). ``model``: see the module docstring; ``scratch``:
+    :func:`make_scratch`. Each test goes from a group's bound to its clusters' bounds to their
+    spheres; after a first MAYBE the scan goes on, as a later HIT settles the state."""
+    kin, groups, obstacles, planes, pairs, margin, clusters = model[0], model[1], model[3], model[4], model[5], \
+        model[6], model[7]
+    R, t, gc, _, cc = scratch
+    pose_bodies(q, kin, R, t)
+    G = groups.shape[0]
+    for g in range(G):
+        b = int(groups[g, 2])
+        gc[g, 0], gc[g, 1], gc[g, 2] = _to_world(R, t, b, groups[g, 3], groups[g, 4], groups[g, 5])
+        for c in range(int(groups[g, 7]), int(groups[g, 8])):
+            cc[c, 0], cc[c, 1], cc[c, 2] = _to_world(R, t, b, clusters[c, 2], clusters[c, 3], clusters[c, 4])
+    status = FREE
+    for g in range(G):
+        gr = groups[g, 6]
+        for m in range(obstacles.shape[0]):
+            o = obstacles[m]
+            reach = gr + o[19] + margin
+            if (gc[g, 0] - o[16]) ** 2 + (gc[g, 1] - o[17]) ** 2 + (gc[g, 2] - o[18]) ** 2 > reach * reach:
+                continue
+            if sphere_obstacle_distance(gc[g, 0], gc[g, 1], gc[g, 2], o, planes) >= gr + margin:
+                continue
+            if _hits_obstacle(g, o, model, R, t, cc):
+                if _inner_hits_obstacle(g, o, model, R, t):
+                    return HIT
+                status = MAYBE
+    for p in range(pairs.shape[0]):
+        g1, g2 = pairs[p, 0], pairs[p, 1]
+        reach = groups[g1, 6] + groups[g2, 6] + margin
+        if (gc[g1, 0] - gc[g2, 0]) ** 2 + (gc[g1, 1] - gc[g2, 1]) ** 2 + (gc[g1, 2] - gc[g2, 2]) ** 2 > reach * reach:
+            continue
+        if _groups_touch(g1, g2, model, R, t, cc):
+            if _inner_groups_touch(g1, g2, model, R, t):
+                return HIT
+            status = MAYBE
+    return status
+
+
+def _resolve(q) -> bool:
+    """The exact verdict on a MAYBE state: whether ``q`` is free for the innermost
+    :func:`resolving` checker."""
+    return _RESOLVERS[-1](q)
+
+
+@numba.njit(cache=True)
+def state_free(q, model, scratch) -> bool:
+    """Whether ``q (n,)`` is free: :func:`state_status`, a MAYBE settled by the exact checker
+    of :func:`resolving` (Python, through ``numba.objmode``) or, without one (``model``'s last
+    entry 0), counted as a collision."""
+    status = state_status(q, model, scratch)
+    if status != MAYBE:
+        return status == FREE
+    if model[9] == 0:
+        return False
+    with numba.objmode(ok="boolean"):
+        ok = _resolve(q)
+    return ok
+
+
+@numba.njit(cache=True, parallel=True)
+def states_status(Q, model) -> np.ndarray:
+    """``(k,)`` uint8: :func:`state_status` of each row of ``Q (k, n)``, in chunks spread over
+    the CPU's threads."""
+    k = Q.shape[0]
+    out = np.empty(k, dtype=np.uint8)
+    chunk = 256
+    for c in numba.prange((k + chunk - 1) // chunk):
+        scratch = make_scratch(model)
+        for i in range(c * chunk, min(k, (c + 1) * chunk)):
+            out[i] = state_status(Q[i], model, scratch)
+    return out
+
+
+@numba.njit(cache=True)
+def make_scratch(model):
+    """Work arrays of one thread's checks: body rotations ``(n, 3, 3)`` and positions ``(n, 3)``,
+    group centres ``(G, 3)``, one configuration ``(n,)``, cluster centres ``(C, 3)``."""
+    n, G, C = model[0].shape[0], model[1].shape[0], model[7].shape[0]
+    return np.empty((n, 3, 3)), np.empty((n, 3)), np.empty((G, 3)), np.empty(n), np.empty((C, 3))
+
+
+@numba.njit(cache=True)
+def n_samples(q0, q1, resolution) -> int:
+    """Samples of the straight motion ``q0 → q1`` so that no joint moves more than
+    ``resolution`` [rad] between two (the end included, the start not)."""
+    d = 0.0
+    for j in range(q0.shape[0]):
+        d = max(d, abs(q1[j] - q0[j]))
+    return max(1, int(np.ceil(d / resolution - 1e-12)))
+
+
+@numba.njit(cache=True, inline="always")
+def _sample_collides(q0, q1, i, steps, model, scratch) -> bool:
+    q = scratch[3]
+    f = i / steps
+    for j in range(q0.shape[0]):
+        q[j] = q0[j] + f * (q1[j] - q0[j])
+    return not state_free(q, model, scratch)
+
+
+@numba.njit(cache=True)
+def motion_free(q0, q1, resolution, model, scratch) -> bool:
+    """Whether every sample of ``q0 → q1`` at ``resolution`` [rad] (:func:`n_samples`; ``q0``
+    assumed free) is free. Samples are visited coarse to fine — the end, then the odd multiples
+    of strides 2^m … 1 — so a collision is usually met after a few."""
+    steps = n_samples(q0, q1, resolution)
+    if _sample_collides(q0, q1, steps, steps, model, scratch):
+        return False
+    stride = 1
+    while stride * 2 <= steps:
+        stride *= 2
+    while stride > 0:
+        for i in range(stride, steps, 2 * stride):
+            if _sample_collides(q0, q1, i, steps, model, scratch):
+                return False
+        stride //= 2
+    return True
+
+
+@numba.njit(cache=True)
+def pairs_touching(Q, model, candidates) -> np.ndarray:
+    """``(k, P)`` bool: whether the two groups of each candidate pair ``(P, 2)`` have spheres
+    nearer than the margin at each row of ``Q (k, n)`` (for the pairs that touch in every pose)."""
+    out = np.zeros((Q.shape[0], candidates.shape[0]), dtype=np.bool_)
+    R, t, _, _, cc = make_scratch(model)
+    groups, clusters = model[1], model[7]
+    for i in range(Q.shape[0]):
+        pose_bodies(Q[i], model[0], R, t)
+        for g in range(groups.shape[0]):
+            for c in range(int(groups[g, 7]), int(groups[g, 8])):
+                cc[c, 0], cc[c, 1], cc[c, 2] = _to_world(R, t, int(groups[g, 2]), clusters[c, 2], clusters[c, 3],
+                                                         clusters[c, 4])
+        for p in range(candidates.shape[0]):
+            out[i, p] = _groups_touch(candidates[p, 0], candidates[p, 1], model, R, t, cc)
+    return out
