@@ -24,7 +24,8 @@ import mujoco
 import numpy as np
 from scipy.cluster.vq import kmeans2
 
-from uvms_jax.plan._vector_kernels import MAYBE, FREE, make_scratch, motion_free, pairs_touching, resolving, states_status
+from uvms_jax.plan._vector_kernels import (make_scratch, motion_free, pairs_touching, settle, states_status,
+                                           without_exact)
 from uvms_jax.plan._worlds import World, add_obstacles, obstacle_rows
 from uvms_jax.robot import BASE, Robot, RobotSpheres, base_body, collision_spheres, inscribed_spheres, robot_mjcf
 
@@ -33,6 +34,7 @@ __all__ = ["LIMIT_TOL", "ExactChecker", "RobotSpheresModel", "VectorChecker", "c
 #: A joint value this close outside a limit counts as at the limit [rad or m]: the chain keeps
 #: limits in float32, which rounds a limit such as 2.8973 rad by up to 2.4e-7.
 LIMIT_TOL = 1e-6
+_OBSTACLE = "obstacle_"  # prefix of the world's geoms in the exact model
 _CLUSTER = 8  # spheres per cluster (on average): the bound tested before them
 _ALWAYS_SAMPLES = 200  # poses of the "touching in every pose" test (as MoveIt's setup assistant)
 
@@ -107,16 +109,18 @@ class RobotSpheresModel:
                and not all(world.allows(x, y) for x in self.group_links[a] for y in self.group_links[b])]
         return np.array(out, dtype=np.int64).reshape(-1, 2)
 
-    def model(self, world: World, margin: float = 0.0, resolve: bool = True) -> tuple:
+    def model(self, world: World, margin: float = 0.0, exact: "ExactChecker | None" = None) -> tuple:
         """The compiled checker's arrays for this robot in ``world`` with ``margin`` [m];
-        ``resolve``: undecided states go to the exact checker (else they count as collisions)."""
+        ``exact``: MuJoCo's model of both, which settles what the spheres cannot tell (None:
+        such states come out MAYBE)."""
         rows, planes = obstacle_rows(world.obstacles)
         # Obstacles beyond every pose's reach never meet a sphere: left out of the loops.
         # A body's origin is at most max_reach from the base's; its group within |centre| + radius.
         reach = self.robot.max_reach + float(np.max(np.linalg.norm(self.groups[:, 3:6], axis=1) + self.groups[:, 6]))
         near = np.linalg.norm(rows[:, 16:19], axis=1) - rows[:, 19] <= reach + float(margin)
+        arrays = without_exact(len(self.groups), int(np.sum(near))) if exact is None else exact.arrays(near)
         return (self.kin, self.groups, self.spheres, rows[near], planes, self.pairs(world), float(margin),
-                self.clusters, self.inner, int(resolve))
+                self.clusters, self.inner, arrays, int(exact is not None))
 
 
 def _bound(c: np.ndarray, r: np.ndarray) -> list[float]:
@@ -199,7 +203,7 @@ def robot_spheres_model(robot: Robot, opening: float | None = None,
                           dtype=np.int64).reshape(-1, 2)
     Q = np.random.default_rng(0).uniform(robot.lower, robot.upper, (_ALWAYS_SAMPLES, n))
     model = (kin, groups, sphere_rows, np.zeros((0, 20)), np.zeros((0, 4)), np.zeros((0, 2), np.int64), 0.0, clusters,
-             inner_rows, 0)
+             inner_rows, without_exact(len(groups), 0), 0)
     touching = pairs_touching(Q, model, candidates)
     for (a, b), always in zip(candidates, np.all(touching, axis=0)):
         if always:
@@ -221,7 +225,7 @@ class ExactChecker:
     def __init__(self, side: RobotSpheresModel, world: World):
         robot = side.robot
         spec = mujoco.MjSpec.from_string(robot_mjcf(robot, jaws_open=side.opening if robot.gripper else None))
-        add_obstacles(spec, world.obstacles)
+        add_obstacles(spec, world.obstacles, _OBSTACLE)
         # The fingers are geoms of their arm body in this model, fixed at the opening: a body
         # pair is left out only where every group pair between the two bodies is.
         bodies = [base_body(robot), *robot.link_names]
@@ -234,6 +238,26 @@ class ExactChecker:
         self.model = spec.compile()
         self.data = mujoco.MjData(self.model)
         self._arm = np.array([self.model.joint(j).qposadr[0] for j in robot.joint_names])
+        m = self.model
+        names = [m.geom(g).name for g in range(m.ngeom)]
+        fingers = tuple(f"geom_{f.joint}_" for f in robot.fingers)  # the fingers' geoms (robot_mjcf's names)
+        ranges, geoms = [], []
+        for (body, finger), body_name in zip(side.group_bodies, on):
+            if finger >= 0:
+                own = [g for g, name in enumerate(names) if name.startswith(fingers[finger])]
+            else:
+                own = [g for g, name in enumerate(names) if m.body(m.geom_bodyid[g]).name == body_name
+                       and not name.startswith(fingers or ("\0",)) and not name.startswith(_OBSTACLE)]
+            ranges.append([len(geoms), len(geoms) + len(own)])
+            geoms += own
+        self._ranges, self._geoms = np.array(ranges, np.int64).reshape(-1, 2), np.array(geoms, np.int32)
+        self._obstacles = np.array([m.geom(_OBSTACLE + o.name).id for o in world.obstacles], np.int32)
+
+    def arrays(self, rows) -> tuple:
+        """The compiled checker's view of this model (see :mod:`uvms_jax.plan._vector_kernels`),
+        for the obstacle rows selected by the mask ``rows (M,)``."""
+        return (self.model._address, self.data._address, self.data.qpos, self._arm.astype(np.int64), self._ranges,
+                self._geoms, self._obstacles[rows])
 
     def free(self, q) -> bool:
         """Whether ``q (n,)`` [rad] is free of penetrating contacts."""
@@ -275,41 +299,31 @@ class VectorChecker:
             raise ValueError(f"margin must be finite and >= 0 [m], got {margin}")
         self.robot, self.world = robot, world
         self.side = robot_spheres_model(robot, opening, spheres)
-        self.model = self.side.model(world, margin)
+        self.exact = ExactChecker(self.side, world)
+        self.model = self.side.model(world, margin, self.exact)
         self.lower, self.upper = robot.lower, robot.upper
         self._scratch = make_scratch(self.model)
 
-    @functools.cached_property
-    def exact(self) -> "ExactChecker":
-        """MuJoCo's check of the same robot, opening and world (built on first use)."""
-        return ExactChecker(self.side, self.world)
+    def _rows(self, Q) -> np.ndarray:
+        Q = np.ascontiguousarray(np.atleast_2d(Q), dtype=np.float64)
+        if Q.ndim != 2 or Q.shape[1] != self.robot.n_joints:
+            raise ValueError(f"Q must have shape (k, {self.robot.n_joints}), got {Q.shape}")
+        return Q
 
     def states_status(self, Q) -> np.ndarray:
         """``(k,)`` uint8 FREE / HIT / MAYBE of the rows of ``Q (k, n)`` [rad] by the spheres
         alone (see :func:`~uvms_jax.plan._vector_kernels.state_status`), in one compiled call
         over the CPU's threads."""
-        Q = np.ascontiguousarray(np.atleast_2d(Q), dtype=np.float64)
-        if Q.ndim != 2 or Q.shape[1] != self.robot.n_joints:
-            raise ValueError(f"Q must have shape (k, {self.robot.n_joints}), got {Q.shape}")
-        return states_status(Q, self.model)
+        return states_status(self._rows(Q), *self.model[:9])
 
     def states_free(self, Q) -> np.ndarray:
         """``(k,)`` bool: rows of ``Q (k, n)`` [rad] where the robot touches nothing (limits not
         checked): the spheres' verdict, MuJoCo's where the spheres cannot tell."""
-        status = self.states_status(Q)
-        free = status == FREE
-        for i in np.flatnonzero(status == MAYBE):
-            free[i] = self.exact.free(np.asarray(Q, dtype=np.float64).reshape(len(status), -1)[i])
-        return free
+        Q = self._rows(Q)
+        return settle(Q, states_status(Q, *self.model[:9]), self.model)
 
     def motion_free(self, q0, q1, resolution: float) -> bool:
         """Whether the straight motion ``q0 → q1`` is free at every sample ``resolution`` [rad]
         apart on every joint (``q0`` itself not checked)."""
-        with self.resolving():
-            return bool(motion_free(np.asarray(q0, dtype=np.float64), np.asarray(q1, dtype=np.float64),
-                                    float(resolution), self.model, self._scratch))
-
-    def resolving(self):
-        """A block within which compiled checks on :attr:`model` settle undecided states with
-        this checker's MuJoCo model."""
-        return resolving(self.exact.free)
+        return bool(motion_free(np.asarray(q0, dtype=np.float64), np.asarray(q1, dtype=np.float64), float(resolution),
+                                self.model, self._scratch))

@@ -21,7 +21,11 @@ Everything is a flat array so that Numba compiles one loop per kernel:
 * ``pairs``: ``(P, 2)`` group pairs checked against each other (self-collision).
 
 The model tuple is ``(kin, groups, spheres, obstacles, planes, pairs, margin, clusters, inner,
-resolve)``; ``resolve`` 1: a MAYBE state is settled by the exact checker of :func:`resolving`.
+exact, resolve)``. ``exact`` is MuJoCo's model of the same robot and world, called through its C
+API: ``(mjModel address, mjData address, qpos (view of the mjData's), the arm joints' qpos
+addresses (n,), per group its geoms' range (G, 2) into geom ids (K,), each obstacle row's geom
+id (M,))``; ``resolve`` 1: the states the spheres cannot tell are measured by it (never in
+parallel threads: the mjData is shared).
 
 A sphere collides with an obstacle when its signed distance is below its radius plus the
 margin; a polytope's distance is bounded below by its largest face distance, so polytopes are
@@ -32,27 +36,34 @@ within the covering spheres' excess of contact, and MuJoCo decides.
 
 from __future__ import annotations
 
-import contextlib
-from collections.abc import Callable
+from pathlib import Path
 
+import llvmlite.binding as llvm
+import mujoco
 import numba
 import numpy as np
 
 BOX, SPHERE, CAPSULE, CYLINDER, POLYTOPE = 0, 1, 2, 3, 4
 FREE, HIT, MAYBE = 0, 1, 2  # outcomes of state_status
-# The exact checkers that settle MAYBE states (Numba cannot hold a MuJoCo model): each a callable
-# ``q -> bool``, pushed for the duration of a check by :func:`resolving`, innermost last.
-_RESOLVERS: list = []
 
 
-@contextlib.contextmanager
-def resolving(free: Callable[[np.ndarray], bool]):
-    """Within this block, compiled checks settle MAYBE states with ``free(q) -> bool``."""
-    _RESOLVERS.append(free)
-    try:
-        yield
-    finally:
-        _RESOLVERS.pop()
+def _load_mujoco() -> None:
+    """Make MuJoCo's C library (the one its Python bindings ship and load) known to Numba's
+    linker by name, so that compiled kernels call it directly and stay cacheable."""
+    folder = Path(mujoco.__file__).parent
+    found = sorted(folder.glob("libmujoco.so*")) + sorted(folder.glob("libmujoco*.dylib")) + sorted(
+        folder.glob("mujoco.dll"))
+    if not found:
+        raise ImportError(f"MuJoCo's C library was not found in {folder}")
+    llvm.load_library_permanently(str(found[0]))
+
+
+_load_mujoco()
+_ptr = numba.types.uintp  # mjModel* / mjData* as the address the bindings give (``_address``)
+_mj_kinematics = numba.types.ExternalFunction("mj_kinematics", numba.types.void(_ptr, _ptr))
+_mj_geom_distance = numba.types.ExternalFunction(
+    "mj_geomDistance", numba.types.float64(_ptr, _ptr, numba.types.intc, numba.types.intc, numba.types.float64, _ptr))
+_DISTMAX = 1e-3  # [m] past the margin: MuJoCo stops measuring a pair there
 
 
 @numba.njit(cache=True, fastmath=False)
@@ -223,15 +234,39 @@ def _inner_groups_touch(g1, g2, model, R, t) -> bool:
 
 
 @numba.njit(cache=True)
+def _pose_exact(q, exact) -> None:
+    """MuJoCo's kinematics of its model at ``q`` (the arm's joints; the rest as built)."""
+    m, d, qpos, qadr = exact[0], exact[1], exact[2], exact[3]
+    for j in range(qadr.shape[0]):
+        qpos[qadr[j]] = q[j]
+    _mj_kinematics(m, d)
+
+
+@numba.njit(cache=True)
+def _exact_near(g, other, exact, margin) -> bool:
+    """Whether MuJoCo measures a geom of group ``g`` nearer than ``margin`` [m] to geom
+    ``other`` (after :func:`_pose_exact`)."""
+    m, d, ranges, geoms = exact[0], exact[1], exact[4], exact[5]
+    for k in range(ranges[g, 0], ranges[g, 1]):
+        if _mj_geom_distance(m, d, geoms[k], other, margin + _DISTMAX, 0) < margin:
+            return True
+    return False
+
+
+@numba.njit(cache=True)
 def state_status(q, model, scratch) -> int:
-    """The robot at ``q (n,)`` against the world and itself: :data:`FREE` (no covering sphere
-    nearer than the margin [m] to an obstacle or to a sphere of a group it is paired with),
-    :data:`HIT` (an inscribed sphere is: certainly in contact) or :data:`MAYBE` (only covering
-    spheres are: the exact geometry decides). ``model``: see the module docstring; ``scratch``:
-    :func:`make_scratch`. Each test goes from a group's bound to its clusters' bounds to their
-    spheres; after a first MAYBE the scan goes on, as a later HIT settles the state."""
+    """The robot at ``q (n,)`` against the world and itself: :data:`FREE` (nothing nearer than
+    the margin [m]) or :data:`HIT`; without the exact model (``model``'s last entry off),
+    :data:`MAYBE` where the spheres cannot tell.
+
+    ``model``: see the module docstring; ``scratch``: :func:`make_scratch`. Each test goes from
+    a group's bound to its clusters' bounds to their covering spheres; where these touch, an
+    inscribed sphere that does settles HIT, else MuJoCo measures the pair's geoms (once posed
+    for this state) or, without it, the state is MAYBE and the scan goes on (a later HIT
+    settles it)."""
     kin, groups, obstacles, planes, pairs, margin, clusters = model[0], model[1], model[3], model[4], model[5], \
         model[6], model[7]
+    exact, resolve = model[9], model[10]
     R, t, gc, _, cc = scratch
     pose_bodies(q, kin, R, t)
     G = groups.shape[0]
@@ -240,7 +275,7 @@ def state_status(q, model, scratch) -> int:
         gc[g, 0], gc[g, 1], gc[g, 2] = _to_world(R, t, b, groups[g, 3], groups[g, 4], groups[g, 5])
         for c in range(int(groups[g, 7]), int(groups[g, 8])):
             cc[c, 0], cc[c, 1], cc[c, 2] = _to_world(R, t, b, clusters[c, 2], clusters[c, 3], clusters[c, 4])
-    status = FREE
+    status, posed = FREE, False
     for g in range(G):
         gr = groups[g, 6]
         for m in range(obstacles.shape[0]):
@@ -250,51 +285,62 @@ def state_status(q, model, scratch) -> int:
                 continue
             if sphere_obstacle_distance(gc[g, 0], gc[g, 1], gc[g, 2], o, planes) >= gr + margin:
                 continue
-            if _hits_obstacle(g, o, model, R, t, cc):
-                if _inner_hits_obstacle(g, o, model, R, t):
-                    return HIT
+            if not _hits_obstacle(g, o, model, R, t, cc):
+                continue
+            if _inner_hits_obstacle(g, o, model, R, t):
+                return HIT
+            if not resolve:
                 status = MAYBE
+                continue
+            if not posed:
+                _pose_exact(q, exact)
+                posed = True
+            if _exact_near(g, exact[6][m], exact, margin):
+                return HIT
     for p in range(pairs.shape[0]):
         g1, g2 = pairs[p, 0], pairs[p, 1]
         reach = groups[g1, 6] + groups[g2, 6] + margin
         if (gc[g1, 0] - gc[g2, 0]) ** 2 + (gc[g1, 1] - gc[g2, 1]) ** 2 + (gc[g1, 2] - gc[g2, 2]) ** 2 > reach * reach:
             continue
-        if _groups_touch(g1, g2, model, R, t, cc):
-            if _inner_groups_touch(g1, g2, model, R, t):
-                return HIT
+        if not _groups_touch(g1, g2, model, R, t, cc):
+            continue
+        if _inner_groups_touch(g1, g2, model, R, t):
+            return HIT
+        if not resolve:
             status = MAYBE
+            continue
+        if not posed:
+            _pose_exact(q, exact)
+            posed = True
+        ranges, geoms = exact[4], exact[5]
+        for k in range(ranges[g2, 0], ranges[g2, 1]):
+            if _exact_near(g1, geoms[k], exact, margin):
+                return HIT
     return status
-
-
-def _resolve(q) -> bool:
-    """The exact verdict on a MAYBE state: whether ``q`` is free for the innermost
-    :func:`resolving` checker."""
-    return _RESOLVERS[-1](q)
 
 
 @numba.njit(cache=True)
 def state_free(q, model, scratch) -> bool:
-    """Whether ``q (n,)`` is free: :func:`state_status`, a MAYBE settled by the exact checker
-    of :func:`resolving` (Python, through ``numba.objmode``) or, without one (``model``'s last
-    entry 0), counted as a collision."""
-    status = state_status(q, model, scratch)
-    if status != MAYBE:
-        return status == FREE
-    if model[9] == 0:
-        return False
-    with numba.objmode(ok="boolean"):
-        ok = _resolve(q)
-    return ok
+    return state_status(q, model, scratch) == FREE
+
+
+@numba.njit(cache=True)
+def without_exact(n_groups: int, n_obstacles: int) -> tuple:
+    """The ``exact`` entry of a model with no MuJoCo model (MAYBE states stay open)."""
+    return (0, 0, np.zeros(1), np.zeros(0, np.int64), np.zeros((n_groups, 2), np.int64), np.zeros(0, np.int32),
+            np.zeros(n_obstacles, np.int32))
 
 
 @numba.njit(cache=True, parallel=True)
-def states_status(Q, model) -> np.ndarray:
-    """``(k,)`` uint8: :func:`state_status` of each row of ``Q (k, n)``, in chunks spread over
-    the CPU's threads."""
+def states_status(Q, kin, groups, spheres, obstacles, planes, pairs, margin, clusters, inner) -> np.ndarray:
+    """``(k,)`` uint8: :func:`state_status` of each row of ``Q (k, n)`` by the spheres alone (the
+    model's entries before ``exact``: threads share no mjData), in chunks over the CPU's threads."""
     k = Q.shape[0]
     out = np.empty(k, dtype=np.uint8)
     chunk = 256
     for c in numba.prange((k + chunk - 1) // chunk):
+        model = (kin, groups, spheres, obstacles, planes, pairs, margin, clusters, inner,
+                 without_exact(groups.shape[0], obstacles.shape[0]), 0)
         scratch = make_scratch(model)
         for i in range(c * chunk, min(k, (c + 1) * chunk)):
             out[i] = state_status(Q[i], model, scratch)
@@ -362,4 +408,17 @@ def pairs_touching(Q, model, candidates) -> np.ndarray:
                                                          clusters[c, 4])
         for p in range(candidates.shape[0]):
             out[i, p] = _groups_touch(candidates[p, 0], candidates[p, 1], model, R, t, cc)
+    return out
+
+
+@numba.njit(cache=True)
+def settle(Q, status, model) -> np.ndarray:
+    """``(k,)`` bool: whether each row of ``Q (k, n)`` is free, its :func:`states_status`
+    ``status`` kept where it is FREE or HIT and measured by ``model``'s exact model (serially:
+    one mjData) where it is MAYBE."""
+    out = status == FREE
+    scratch = make_scratch(model)
+    for i in range(Q.shape[0]):
+        if status[i] == MAYBE:
+            out[i] = state_status(Q[i], model, scratch) == FREE
     return out
