@@ -36,7 +36,7 @@ from hydra.core.hydra_config import HydraConfig  # noqa: E402
 from omegaconf import DictConfig, OmegaConf  # noqa: E402
 
 from uvms_jax import evo  # noqa: E402
-from uvms_jax.pipeline import PipelineSettings, run_pipeline  # noqa: E402
+from uvms_jax.pipeline import PipelineSettings, check_stages, run_pipeline  # noqa: E402
 from uvms_jax.settings import SettingsError, check_keys, from_mapping  # noqa: E402
 
 EXAMPLE_PLAN = Path(__file__).resolve().parents[1] / "examples" / "thesis_plan.json"
@@ -108,7 +108,8 @@ def main(cfg: DictConfig) -> dict:
         settings = settings_of(cfg)
         if "schedule" in settings.stages:
             _cli.reject_unused_weights(settings.sched.source.kind)
-    return run_pipeline(settings, Path(HydraConfig.get().runtime.output_dir), OmegaConf.to_yaml(cfg))
+        checked = check_stages(settings)  # what each stage needs of the arm, before the first one
+    return run_pipeline(settings, Path(HydraConfig.get().runtime.output_dir), OmegaConf.to_yaml(cfg), checked)
 
 
 if __name__ == "__main__":

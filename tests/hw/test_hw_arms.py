@@ -127,7 +127,7 @@ def test_an_arm_without_gripper_runs_its_moves_and_dwells():
     ticks = [row for row in run.log.rows if row[1] == 1]
     assert ticks[-1][0] - ticks[0][0] >= dwell_s
     assert mujoco.mj_name2id(SimArm(bare).model, mujoco.mjtObj.mjOBJ_JOINT, "axis_a") == -1
-    with pytest.raises(PlanError, match="segment 0 \\(out\\): a gripper step \\(10.0 mm\\), but the arm has no gripper"):
+    with pytest.raises(PlanError, match=r"segment 0 \(out\): a gripper step \(10.0 mm\), but the arm has no gripper"):
         run_plan(alpha_plan(arm=bare.record()), bare)
 
 
