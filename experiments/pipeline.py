@@ -44,7 +44,7 @@ from omegaconf import DictConfig, OmegaConf  # noqa: E402
 from uvms_jax import evo  # noqa: E402
 from uvms_jax import plan as planning  # noqa: E402
 from uvms_jax.files import refuse_used_folder  # noqa: E402
-from uvms_jax.pipeline import RETRY, RUN_FILES, PipelineSettings, run_pipeline  # noqa: E402
+from uvms_jax.pipeline import RETRY, RUN_FILES, PipelineSettings, check_stages, run_pipeline  # noqa: E402
 from uvms_jax.settings import SettingsError, check_keys, from_mapping  # noqa: E402
 
 EXAMPLE_PLAN = Path(__file__).resolve().parents[1] / "examples" / "thesis_plan.json"
@@ -82,22 +82,18 @@ def check_scenarios(c: dict) -> None:
 
 
 def check_arm(settings: PipelineSettings) -> None:
-    """The scenario's arm loads (quietly: the run loads it again and logs what it found), and
-    the scenario's and the baseline's start configurations fit it (call inside a Hydra context).
+    """The scenario's arm loads (quietly: the run loads it again and logs what it found; call
+    inside a Hydra context). The baseline takes the same arm and start (its start_q is not read:
+    :func:`uvms_jax.pipeline.baseline_scenario`).
 
     Raises:
       SettingsError: ``<file>: <key path>: <what is wrong>``.
     """
     try:
         with _cli.quiet("uvms_jax.robot"):
-            robot = planning.scenario_robot(settings.scenario)
+            planning.scenario_robot(settings.scenario)
     except SettingsError as e:
         raise SettingsError(f"{_cli.config_file('scenario')}: {e}") from None
-    if settings.baseline is not None:
-        try:
-            planning.check_start_q(robot, settings.baseline.get("start_q"), "baseline.start_q")
-        except SettingsError as e:
-            raise SettingsError(f"{_cli.config_file('scenario@baseline')}: {e}") from None
 
 
 def settings_of(cfg: DictConfig) -> PipelineSettings:
@@ -159,10 +155,11 @@ def main(cfg: DictConfig) -> dict:
             _cli.reject_unused_weights(settings.sched.source.kind)
         if settings.scenario:
             check_arm(settings)
+        checked = check_stages(settings)  # what each stage needs of the arm, before the first one
         out = Path(HydraConfig.get().runtime.output_dir)
         if not cfg.overwrite:  # a multirun's job folder (a run's: the callback checked it already)
             refuse_used_folder(out, RUN_FILES, RETRY)
-    return run_pipeline(settings, out, OmegaConf.to_yaml(cfg), overwrite=cfg.overwrite)
+    return run_pipeline(settings, out, OmegaConf.to_yaml(cfg), checked, overwrite=cfg.overwrite)
 
 
 if __name__ == "__main__":

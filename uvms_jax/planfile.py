@@ -4,6 +4,7 @@ Format (version 1; JSON object)::
 
     {
       "version": 1,
+      "meta": {"gripper_steps": "jaws"},            # optional notes, kept as they are
       "joint_names": ["G", "F", "E", "D", "C", "B"],
       "arm": {"name": "my_arm", "dof": 6,           # optional: the arm the plan was made for
               "joint_names": [...], "gripper": {"joint": "A", "lower_m": 0.0, "upper_m": 0.035,
@@ -27,6 +28,11 @@ the gate threshold (thesis 4.6) before going on. After the motion, ``gripper`` (
 the jaws [mm, within the gripper's limits] and waits for them the same way. A segment's first waypoint must repeat
 the previous segment's last one (continuity); the plan's first waypoint is where the arm must
 already be. Joint angles are in rad, within the arm's limits.
+
+``meta`` (optional) holds notes that the runner does not read. The planning stage records there how
+the arm takes the gripper steps: ``gripper_steps: jaws``, or for an arm without a gripper
+``{gripper_steps: dwell, dwell_s: …}``: its plan has, instead of each gripper step, a segment
+where the arm holds still for ``dwell_s`` [s], named ``… (dwell: no gripper)``.
 
 ``arm`` (optional; plans written before it existed have none) is the ``record()`` of the
 :class:`uvms_jax.robot.Robot` the plan was made for: its name, joint names (equal to the plan's),
@@ -61,13 +67,15 @@ the file suffix, and :func:`load_plan` tells the two formats apart by their keys
   their speed limit, e.g. 35 mm at 0.1 m/s: 0.35 s; the executor waits for the jaws' gate
   anyway).
   Before the first gripper step the jaws hold ``jaws_start_mm`` (by default the first step's
-  opening). Reading back, a point where the arm stands still is a gripper step; so a plan that
-  stands still at a motion waypoint, or starts with a gripper step, cannot be written. A plan
-  with gripper steps and no gripper known cannot be written; read back without a gripper
-  known, every joint is an arm joint.
+  opening). Reading back, a point where the arm stands still is a gripper step; so a plan with
+  gripper steps that stands still at a motion waypoint, or starts with a gripper step, cannot be
+  written. A plan with gripper steps and no gripper known cannot be written; read back without
+  a gripper known, every joint is an arm joint. A plan without gripper steps (e.g. an arm
+  without a gripper, which dwells instead) may stand still: a point that repeats the previous
+  positions later, read back as such.
 - What a JointTrajectory cannot hold is lost: segment names and the boundaries between two
   motions (a plan read back has one motion segment between gripper steps, named after its
-  points), ``base_rpy``, ``arm`` (unless a robot is passed in) and the ``meta`` object. Times
+  points), ``base_rpy``, ``arm`` (unless a robot is passed in) and ``meta``. Times
   keep nanosecond resolution. The motion itself (every waypoint, the time between waypoints,
   every gripper step) survives the round trip.
 """
@@ -146,12 +154,14 @@ class Plan:
         simulated arm takes its gravity and buoyancy from it.
       arm: the ``record()`` of the robot the plan was made for (module docstring), or None
         where not recorded.
+      meta: notes kept with the plan and not interpreted (module docstring), or None.
     """
 
     joint_names: tuple[str, ...]
     segments: tuple[Segment, ...]
     base_rpy: tuple[float, float, float] | None = None
     arm: dict | None = None
+    meta: dict | None = None
 
     def __post_init__(self) -> None:
         if self.arm is not None:  # checked, and kept as plan.json holds it
@@ -227,7 +237,11 @@ def parse_plan(obj: Mapping[str, Any]) -> Plan:
         base_rpy = _floats(base_rpy, "plan.base_rpy")
         if len(base_rpy) != 3 or not all(math.isfinite(v) for v in base_rpy):
             raise PlanError(f"plan.base_rpy: expected 3 finite angles (roll, pitch, yaw) [rad], got {list(base_rpy)}")
-    return Plan(tuple(names), tuple(out), base_rpy, parse_arm(obj.get("arm"), tuple(names)))
+    meta = obj.get("meta")
+    if meta is not None and not isinstance(meta, Mapping):
+        raise PlanError(f"plan.meta: expected an object, got {type(meta).__name__}")
+    return Plan(tuple(names), tuple(out), base_rpy, parse_arm(obj.get("arm"), tuple(names)),
+                None if meta is None else dict(meta))
 
 
 # What an arm record must hold; any further keys a newer Robot.record() writes are kept as they are.
@@ -379,10 +393,10 @@ def to_joint_trajectory(plan: Plan, jaws_start_mm: float | None = None, gripper:
       jaws, last), velocities all zero, times ``{sec, nanosec}``.
 
     Raises:
-      PlanError: a plan that starts with a gripper step, stands still at a motion waypoint,
-        is not continuous between segments, has non-increasing times, already names a joint
-        as the jaws, has gripper steps but no gripper known, or a ``jaws_start_mm`` outside
-        the jaws' travel.
+      PlanError: a plan that starts with a gripper step, stands still at a motion waypoint
+        while it has gripper steps, is not continuous between segments, has non-increasing
+        times, already names a joint as the jaws, has gripper steps but no gripper known, or a
+        ``jaws_start_mm`` outside the jaws' travel.
     """
     jaws = [s.jaws_mm for s in plan.segments if s.jaws_mm is not None]
     names = list(plan.joint_names)
@@ -420,7 +434,7 @@ def to_joint_trajectory(plan: Plan, jaws_start_mm: float | None = None, gripper:
             elif k == 0:
                 if q != q_last:
                     raise PlanError(f"{where}: first waypoint does not repeat the previous one")
-            elif q == q_last:
+            elif q == q_last and jaws:
                 raise PlanError(f"{where}.q[{k}]: the arm stands still, which a JointTrajectory "
                                 "reads as a gripper step")
             else:
@@ -530,5 +544,6 @@ def plan_to_dict(plan: Plan) -> dict[str, Any]:
 
     base = {} if plan.base_rpy is None else {"base_rpy": list(plan.base_rpy)}
     arm = {} if plan.arm is None else {"arm": parse_arm(plan.arm, plan.joint_names)}
-    return {"version": PLAN_VERSION, "joint_names": list(plan.joint_names), **arm, **base,
+    meta = {} if plan.meta is None else {"meta": dict(plan.meta)}
+    return {"version": PLAN_VERSION, **meta, "joint_names": list(plan.joint_names), **arm, **base,
             "segments": [segment(s) for s in plan.segments]}

@@ -104,9 +104,31 @@ def test_an_arm_without_hardware_profile_runs_only_simulated():
         run_plan(alpha_plan(arm=None), bare, link=client)
 
 
-def test_an_arm_without_gripper_is_refused_clearly():
-    with pytest.raises(ValueError, match="has no gripper"):
-        joint_specs(dataclasses.replace(ALPHA, gripper=None, hardware=None))
+def test_an_arm_without_gripper_runs_its_moves_and_dwells():
+    """No gripper (a suction cup, a tool changer, no tool): the joint table is the arm's joints
+    alone, a dwell (the arm holding still for a planned time) passes its gate after that time,
+    and a plan with a jaws step is refused before anything moves."""
+    import mujoco
+
+    bare = dataclasses.replace(ALPHA, gripper=None, hardware=None)
+    assert [j.name for j in joint_specs(bare)] == list(ALPHA.joint_names)
+    dwell_s = 1.5
+    plan = planfile.Plan(bare.joint_names, (
+        planfile.Segment("out", (0.0, 0.8), (tuple(A0), tuple(A1))),
+        planfile.Segment("hold (dwell: no gripper)", (0.0, dwell_s), (tuple(A1), tuple(A1))),
+        planfile.Segment("back", (0.0, 0.8), (tuple(A1), tuple(A0))),
+    ), arm=bare.record())
+    run = run_plan(plan, bare, link="loopback")
+    assert run.ok, run.result.reason
+    assert [(g.segment, g.waypoint) for g in run.result.gates] == [(0, 0), (0, 1), (1, 1), (2, 1)]
+    assert run.result.max_gate_error_rad <= HwConfig().gate_threshold_rad
+    assert np.isnan(run.result.max_gate_error_mm) and run.log.joint_names == bare.joint_names
+    # the dwell: from the gate at A1 to the next gate, the arm stood still for at least dwell_s
+    ticks = [row for row in run.log.rows if row[1] == 1]
+    assert ticks[-1][0] - ticks[0][0] >= dwell_s
+    assert mujoco.mj_name2id(SimArm(bare).model, mujoco.mjtObj.mjOBJ_JOINT, "axis_a") == -1
+    with pytest.raises(PlanError, match=r"segment 0 \(out\): a gripper step \(10.0 mm\), but the arm has no gripper"):
+        run_plan(alpha_plan(arm=bare.record()), bare)
 
 
 def test_arm_without_mass_properties_is_simulated_weightless():

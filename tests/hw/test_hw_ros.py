@@ -112,14 +112,29 @@ def test_time_origin_and_header_are_ignored():
     assert_same_motion(short_plan(), from_joint_trajectory(jt, GRIPPER))
 
 
+def test_dwells_of_an_arm_without_gripper_round_trip():
+    """A plan without gripper steps (an arm without a gripper holds still instead) stands still
+    between two motions: written as a point that repeats the positions later, read back as the
+    same motion with no gripper known."""
+    plan = parse_plan({"joint_names": list("GFEDCB"), "segments": [
+        {"t": [0.0, 1.0], "q": [Q0, Q1]}, {"name": "close (dwell: no gripper)", "t": [0.0, 2.5], "q": [Q1, Q1]},
+        {"t": [0.0, 1.0], "q": [Q1, Q0]}]})
+    jt = to_joint_trajectory(plan)
+    assert jt["joint_names"] == list("GFEDCB")
+    assert [seconds(p["time_from_start"]) for p in jt["points"]] == pytest.approx([0.0, 1.0, 3.5, 4.5], abs=TIME_ATOL)
+    assert jt["points"][1]["positions"] == jt["points"][2]["positions"] == list(Q1)
+    assert_same_motion(plan, from_joint_trajectory(jt))
+
+
 def test_unwritable_plans_are_refused():
     def plan(*segments):
         return parse_plan({"joint_names": list("GFEDCB"), "segments": list(segments)})
 
     with pytest.raises(PlanError, match="starts with a gripper step"):
         to_joint_trajectory(plan({"gripper": {"jaws_mm": 5.0}}, {"t": [0.0, 1.0], "q": [Q0, Q1]}), gripper=GRIPPER)
-    with pytest.raises(PlanError, match="stands still"):
-        to_joint_trajectory(plan({"t": [0.0, 1.0, 2.0], "q": [Q0, Q1, Q1]}))
+    with pytest.raises(PlanError, match="stands still"):  # with gripper steps, that reads as one
+        to_joint_trajectory(plan({"t": [0.0, 1.0, 2.0], "q": [Q0, Q1, Q1]}, {"gripper": {"jaws_mm": 5.0}}),
+                            gripper=GRIPPER)
     with pytest.raises(PlanError, match="does not repeat the previous"):
         to_joint_trajectory(plan({"t": [0.0, 1.0], "q": [Q0, Q1]}, {"t": [0.0, 1.0], "q": [Q0, Q1]}))
     with pytest.raises(PlanError, match="increase strictly"):

@@ -19,7 +19,7 @@ from uvms_jax import frames
 from uvms_jax import plan as P
 from uvms_jax.plan import _vector_kernels as K
 from uvms_jax.plan._collision import densify
-from uvms_jax.robot import base_body, load_robot, robot_mjcf
+from uvms_jax.robot import load_robot, robot_mjcf
 
 DATA = Path(__file__).parent / "data" / "mbm"
 FAMILIES = ("box", "bookshelf_thin", "cage", "table_pick")

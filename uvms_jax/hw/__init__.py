@@ -1,8 +1,8 @@
 """Hardware runner for Reach arms (Blueprint Lab's BPL protocol; docs/theory.md §6, thesis 4.6).
 
 Every stage takes the arm as a :class:`uvms_jax.robot.Robot` (``robot.load_arm("bravo7")``,
-``"alpha5"``, or any card with a gripper and revolute joints): its limits, device ids and model
-come from it; nothing here knows a particular arm.
+``"alpha5"``, or any card with revolute joints, with or without a gripper): its limits, device
+ids and model come from it; nothing here knows a particular arm.
 
 Layers, from the wire up (impurity — sockets, ports, clocks, files — stays in the transports,
 the simulator server, the executor loop, :func:`write_run` and the CLI):
@@ -11,9 +11,9 @@ the simulator server, the executor loop, :func:`write_run` and the CLI):
   datagram at a time with any number of packets), :func:`crc8`, float helpers, typed ids
   :class:`PacketID`, :class:`Mode`, :class:`HardwareStatus` (4 bytes), :data:`BROADCAST`;
   what each request is answered with: :data:`ANSWER_FORMATS`, :func:`decode_answer`;
-* joints: :func:`joint_specs` of a robot (arm joints in rad, jaws in mm; device ids from its
-  hardware profile, :func:`device_ids`), :class:`LimitError`, and the float32 that goes on
-  the wire (:func:`wire_position`);
+* joints: :func:`joint_specs` of a robot (arm joints in rad, jaws in mm if it has them;
+  device ids from its hardware profile, :func:`device_ids`), :class:`LimitError`, and the
+  float32 that goes on the wire (:func:`wire_position`);
 * transports: :class:`UdpTransport`, :class:`SerialTransport` (timeouts; :class:`LinkError`);
 * client: :class:`ReachArm` — modes, position/velocity demands behind a send guard that raises
   on anything outside the limits (checked on the float32 sent), requests and decoded reads,

@@ -1,8 +1,8 @@
 """The dry-run check that guards the hardware runner: a ``plan.json`` (:mod:`uvms_jax.planfile`)
 is refused for another arm than the one it runs on (:func:`check_arm`), and, with every problem
-listed, for wrong joint names, malformed rows, non-finite values,
-times not starting at 0 or not increasing, positions or jaws outside limits, discontinuities
-between segments, and average speeds between waypoints above the velocity limit.
+listed, for wrong joint names, malformed rows, non-finite values, times not starting at 0 or not
+increasing, positions or jaws outside limits, gripper steps for an arm without a gripper,
+discontinuities between segments, and average speeds between waypoints above the velocity limit.
 """
 
 from __future__ import annotations
@@ -45,7 +45,8 @@ class PlanSummary:
 
 
 def specs_of(robot) -> tuple[JointSpec, ...]:
-    """``(n + 1,)`` joint specs (arm joints, then the jaws) of a robot, or the specs themselves."""
+    """``(n + 1,)`` joint specs (arm joints, then the jaws; ``(n,)`` without a gripper) of a
+    robot, or the specs themselves."""
     if isinstance(robot, Sequence) and all(isinstance(j, JointSpec) for j in robot):
         return tuple(robot)
     if hasattr(robot, "chain") and hasattr(robot, "record"):
@@ -86,7 +87,8 @@ def check_plan(
     Args:
       plan: the plan (joint angles [rad], jaws [mm]).
       robot: the arm it is to run on (a :class:`uvms_jax.robot.Robot`, whose plan record is
-        checked first, :func:`check_arm`), or its ``(n + 1,)`` joint specs (arm, then jaws).
+        checked first, :func:`check_arm`), or its ``(n + 1,)`` joint specs (arm, then jaws;
+        ``(n,)`` for an arm without a gripper, which refuses every gripper step).
       config: speed scale and continuity tolerance.
       max_problems: most problems listed.
 
@@ -97,7 +99,7 @@ def check_plan(
     specs = specs_of(robot)
     if not isinstance(robot, Sequence):
         check_arm(plan, robot)
-    joints, jaws = specs[:-1], specs[-1]
+    joints, jaws = (specs[:-1], specs[-1]) if specs[-1].unit == "mm" else (specs, None)
     problems: list[str] = []
     names = tuple(j.name for j in joints)
     if plan.joint_names != names:
@@ -149,7 +151,9 @@ def check_plan(
             prev_q = q[-1]
         if seg.jaws_mm is not None:
             n_grip += 1
-            if not (math.isfinite(seg.jaws_mm) and jaws.contains(seg.jaws_mm)):
+            if jaws is None:
+                problems.append(f"{where}: a gripper step ({seg.jaws_mm} mm), but the arm has no gripper")
+            elif not (math.isfinite(seg.jaws_mm) and jaws.contains(seg.jaws_mm)):
                 problems.append(f"{where}: jaws {seg.jaws_mm} mm outside [{jaws.lower}, {jaws.upper}]")
     if n_wp == 0:
         problems.append("plan has no waypoints: the start position is unknown")

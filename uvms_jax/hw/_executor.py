@@ -6,7 +6,9 @@ state every tick, and after the profile ends holds the goal until the reached-ga
 every encoder within ``gate_threshold_rad`` (jaws ``gate_threshold_mm``). Only then does the
 next move start. A closing jaws step that stalls on an object (still for ``grip_settle_s``,
 short of its goal) has gripped it: its gate passes, and later gates expect the jaws at the
-opening where they stopped, so a dropped object stops the run.
+opening where they stopped, so a dropped object stops the run. An arm without a gripper has no
+jaws in its joint table (its plans hold still where a gripper would move: dwells, which are
+moves to where the arm stands) and takes no gripper step.
 
 The state comes from a request every tick, or from the joints' heartbeat stream
 (``HwConfig.stream_hz``); answers lost on the way are made up from ones under
@@ -70,7 +72,7 @@ class GateRecord:
     Attributes:
       segment, waypoint: where (waypoint -1 = the segment's gripper step).
       error_rad: max |measured - goal| over the arm joints when the gate passed [rad].
-      error_mm: |measured - goal| of the jaws [mm].
+      error_mm: |measured - goal| of the jaws [mm] (NaN for an arm without a gripper).
       wait_s: time from the end of the profile to the gate [s].
       gripped: a closing jaws step stopped on an object; ``error_mm`` is then how far short of
         the goal the jaws stopped.
@@ -120,8 +122,9 @@ class RunResult:
 
     @property
     def max_gate_error_mm(self) -> float:
-        """Max jaws error over the gates the jaws reached (grips excluded) [mm]; NaN if none."""
-        errs = [g.error_mm for g in self.gates if not g.gripped]
+        """Max jaws error over the gates the jaws reached (grips excluded) [mm]; NaN if none
+        (or no jaws)."""
+        errs = [g.error_mm for g in self.gates if not g.gripped and not math.isnan(g.error_mm)]
         return max(errs) if errs else math.nan
 
     @property
@@ -135,7 +138,8 @@ class Executor:
 
     Args:
       client: connected client; its clock is the executor's clock, its ``joints`` (the arm's
-        joints, then the jaws; ``joint_specs(robot)``) the limits the executor runs within.
+        joints, then the jaws if it has a gripper; ``joint_specs(robot)``) the limits the
+        executor runs within.
       config: rates, thresholds and timeouts.
       sleep: how to wait [s] (``time.sleep``, or a virtual clock's ``sleep``).
       log: where commanded/measured states go (a fresh :class:`RunLog` by default).
@@ -156,9 +160,12 @@ class Executor:
         self.clock = client.clock
         self.sleep = sleep
         self.joints = tuple(client.joints)
-        self.arm_joints, self.jaws = self.joints[:-1], self.joints[-1]
-        if self.jaws.unit != "mm":
-            raise ValueError(f"the client's last joint must be the jaws (mm), got {self.jaws.name} in {self.jaws.unit}")
+        # The jaws (mm), if any, come last; an arm without a gripper has none.
+        self.jaws = self.joints[-1] if self.joints[-1].unit == "mm" else None
+        self.arm_joints = self.joints[:-1] if self.jaws is not None else self.joints
+        misplaced = [j.name for j in self.arm_joints if j.unit == "mm"]
+        if misplaced:
+            raise ValueError(f"the client's jaws (mm) must be its last joint, got {misplaced} before it")
         self.devices = tuple(j.device_id for j in self.joints)
         self.log = log if log is not None else RunLog(tuple(j.name for j in self.joints))
         self.progress = progress
@@ -171,7 +178,7 @@ class Executor:
         self._amax = np.array([j.max_acceleration for j in self.joints]) * config.speed_scale
         self._gate = np.array([config.gate_threshold_mm if j.unit == "mm" else config.gate_threshold_rad
                                for j in self.joints])
-        self._arm = np.arange(n - 1)
+        self._arm = np.arange(len(self.arm_joints))
         self._cmd = np.full(n, math.nan)
         self._goal = np.full(n, math.nan)
         self._expected = np.full(n, math.nan)  # what the encoders read at a gate (jaws: on the object)
@@ -280,7 +287,8 @@ class Executor:
         moving = np.flatnonzero(np.abs(goal - self._goal) > 0) if np.all(np.isfinite(self._goal)) \
             else np.arange(len(goal))
         move: Move = synchronised_move(self._goal, goal, self._vmax, self._amax, min_duration)
-        closing = goal[-1] < self._goal[-1]
+        jaws = self.jaws is not None
+        closing = jaws and goal[-1] < self._goal[-1]
         expected = np.where(goal != self._goal, goal, self._expected)
         start = self.clock()
         self._move_start = start
@@ -309,9 +317,9 @@ class Executor:
                     err = np.abs(meas - expected)
                     if np.all(err <= self._gate):
                         self._expected = expected
-                        return GateRecord(seg, wp, float(np.max(err[self._arm])), float(err[-1]),
-                                          t - move.duration)
-                    if not abs(meas[-1] - still_at) <= self._gate[-1]:  # jaws moved (or first reading)
+                        return GateRecord(seg, wp, float(np.max(err[self._arm])),
+                                          float(err[-1]) if jaws else math.nan, t - move.duration)
+                    if jaws and not abs(meas[-1] - still_at) <= self._gate[-1]:  # jaws moved (or first reading)
                         still_since, still_at = t, meas[-1]
                     gripped = (closing and meas[-1] > goal[-1] and t - still_since >= cfg.grip_settle_s
                                and np.all(err[self._arm] <= self._gate[self._arm]))

@@ -4,7 +4,8 @@ The limits are the robot's (:class:`uvms_jax.robot.Robot`), in wire units: joint
 everywhere in ``uvms_jax.hw`` (plans, executor, logs) is the arm's chain order, then the
 gripper; device ids come from the robot's hardware profile (the Bravo 7: G … B = 0x07 …
 0x02, jaws A = 0x01). Revolute joints in rad and rad/s, the jaws in mm and mm/s, exactly as
-they travel on the wire.
+they travel on the wire. An arm without a gripper (a tool changer, a suction cup, no tool) has
+no jaws in its table: its plans hold still where a gripper would move (dwells).
 """
 
 from __future__ import annotations
@@ -106,16 +107,15 @@ def joint_specs(robot) -> tuple[JointSpec, ...]:
     Returns:
       ``(n + 1,)`` specs: the arm joints in chain order (rad, rad/s; acceleration 1 rad/s²,
       a default: descriptions give none), then the gripper (mm, mm/s: its limits × 1000, speed
-      ``min(20 mm/s, its limit)``, acceleration 40 mm/s²), device ids from :func:`device_ids`.
+      ``min(20 mm/s, its limit)``, acceleration 40 mm/s²), device ids from :func:`device_ids`;
+      ``(n,)``, the arm joints alone, for an arm without a gripper.
 
     Raises:
-      ValueError: an arm with no gripper or with a prismatic arm joint (the runner drives
-        revolute joints and one gripper), or without BPL as its protocol.
+      ValueError: an arm with a prismatic arm joint (the runner drives revolute joints and
+        at most one gripper).
     """
     from uvms_jax.kin._chain import REVOLUTE  # the chain's kinds; kin is imported with the robot
 
-    if robot.gripper is None:
-        raise ValueError(f"robot {robot.name!r} has no gripper: the hardware runner drives an arm and its jaws")
     linear = [n for n, k in zip(robot.joint_names, robot.chain.kinds) if k != REVOLUTE]
     if linear:
         raise ValueError(f"robot {robot.name!r}: the hardware runner drives revolute arm joints, {linear} are not")
@@ -123,6 +123,8 @@ def joint_specs(robot) -> tuple[JointSpec, ...]:
     arm = tuple(JointSpec(name, ids[name], _as_written(lo), _as_written(hi), _as_written(v), _ACCELERATION)
                 for name, lo, hi, v in zip(robot.joint_names, robot.lower, robot.upper, robot.velocity_limits))
     g = robot.gripper
+    if g is None:
+        return arm
     jaws = JointSpec(g.joint, ids[g.joint], g.lower * MM_PER_M, g.upper * MM_PER_M,
                      min(_JAWS_VELOCITY_MM, g.velocity * MM_PER_M), _JAWS_ACCELERATION_MM, unit="mm")
     return arm + (jaws,)

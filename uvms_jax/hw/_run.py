@@ -181,7 +181,8 @@ def _simulated(link: str, plan: Plan, robot, config: HwConfig, sim: SimConfig,
                world: ArmWorld | None) -> Iterator[tuple[ReachArm, Callable[[float], None], SimLink]]:
     """A client of a simulated ``robot`` at the plan's start: ``(client, sleep, link)``."""
     start = next(s.q[0] for s in plan.segments if s.q)  # the dry run ensured there is one
-    arm = SimArm(robot, sim, [*start, joint_specs(robot)[-1].lower], world)  # the jaws at their lower limit
+    jaws = [joint_specs(robot)[-1].lower] if robot.gripper is not None else []  # at their lower limit
+    arm = SimArm(robot, sim, [*start, *jaws], world)
     if link == "loopback":
         clock = VirtualClock()
         sim_link = SimLink(arm)

@@ -98,13 +98,13 @@ class SimArm:
     """The simulated device: MuJoCo physics plus BPL behaviour.
 
     Args:
-      robot: the arm (:class:`uvms_jax.robot.Robot` with a gripper); its joint table, device
-        ids included, is :func:`~uvms_jax.hw.joint_specs` of it (an arm without a hardware
-        profile: consecutive ids, the gripper 1).
+      robot: the arm (:class:`uvms_jax.robot.Robot`); its joint table, device ids included, is
+        :func:`~uvms_jax.hw.joint_specs` of it (an arm without a hardware profile: consecutive
+        ids, the gripper 1; an arm without a gripper: no jaws).
       config: servo, physics and the device-side faults (stuck joint, hardware status; joints
         named as the robot names them, case ignored).
       q0: ``(n + 1,)`` initial positions in plan order, the arm's joints then the jaws [rad …,
-        mm]; default mid-range arm and jaws at their lower limit.
+        mm] (``(n,)`` without a gripper); default mid-range arm and jaws at their lower limit.
       world: where the arm is mounted, if not on a fixed base (:class:`ArmWorld`, e.g. a
         hovering vehicle, :class:`uvms_jax.hover.HoverWorld`): its model holds the arm's body
         tree, and it steps the physics with its own forces (buoyancy included: the arm's then
@@ -187,7 +187,8 @@ class SimArm:
         self._next_heartbeat: dict[int, float] = {}
         self._tool = self.model.site(TOOL_SITE).id
         self._base = self.model.body(base_body(robot)).id
-        efforts = np.array([*robot.effort_limits, robot.gripper.effort], dtype=float)
+        self._jaws = robot.gripper is not None  # the last joint is the jaws
+        efforts = np.array([*robot.effort_limits, *([robot.gripper.effort] if self._jaws else [])], dtype=float)
         efforts[~(efforts > 0)] = _DEFAULT_EFFORT
         self._torque_constant = efforts / (_EFFORT_CURRENT_MA * 1e-3)
         self._max_integral = self._torque_constant * _CURRENT_LIMIT_MA * 1e-3 / _KI
@@ -226,7 +227,8 @@ class SimArm:
         return float(self.data.time)
 
     def positions(self) -> np.ndarray:
-        """(n + 1,) positions in wire units (rad, mm), plan order: the arm's joints, then the jaws."""
+        """(n + 1,) positions in wire units (rad, mm), plan order: the arm's joints, then the jaws
+        (``(n,)`` without a gripper)."""
         return self.data.qpos[self._qadr] / self._scale
 
     def velocities(self) -> np.ndarray:
@@ -240,7 +242,8 @@ class SimArm:
             return
         d, q_idx, d_idx, scale = self.data, self._qadr, self._dadr, self._scale
         qpos, qvel, ctrl = d.qpos, d.qvel, d.ctrl
-        width = self.config.object_width_mm * _MM if self.config.object_width_mm > 0 else -math.inf
+        # the jaws stall at the object's width (none: -inf, never; no jaws: nothing to stall)
+        width = self.config.object_width_mm * _MM if self.config.object_width_mm > 0 and self._jaws else -math.inf
         # modes and demands change only between calls (in handle): fixed for this stretch
         position = self.mode == int(Mode.POSITION)
         held = np.where(self.mode == int(Mode.VELOCITY), self.vel_target, 0.0)
@@ -257,7 +260,7 @@ class SimArm:
             np.clip(v, -vmax, vmax, out=v)
             if self.stuck >= 0:
                 v[self.stuck] = 0.0
-            jaws_before = qpos[q_idx[-1]]
+            jaws_before = qpos[q_idx[-1]]  # the last joint: the jaws, if any (else width is -inf)
             v *= scale  # MuJoCo units
             ctrl[act] = v
             # integral of the speed error, clamped where the drive saturates (no wind-up)

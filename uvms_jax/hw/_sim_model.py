@@ -3,8 +3,9 @@
 The bodies, joints, capsules and the tool site are :func:`uvms_jax.robot.mjcf_body`'s (with the
 robot's mass properties where ``dynamics`` is on); this module adds what only the simulator
 needs: gravity along the world's -z turned into the base frame (:func:`world_up`), no contacts,
-rotor inertia and damping on every joint, the jaws (the description's fingers on their slide
-joints, the mimics tied to the gripper joint; or one slide joint at the tool frame), and two
+rotor inertia and damping on every joint, the jaws (an arm with a gripper: the description's
+fingers on their slide joints, the mimics tied to the gripper joint; or one slide joint at the
+tool frame), and two
 actuators per joint — a velocity servo ``v_<joint>`` and an integral-torque motor ``i_<joint>``
 (:class:`~uvms_jax.hw.SimArm` drives both).
 """
@@ -17,7 +18,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ._config import SimConfig
-from ._joints import MM_PER_M, joint_specs
+from ._joints import MM_PER_M, JointSpec, joint_specs
 
 if TYPE_CHECKING:
     import mujoco
@@ -69,7 +70,7 @@ def sim_spec(robot, kv: float = KV, physics_dt: float = SimConfig.physics_dt, dy
     :class:`~uvms_jax.hw.SimArm`.
 
     Args:
-      robot: the arm (:class:`uvms_jax.robot.Robot`, with a gripper).
+      robot: the arm (:class:`uvms_jax.robot.Robot`).
       kv: velocity actuator gain [N·m·s/rad; N·s/m for the jaws].
       physics_dt: time step [s].
       dynamics: the robot's mass properties, gravity on.
@@ -98,11 +99,11 @@ def sim_spec(robot, kv: float = KV, physics_dt: float = SimConfig.physics_dt, dy
 def add_drives(spec: mujoco.MjSpec, robot, kv: float = KV, dynamics: bool = True) -> mujoco.MjSpec:
     """Add what the simulated device needs to the model ``spec`` holding ``robot``'s body tree
     (as :func:`uvms_jax.robot.mjcf_body` names it; anywhere in the world, e.g. under a vehicle):
-    the jaws' slide joint, and a velocity actuator and an integral-torque motor on every joint.
-    Where the body tree holds the description's fingers on their joints (``mjcf_body(...,
-    finger_joints=True)``), the gripper joint's finger is the jaws and each mimic follows it by
-    a joint equality (``finger = multiplier · opening + offset``); otherwise the jaws are a
-    slide body at the tool frame.
+    the jaws' slide joint (an arm with a gripper), and a velocity actuator and an integral-torque
+    motor on every joint. Where the body tree holds the description's fingers on their joints
+    (``mjcf_body(..., finger_joints=True)``), the gripper joint's finger is the jaws and each mimic
+    follows it by a joint equality (``finger = multiplier · opening + offset``); otherwise the
+    jaws are a slide body at the tool frame.
 
     Bodies without mass properties (all of them without ``dynamics``, or for an arm whose
     description has none, e.g. the Reach Alpha 5) are gravity compensated: such an arm is
@@ -116,28 +117,23 @@ def add_drives(spec: mujoco.MjSpec, robot, kv: float = KV, dynamics: bool = True
     """
     import mujoco
 
-    from uvms_jax.robot import TOOL_SITE, base_body
+    from uvms_jax.robot import base_body
 
     specs = joint_specs(robot)
     massive = massive_bodies(robot) if dynamics else set()
     for k, name in enumerate(robot.link_names):
         spec.body(name).gravcomp = 0.0 if k in massive else 1.0
     spec.body(base_body(robot)).gravcomp = 0.0 if -1 in massive else 1.0
-    for j in specs[:-1]:
+    jaws = robot.gripper is not None  # the last spec is the jaws
+    for j in specs[:-1] if jaws else specs:
         joint = spec.joint(j.name)
         joint.range = [j.lower, j.upper]
         joint.armature = _HINGE_ARMATURE
         joint.damping[0] = _HINGE_DAMPING  # [linear, (polynomial terms)]
-    jaws_spec = specs[-1]
-    if robot.fingers and spec.joint(jaws_spec.name) is not None:
-        _tie_fingers(spec, robot, jaws_spec)
-    else:
-        tool = spec.site(TOOL_SITE)
-        jaws = spec.body(robot.link_names[-1]).add_body(name=JAWS_BODY, pos=tool.pos, quat=tool.quat, gravcomp=1.0)
-        jaws.add_joint(name=jaws_spec.name, type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[1.0, 0.0, 0.0],
-                       range=[jaws_spec.lower * _MM, jaws_spec.upper * _MM], limited=mujoco.mjtLimited.mjLIMITED_TRUE,
-                       armature=_JAWS_ARMATURE, damping=_JAWS_DAMPING)
-        jaws.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=_JAWS_HALF_SIZE, mass=_JAWS_MASS)
+    if jaws and robot.fingers and spec.joint(specs[-1].name) is not None:
+        _tie_fingers(spec, robot, specs[-1])
+    elif jaws:
+        _add_jaws(spec, robot, specs[-1])
     for j in specs:
         act = spec.add_actuator(name=f"v_{j.name}", target=j.name, trntype=mujoco.mjtTrn.mjTRN_JOINT)
         act.set_to_velocity(kv=kv)
@@ -161,3 +157,18 @@ def _tie_fingers(spec: mujoco.MjSpec, robot, jaws_spec) -> None:
         tie = spec.add_equality(type=mujoco.mjtEq.mjEQ_JOINT, objtype=mujoco.mjtObj.mjOBJ_JOINT, name1=f.joint,
                                 name2=jaws_spec.name)
         tie.data[:5] = [f.offset, f.multiplier, 0.0, 0.0, 0.0]  # joint1 = offset + multiplier · joint2
+
+
+def _add_jaws(spec: mujoco.MjSpec, robot, jaws: JointSpec) -> None:
+    """The jaws: a light slide body at the tool frame, opening along its x axis (limits: the
+    spec's mm as m)."""
+    import mujoco
+
+    from uvms_jax.robot import TOOL_SITE
+
+    tool = spec.site(TOOL_SITE)
+    body = spec.body(robot.link_names[-1]).add_body(name=JAWS_BODY, pos=tool.pos, quat=tool.quat, gravcomp=1.0)
+    body.add_joint(name=jaws.name, type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[1.0, 0.0, 0.0],
+                   range=[jaws.lower * _MM, jaws.upper * _MM], limited=mujoco.mjtLimited.mjLIMITED_TRUE,
+                   armature=_JAWS_ARMATURE, damping=_JAWS_DAMPING)
+    body.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=_JAWS_HALF_SIZE, mass=_JAWS_MASS)

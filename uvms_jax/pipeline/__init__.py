@@ -7,9 +7,12 @@ stage is its package's stage function (``surrogate.run_reach_map``, ``evo.run_do
 pose puts the arm's base into the planning scene (:func:`docked_scene`), the planning metrics
 become the cost matrix, the winning schedule's plan is executed. :func:`run_pipeline` runs the
 configured stages and writes ``summary.md`` (the chain at a glance, every stage's tables) and
-``results.json``.
+``results.json``, after :func:`check_stages` has checked what every stage needs of the arm.
 """
 
+from uvms_jax.pipeline._precheck import Checked
+from uvms_jax.pipeline._precheck import baseline_scenario
+from uvms_jax.pipeline._precheck import check_stages
 from uvms_jax.pipeline._report import StageReport
 from uvms_jax.pipeline._report import md_table
 from uvms_jax.pipeline._run import RETRY, RUN_FILES, run_pipeline
@@ -19,4 +22,4 @@ from uvms_jax.pipeline._settings import HwStageSettings
 from uvms_jax.pipeline._settings import PipelineSettings
 from uvms_jax.pipeline._stages import docked_scene
 
-__all__ = ["RETRY", "RUN_FILES", "STAGES", "HoverStageSettings", "HwStageSettings", "PipelineSettings", "StageReport", "docked_scene", "md_table", "run_pipeline"]
+__all__ = ["RETRY", "RUN_FILES", "STAGES", "Checked", "HoverStageSettings", "HwStageSettings", "PipelineSettings", "StageReport", "baseline_scenario", "check_stages", "docked_scene", "md_table", "run_pipeline"]

@@ -9,9 +9,9 @@ from pathlib import Path
 
 import jax
 
-from uvms_jax import plan as planning
 from uvms_jax import progress
 from uvms_jax.files import RUNNING, clear_running, mark_running, refuse_used_folder, write_atomic
+from uvms_jax.pipeline._precheck import Checked, check_stages
 from uvms_jax.pipeline._report import write_summary
 from uvms_jax.pipeline._settings import STAGES, PipelineSettings
 from uvms_jax.pipeline._stages import STAGE_FNS, Flow, chain
@@ -25,7 +25,9 @@ RUN_FILES = ("results.json", "summary.md", RUNNING)
 RETRY = "choose another hydra.run.dir or pass --overwrite"
 
 
-def run_pipeline(settings: PipelineSettings, out: Path, config_text: str = "", *, overwrite: bool = False) -> dict:
+
+def run_pipeline(settings: PipelineSettings, out: Path, config_text: str = "", checked: Checked | None = None, *,
+                 overwrite: bool = False) -> dict:
     """Run the configured stages into ``out`` (one folder per stage) and write ``summary.md``
     and ``results.json``; returns results.json's dict.
 
@@ -42,19 +44,25 @@ def run_pipeline(settings: PipelineSettings, out: Path, config_text: str = "", *
     folders keep what they wrote); results.json is never written for it, so nothing reads a
     partial run as a finished one.
 
+    What the stages need of the arm is checked first (:func:`check_stages`): a run that cannot
+    finish is refused before anything is written.
+
     Args:
       settings: every stage's settings.
       out: the run directory.
       config_text: the config as YAML, copied into summary.md.
+      checked: :func:`check_stages` of ``settings``, where the caller has it already.
       overwrite: run in a folder that holds an earlier run.
 
     Raises:
       UsedFolderError: ``out`` holds an earlier run and ``overwrite`` is off (one line naming
         the files and the marker's run, :func:`uvms_jax.files.used_run_folder`); nothing written.
+      SettingsError: what a stage cannot do for the arm (one line), before any stage runs.
     """
     out = Path(out)
     if not overwrite:
         refuse_used_folder(out, RUN_FILES, RETRY)
+    checked = check_stages(settings) if checked is None else checked
     mark_running(out)
     # A folder used before (overwrite): its results are not this run's, and must not stand for
     # it if this run stops early (it writes them anew at the end).
@@ -62,7 +70,7 @@ def run_pipeline(settings: PipelineSettings, out: Path, config_text: str = "", *
         (out / name).unlink(missing_ok=True)
     done: dict = {}
     try:
-        results = _run_stages(settings, out, config_text, done)
+        results = _run_stages(settings, out, config_text, done, checked)
     except BaseException as e:
         status = "interrupted" if isinstance(e, KeyboardInterrupt) else "failed"
         stage = next((s for s in STAGES if s in settings.stages and s not in done), None)
@@ -73,13 +81,14 @@ def run_pipeline(settings: PipelineSettings, out: Path, config_text: str = "", *
     return results
 
 
-def _run_stages(settings: PipelineSettings, out: Path, config_text: str, done: dict) -> dict:
+def _run_stages(settings: PipelineSettings, out: Path, config_text: str, done: dict, checked: Checked) -> dict:
     """:func:`run_pipeline`'s work; ``done`` collects each finished stage's results."""
     order = [s for s in STAGES if s in settings.stages]
     log.info("pipeline stages %s into %s; devices %s", order, out, jax.devices())
+    checked.log_findings(order)
     # One arm for every stage: the scenario's (planning.scenario_robot).
-    robot = planning.scenario_robot(settings.scenario) if settings.scenario else None
-    flow, reports = Flow(robot=robot), []
+    flow = Flow(robot=checked.robot, baseline_scene=checked.baseline_scene, baseline_skipped=checked.baseline_skipped)
+    reports = []
     t_start = time.perf_counter()
     for name in progress.bar(order, desc="pipeline", unit="stage"):
         stage_out = out / name
@@ -95,7 +104,7 @@ def _run_stages(settings: PipelineSettings, out: Path, config_text: str, done: d
     total = time.perf_counter() - t_start
     results = {"total_seconds": total, "stage_seconds": {r.name: r.seconds for r in reports},
                "stage_cpu_seconds": {r.name: r.cpu_seconds for r in reports},
-               "arm": None if robot is None else robot.record(), **{r.name: r.results for r in reports}}
+               "arm": checked.arm_record(), **{r.name: r.results for r in reports}}
     write_atomic(out / "results.json", json.dumps(results, indent=1, default=str))
     summary = write_summary(out, reports, total, config_text, chain(flow, out))
     log.info("pipeline done in %.1f s; summary: %s", total, summary)

@@ -16,6 +16,7 @@ import numpy as np
 from uvms_jax import evo, hover, hw, planfile, progress, sched, surrogate
 from uvms_jax import robot as robots
 from uvms_jax import plan as planning
+from uvms_jax.pipeline._precheck import baseline_scenario, vehicle_hull
 from uvms_jax.pipeline._report import StageReport, md_table
 from uvms_jax.pipeline._settings import PipelineSettings
 
@@ -40,6 +41,11 @@ class Flow:
       pose: the docking stage's vehicle pose ``(4,)`` [m, rad]; T_world_vehicle, T_world_base:
         ``(4, 4)`` the vehicle and the arm's base there.
       scene_spec: the planning scene (the scenario with the arm under the docked vehicle).
+      scene: the planning scene built already, else None: the plan stage builds it from
+        ``scene_spec``.
+      baseline_scene, baseline_skipped: the baseline's scene (the arm at the fixed mount),
+        built by the checks before the first stage, or why the baseline stage is skipped
+        (:func:`~uvms_jax.pipeline.check_stages`).
       task_plan, plan, plan_source: planning → schedule → execution.
       reports: the reports of the stages run so far, by name.
     """
@@ -52,6 +58,9 @@ class Flow:
     T_world_vehicle: np.ndarray | None = None
     T_world_base: np.ndarray | None = None
     scene_spec: planning.SceneSpec | None = None
+    scene: planning.Scene | None = None
+    baseline_scene: planning.Scene | None = None
+    baseline_skipped: str | None = None
     task_plan: planning.TaskGraphPlan | None = None
     plan: planfile.Plan | None = None
     plan_source: str = ""
@@ -196,7 +205,9 @@ def docking(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
 def plan(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
     """IK targets and OMPL plans of every task-graph edge, the arm's base where the docking
     stage put it (else the scenario's mount); kept in memory for the schedule."""
-    scene = planning.build_scene(flow.robot, flow.scene_spec if flow.scene_spec is not None else s.scenario)
+    scene = flow.scene
+    if scene is None:
+        scene = planning.build_scene(flow.robot, flow.scene_spec if flow.scene_spec is not None else s.scenario)
     task_plan = planning.plan_task_graph(jax.random.key(s.plan.seed), scene, s.plan)
     planning.write_task_graph(task_plan, out)
     flow.task_plan = task_plan
@@ -345,10 +356,7 @@ def hovering(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
     to it, in still water and in the configured current: how good the docking pose is if the
     vehicle only hovers there."""
     hs, scene = s.hover, s.docking.scene
-    hull = scene.vehicle_boxes[0]
-    if len(scene.vehicle_boxes) != 1 or any(hull.pos) or any(hull.rpy):
-        raise ValueError("the hover stage models the vehicle as one hull box centred on the vehicle frame; "
-                         f"the docking scene has {[b.name for b in scene.vehicle_boxes]}")
+    hull = vehicle_hull(scene)
     vehicle = dataclasses.replace(hs.vehicle, size=tuple(hull.size), mount_xyz=tuple(scene.mount_xyz),
                                   mount_rpy=tuple(scene.mount_rpy))
     cases = {"still water": ((0.0, 0.0, 0.0), False)}
@@ -458,17 +466,36 @@ def _fixed_mount_M_a(problem: evo.ArmDockingProblem, T_world_base: np.ndarray) -
     return float(evo.evaluate_arm(no_hull, pose).M_a)
 
 
+BASELINE_TITLE = "Baseline: the thesis's fixed mount against the docked arm"
+
+
+def _baseline_skipped(why: str) -> StageReport:
+    return StageReport("baseline", BASELINE_TITLE, [], {"skipped": why}, [f"Skipped: {why}."])
+
+
 def baseline(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
-    """The same task with the thesis's fixed cage-top mount (``baseline``): plan, schedule and
-    run again, and compare with the docked arm."""
+    """The same task with the thesis's fixed cage-top mount (``baseline``), the run's arm and
+    start (:func:`~uvms_jax.pipeline.baseline_scenario`): plan, schedule and run again, and
+    compare with the docked arm. Skipped, with the reason in ``results["skipped"]``, where the
+    arm cannot do the task from there (found before the first stage, or no valid IK target)."""
     if s.baseline is None:
         raise ValueError("the baseline stage needs a baseline scenario (`baseline.scenario`)")
-    fixed = Flow(robot=flow.robot, scene_spec=planning.SceneSpec.from_mapping(s.baseline))
+    if flow.baseline_skipped is not None:
+        return _baseline_skipped(flow.baseline_skipped)
+    fixed = Flow(robot=flow.robot, scene_spec=planning.SceneSpec.from_mapping(baseline_scenario(s)),
+                 scene=flow.baseline_scene)
     quiet = dataclasses.replace(s, hw=dataclasses.replace(s.hw, plot=False))
     stages = {}
     for name, fn in (("plan", plan), ("schedule", schedule), ("hw", execute)):
         (out / name).mkdir(parents=True, exist_ok=True)
-        stages[name] = fn(quiet, out / name, fixed).results
+        try:
+            stages[name] = fn(quiet, out / name, fixed).results
+        except ValueError as e:  # a node without a valid IK target from the fixed mount
+            if name != "plan":
+                raise
+            why = f"arm {flow.robot.name!r} cannot do the task from the fixed mount: {e}"
+            log.warning("baseline stage skipped: %s", why)
+            return _baseline_skipped(why)
     planner = s.sched_planner or s.plan.planners[0]
     rows, res = [], {}
     for label, f, r in (("docked under the vehicle", flow, {k: v.results for k, v in flow.reports.items()}),
@@ -503,8 +530,9 @@ def baseline(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
                      "with the base there and no hull).")
     notes.append("Sums along each schedule of the raw metrics; the costs are normalised within each scene's own edges "
                  "(thesis eq. 4.16), so they rank schedules of one scene, not the two scenes. The baseline plans in "
-                 "the thesis's cage (`configs/scenario/thesis_cage.yaml`).")
-    return StageReport("baseline", "Baseline: the thesis's fixed mount against the docked arm", [table], res, notes)
+                 "the thesis's cage (`configs/scenario/thesis_cage.yaml`) with the run's arm and start "
+                 "(`scenario.start_q`; null: one found there).")
+    return StageReport("baseline", BASELINE_TITLE, [table], res, notes)
 
 
 def chain(flow: Flow, out: Path) -> str:

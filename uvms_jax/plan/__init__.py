@@ -28,7 +28,8 @@ as the thesis's test cage (thesis ch. 4–5).
 * metrics: :func:`trajectory_metrics`, :class:`EdgeMetrics` (fields: ``uvms_jax.sched.METRICS``),
   :func:`static_torques` (the arm's weight and buoyancy and the held object's load);
 * task graph: :func:`task_edges`, :func:`plan_edge`, :func:`metric_tensor` (the input of
-  ``uvms_jax.sched.normalise_metrics``), :func:`plan_from_edges`.
+  ``uvms_jax.sched.normalise_metrics``), :func:`plan_from_edges` (:func:`gripper_steps`: how an arm
+  without a gripper takes its gripper steps).
 
 The package never imports ``uvms_jax.hw``: plans meet the hardware only through
 :mod:`uvms_jax.planfile`.
@@ -82,6 +83,7 @@ from uvms_jax.plan._tasks import EdgeResult
 from uvms_jax.plan._tasks import compatibility
 from uvms_jax.plan._tasks import edge_endpoints
 from uvms_jax.plan._tasks import goal_node
+from uvms_jax.plan._tasks import gripper_steps
 from uvms_jax.plan._tasks import metric_tensor
 from uvms_jax.plan._tasks import plan_edge
 from uvms_jax.plan._tasks import plan_from_edges

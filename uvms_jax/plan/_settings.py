@@ -66,17 +66,21 @@ class PlanJsonSettings:
       planner: whose trajectories the plan uses.
       sequence: node sequence of the schedule (default: the thesis's greedy schedule, 4.7).
       jaws_open_mm, jaws_closed_mm: jaw openings of the open/release and close steps [mm].
+      dwell_s: an arm without a gripper (a tool changer, a suction cup, no tool) holds still
+        this long at each gripper step instead [s].
     """
 
     planner: str = "RRTConnect"
     sequence: tuple[int, ...] = (0, 2, 5, 4, 8, 0, 1, 6, 3, 7, 9)
     jaws_open_mm: float = 35.0
     jaws_closed_mm: float = 0.0
+    dwell_s: float = 1.0
 
     def __post_init__(self):
         _require(self.planner in ompl_planners(),
                  f"plan_json.planner {self.planner!r} is not an OMPL planner ({', '.join(ompl_planners())})")
         _require(len(self.sequence) >= 2, f"plan_json.sequence needs at least two nodes, got {list(self.sequence)}")
+        _require(self.dwell_s > 0, f"plan_json.dwell_s must be > 0 [s], got {self.dwell_s}")
 
 
 @dataclasses.dataclass(frozen=True)

@@ -151,8 +151,8 @@ def plan_for_schedule(task_plan: TaskGraphPlan, planner: str, sequence: Sequence
     """The :class:`uvms_jax.planfile.Plan` of a schedule from ``planner``'s trajectories.
 
     The node's down/up motions are time-parameterised with ``settings.max_velocity`` and
-    ``max_acceleration`` and checked for collisions; the jaw openings come from
-    ``settings.plan_json``. ``planfile.plan_to_dict`` gives the ``plan.json`` object.
+    ``max_acceleration`` and checked for collisions; the jaw openings (an arm without a
+    gripper: the dwells) come from ``settings.plan_json``. ``planfile.plan_to_dict`` gives the ``plan.json`` object.
 
     Args:
       task_plan: from :func:`plan_task_graph`.
@@ -169,7 +169,7 @@ def plan_for_schedule(task_plan: TaskGraphPlan, planner: str, sequence: Sequence
     edges = {(r.src, r.dst): r for r in task_plan.by_planner[planner]}
     jp = settings.plan_json
     plan = plan_from_edges(task_plan.scene, task_plan.targets, edges, [int(v) for v in sequence],
-                           jaws_open_mm=jp.jaws_open_mm, jaws_closed_mm=jp.jaws_closed_mm,
+                           jaws_open_mm=jp.jaws_open_mm, jaws_closed_mm=jp.jaws_closed_mm, dwell_s=jp.dwell_s,
                            max_velocity=settings.joint_velocity(task_plan.scene.robot), max_acceleration=settings.max_acceleration,
                            checker=task_plan.checker)
     return plan

@@ -177,8 +177,22 @@ def _motion(name: str, traj: Trajectory, jaws_mm: float | None = None) -> planfi
                             tuple(tuple(float(v) for v in row) for row in traj.q), jaws_mm)
 
 
-def _gripper(name: str, jaws_mm: float) -> planfile.Segment:
-    return planfile.Segment(name, (), (), float(jaws_mm))
+def _gripper(name: str, jaws_mm: float, q, dwell_s: float | None) -> planfile.Segment:
+    """A gripper step: the jaws to ``jaws_mm`` [mm]; for an arm without a gripper (``dwell_s``
+    given), the arm holding still at ``q (n,)`` [rad] for ``dwell_s`` [s] instead."""
+    if dwell_s is None:
+        return planfile.Segment(name, (), (), float(jaws_mm))
+    q = tuple(float(v) for v in q)
+    return planfile.Segment(f"{name} (dwell: no gripper)", (0.0, float(dwell_s)), (q, q))
+
+
+def gripper_steps(robot, dwell_s: float) -> dict:
+    """How ``robot``'s plans take their gripper steps, as ``plan.json``'s ``meta`` and
+    ``results.json`` record it: ``{"gripper_steps": "jaws"}``, or for an arm without a gripper
+    ``{"gripper_steps": "dwell", "dwell_s": dwell_s}`` (the arm holds still that long [s])."""
+    if robot.gripper is not None:
+        return {"gripper_steps": "jaws"}
+    return {"gripper_steps": "dwell", "dwell_s": float(dwell_s)}
 
 
 def plan_from_edges(
@@ -189,6 +203,7 @@ def plan_from_edges(
     *,
     jaws_open_mm: float = 35.0,
     jaws_closed_mm: float = 0.0,
+    dwell_s: float = 1.0,
     max_velocity=0.5,
     max_acceleration=1.0,
     checker: CollisionChecker | None = None,
@@ -200,13 +215,17 @@ def plan_from_edges(
     edge's motion, then at an object: ``open``, ``grasp`` (down), ``close``, ``post-grasp``
     (up); at a base: ``final`` (down), ``release`` (open), ``post-final`` (up). Pre-grasp and
     pre-final are the ends of the edge motions. The plan records the scene's base orientation
-    (``base_rpy``), so a simulated run of it has the gravity it was planned under.
+    (``base_rpy``), so a simulated run of it has the gravity it was planned under. An arm without
+    a gripper holds still for ``dwell_s`` at each gripper step instead (a motion segment from
+    where it stands to the same point, named ``… (dwell: no gripper)``), which the plan's
+    ``meta`` records (:func:`gripper_steps`).
 
     Args:
       scene, targets: the scene and its node targets.
       edges: ``(src, dst)`` → planned edge.
       sequence: node sequence of the schedule.
       jaws_open_mm, jaws_closed_mm: jaw openings of the open/release and close steps [mm].
+      dwell_s: an arm without a gripper's dwell at each gripper step [s].
       max_velocity, max_acceleration: limits of the down/up motions [rad/s, rad/s²].
       checker: when given, the down/up motions are checked at ``resolution`` [rad].
 
@@ -217,6 +236,7 @@ def plan_from_edges(
     names = {o.node: o.name for o in scene.spec.objects} | {b.node: b.name for b in scene.spec.bases}
     names |= {START: "start", goal_node(scene): "goal"}
     segments: list[planfile.Segment] = []
+    dwell = None if scene.robot.gripper is not None else dwell_s
     for src, dst in zip(sequence[:-1], sequence[1:]):
         e = edges.get((src, dst))
         if e is None or not e.success or e.trajectory is None:
@@ -233,13 +253,14 @@ def plan_from_edges(
                 if not checker.path_is_valid(tr.q, ctx[key], resolution):
                     raise ValueError(f"node {dst}: the {key} motion collides")
         if dst in scene.objects:
-            segments += [_gripper(f"open at {names[dst]}", jaws_open_mm),
+            segments += [_gripper(f"open at {names[dst]}", jaws_open_mm, tg.q_pre, dwell),
                          _motion(f"grasp {names[dst]}", down),
-                         _gripper(f"close on {names[dst]}", jaws_closed_mm),
+                         _gripper(f"close on {names[dst]}", jaws_closed_mm, tg.q_at, dwell),
                          _motion(f"post-grasp {names[dst]}", up)]
         else:
             segments += [_motion(f"final on {names[dst]}", down),
-                         _gripper(f"release on {names[dst]}", jaws_open_mm),
+                         _gripper(f"release on {names[dst]}", jaws_open_mm, tg.q_at, dwell),
                          _motion(f"post-final {names[dst]}", up)]
     return planfile.Plan(scene.robot.joint_names, tuple(segments),
-                         base_rpy=tuple(float(v) for v in scene.spec.mount_rpy), arm=scene.robot.record())
+                         base_rpy=tuple(float(v) for v in scene.spec.mount_rpy), arm=scene.robot.record(),
+                         meta=gripper_steps(scene.robot, dwell_s))
