@@ -158,7 +158,8 @@ _EYE = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
 
 def _mat(a, b):
     """Product of two rotations given as 9 row-major components each."""
-    return tuple(a[3 * r] * b[c] + a[3 * r + 1] * b[3 + c] + a[3 * r + 2] * b[6 + c] for r in range(3) for c in range(3))
+    return tuple(a[3 * r] * b[c] + a[3 * r + 1] * b[3 + c] + a[3 * r + 2] * b[6 + c]
+                 for r in range(3) for c in range(3))
 
 
 def _apply(R, t, v):
