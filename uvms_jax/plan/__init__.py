@@ -22,6 +22,9 @@ as the thesis's test cage (thesis ch. 4–5).
   docking optimiser's task, ``uvms_jax.evo.ArmTask``, with the planner's collision world of the
   arm on its vehicle, :func:`docking_world`: the sphere checker's model as a
   ``uvms_jax.evo.SphereWorld``; :func:`vehicle_obstacles`: the vehicle's boxes in a scene);
+* batches on a GPU: :func:`plan_batch` (many problems in one jitted call, :class:`BatchSettings`
+  → :class:`BatchPlan`) on the sphere checker in JAX (:func:`sphere_arm`, :func:`sphere_worlds`:
+  the robot's spheres and a padded batch of worlds);
 * planning: :func:`plan_motion` (any OMPL geometric planner by name, :func:`ompl_planners`,
   with its parameters, :func:`planner_parameters`; simplification; MuJoCo re-check),
   :func:`time_parameterize`, :class:`Trajectory`, :func:`check_trajectory`, :func:`seed_ompl`;
@@ -108,3 +111,10 @@ from uvms_jax.plan._vector import LIMIT_TOL
 from uvms_jax.plan._vector import VectorChecker
 from uvms_jax.plan._worlds import World
 from uvms_jax.plan._vector import check_in_limits
+from uvms_jax.plan._vector_jax import SphereArm
+from uvms_jax.plan._vector_jax import SphereWorlds
+from uvms_jax.plan._vector_jax import sphere_arm
+from uvms_jax.plan._vector_jax import sphere_worlds
+from uvms_jax.plan._batch_jax import BatchPlan
+from uvms_jax.plan._batch_jax import BatchSettings
+from uvms_jax.plan._batch_jax import plan_batch
