@@ -4,7 +4,6 @@ through jit and vmap, in float64 and float32; padding never changes a verdict; t
 samples are the CPU path's (densify)."""
 
 import importlib.metadata
-import os
 from pathlib import Path
 
 import jax
@@ -15,15 +14,20 @@ import pytest
 from uvms_jax import robot as R
 from uvms_jax.plan import Obstacle, VectorChecker, densify, load_moveit_scene
 from uvms_jax.plan._vector import robot_spheres_model
-from uvms_jax.plan._vector_jax import (PAD_ROW, motion_samples, numba_model, sphere_arm, sphere_worlds,
+from uvms_jax.plan._vector_jax import (motion_samples, numba_model, sphere_arm, sphere_worlds,
                                        states_free)
-from uvms_jax.plan._vector_kernels import sphere_obstacle_distance, states_free as numba_states_free
+from uvms_jax.plan._vector_kernels import FREE, sphere_obstacle_distance, states_status
+
+
+def numba_states_free(Q, model):
+    """The Numba kernel's covering-sphere verdicts (what the JAX checker computes)."""
+    return states_status(np.ascontiguousarray(Q), *model[:9]) == FREE
 from uvms_jax.plan._worlds import World, obstacle_rows
 
 ROBOTS = Path(str(importlib.metadata.distribution("example-robot-data").locate_file(
     "cmeel.prefix/share/example-robot-data/robots")))
-MBM = Path(os.environ.get("MBM_PROBLEMS", "mbm/problems"))  # <family>_panda/sceneNNNN.yaml, requestNNNN.yaml
-FAMILIES = ("bookshelf_thin_panda", "cage_panda", "table_under_pick_panda")
+DATA = Path(__file__).parent / "data" / "mbm"  # MotionBenchMaker problems (see its README)
+FAMILIES = ("bookshelf_thin", "cage", "table_pick")
 OPENING = 0.04  # [m] the gripper's largest opening
 # Verdicts may differ only for states whose nearest sphere is within round-off of touching.
 # The bracket: a state free by Numba with the margin raised by TOL is free here, and one
@@ -47,9 +51,7 @@ def side(panda):
 
 
 def _mbm_worlds():
-    if not MBM.is_dir():
-        pytest.skip(f"MotionBenchMaker problems not found under {MBM} (set MBM_PROBLEMS)")
-    return [load_moveit_scene(MBM / f / "scene0001.yaml") for f in FAMILIES]
+    return [load_moveit_scene(DATA / f"{f}_scene.yaml") for f in FAMILIES]
 
 
 def _primitives_world(tmp_path) -> World:
@@ -91,7 +93,7 @@ def _states(panda, rng, k):
 
 def _bracket(side, worlds, index, Q, got, tol):
     model = numba_model(side, worlds, index)
-    lo, hi = (model[:6] + (model[6] + m,) for m in (-tol, tol))
+    lo, hi = (model[:6] + (model[6] + m,) + model[7:] for m in (-tol, tol))
     free_lo, free_hi = numba_states_free(Q, lo), numba_states_free(Q, hi)
     assert not np.any(free_hi & ~got), "free by Numba with a larger margin, colliding here"
     assert not np.any(got & ~free_lo), "colliding by Numba with a smaller margin, free here"
@@ -110,7 +112,7 @@ def test_mbm_verdicts_match_numba_batched(panda, side, dtype):
     Q = np.stack([_states(panda, rng, 3000) for _ in worlds])
     got = np.asarray(jax.jit(jax.vmap(states_free, in_axes=(None, 0, 0)))(arm, batch, jnp.asarray(Q, dtype)))
     for b, w in enumerate(worlds):
-        unpadded = VectorChecker(panda, w, opening=OPENING, margin=0.01).states_free(Q[b])
+        unpadded = VectorChecker(panda, w, opening=OPENING, margin=0.01).states_status(Q[b]) == FREE
         np.testing.assert_array_equal(unpadded, numba_states_free(Q[b], numba_model(side, batch, b)))
         _bracket(side, batch, b, Q[b].astype(np.float64), got[b], TOL[dtype])
     if dtype == np.float64:
@@ -130,7 +132,7 @@ def test_every_primitive_and_batch_shape(panda, side, tmp_path, shape):
     assert got.shape == shape
     flat = Q.reshape(-1, panda.n_joints)
     np.testing.assert_array_equal(numba_states_free(flat, numba_model(side, one)),
-                                  VectorChecker(panda, world, opening=OPENING).states_free(flat))
+                                  VectorChecker(panda, world, opening=OPENING).states_status(flat) == FREE)
     _bracket(side, one, None, flat, got.reshape(-1), TOL[np.float64])
 
 
