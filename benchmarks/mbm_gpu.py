@@ -54,6 +54,7 @@ def _args(argv=None) -> argparse.Namespace:
     for f in _SIZES:
         ap.add_argument(f"--{f}", type=int, default=None, help="BatchSettings." + f)
     ap.add_argument("--uniform", type=float, default=None, help="BatchSettings.uniform")
+    ap.add_argument("--urdf", type=Path, default=None, help="the Panda's URDF (default: example-robot-data's)")
     ap.add_argument("--out", type=Path, default=None, help="record file (default results/mbm_gpu_<device>.json)")
     args = ap.parse_args(argv)
     if args.problems is None or not Path(args.problems).is_dir():
@@ -71,13 +72,14 @@ def device_label(device) -> str:
     return m.group(1).lower() if m else device.platform
 
 
-def panda():
+def panda(urdf: Path | None = None):
+    """The Panda with its hand: ``urdf``, or the example-robot-data wheel's."""
     from uvms_jax import robot as R
 
-    robots = importlib.metadata.distribution("example-robot-data").locate_file(
-        "cmeel.prefix/share/example-robot-data/robots")
-    return R.load_robot(Path(str(robots)) / "panda_description/urdf/panda.urdf", tip="panda_hand_tcp",
-                        link_radius=0.05, gripper="panda_finger_joint1")
+    if urdf is None:
+        urdf = Path(str(importlib.metadata.distribution("example-robot-data").locate_file(
+            "cmeel.prefix/share/example-robot-data/robots"))) / "panda_description/urdf/panda.urdf"
+    return R.load_robot(urdf, tip="panda_hand_tcp", link_radius=0.05, gripper="panda_finger_joint1")
 
 
 def load_problems(root: Path, families, count: int, robot):
@@ -114,7 +116,7 @@ def run(args: argparse.Namespace) -> dict:
     if args.dtype == "float64":
         jax.config.update("jax_enable_x64", True)
     dtype = np.dtype(args.dtype)
-    robot = panda()
+    robot = panda(args.urdf)
     side = robot_spheres_model(robot, args.opening)
     t0 = time.perf_counter()
     problems = load_problems(Path(args.problems), args.families, args.count, robot)

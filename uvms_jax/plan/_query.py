@@ -25,7 +25,7 @@ from uvms_jax.robot import Robot
 __all__ = ["QueryResult", "plan_query"]
 
 _OUTCOMES = {SOLVED: "solved", TIMEOUT: "timeout", FULL: "tree full"}
-_SHORTCUT_TRIES = 10  # random shortcuts: 10 keep paths within 2 % of the length 100 give, at a sixth of the time
+_SHORTCUT_TRIES = 5  # random shortcuts (94 MBM problems: mean length 5.40 rad with none, 5.20 with five, 5.16 with ten)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -117,7 +117,7 @@ def _repair(checker: VectorChecker, path: np.ndarray, resolution: float, step: f
 
 def plan_query(robot: Robot, world: World, start, goal, *, planner: str = "RRTConnect", budget_s: float = 1.0,
                opening: float | None = None, resolution: float = 0.05, check_resolution: float = 0.01,
-               step: float = 1.0, seed: int = 0, margin: float = 0.0, exact: bool = True,
+               step: float = 0.5, seed: int = 0, margin: float = 0.0, exact: bool = True,
                checker: VectorChecker | None = None, max_nodes: int = 1 << 15) -> QueryResult:
     """Plan a collision-free joint path ``start → goal`` for ``robot`` in ``world``.
 
@@ -130,7 +130,7 @@ def plan_query(robot: Robot, world: World, start, goal, *, planner: str = "RRTCo
       opening: the gripper joint's value the fingers hold [m] (default: its largest).
       resolution: motion-check step while planning [rad]; check_resolution: the step of the
         final checks (spheres, then MuJoCo) [rad]: a segment that fails it is re-planned at it.
-      step: RRT-Connect's largest tree extension [rad].
+      step: RRT-Connect's largest tree extension [rad] (0.5: on 94 MBM problems the median time of 0.2–2 rad, p95 36 ms against 134 ms at 1 rad).
       seed: the sampler's seed.
       margin: safety distance of the sphere checks [m].
       exact: run MuJoCo's check of the final path (recommended; off only to time the planner).
