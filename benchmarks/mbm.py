@@ -85,6 +85,28 @@ def _summary(times: list[float], solved: int, valid: int, recheck_ok: int) -> di
             "max_ms": float(np.max(t) * 1e3), "rechecked_free": recheck_ok}
 
 
+def state_rates(robot: R.Robot, problems: Path, batch: int = 4096) -> dict:
+    """Per-state cost of the checker in one call over ``batch`` uniform random configurations,
+    in each family's first world [µs]: the spheres alone (FREE/HIT/MAYBE, over the CPU's
+    threads), and the verdicts with MuJoCo settling MAYBE (serially), with MuJoCo's own check
+    (``mj_kinematics`` + ``mj_collision`` per state) beside them."""
+    Q = np.random.default_rng(0).uniform(robot.lower, robot.upper, (batch, robot.n_joints))
+    out = {}
+    for family in FAMILIES:
+        checker = P.VectorChecker(robot, P.load_moveit_scene(problems / f"{family}_panda" / "scene0001.yaml"), OPENING)
+        checker.states_free(Q)  # compiled, and the threads started
+        row = {}
+        for name, fn in (("spheres_us", checker.states_status), ("verdict_us", checker.states_free),
+                         ("mujoco_us", lambda X: [checker.exact.free(q) for q in X])):
+            t0 = time.perf_counter()
+            fn(Q)
+            row[name] = (time.perf_counter() - t0) / batch * 1e6
+        status = checker.states_status(Q)
+        row["maybe_fraction"] = float(np.mean(status == 2))
+        out[family] = row
+    return out
+
+
 def run(problems: Path, budget_s: float, per_family: int, peer: bool) -> dict:
     robot = panda()
     P.seed_ompl(0)
@@ -139,7 +161,9 @@ def run(problems: Path, budget_s: float, per_family: int, peer: bool) -> dict:
             records.append(rec)
         families[family] = {name: _summary(t, s, valid, ok) for name, (t, s, ok) in rows.items()
                             if name == "query" or peer}
-    return {"families": families, "invalid": invalid, "compile_s": compile_s, "records": records}
+    return {"families": families, "invalid": invalid, "compile_s": compile_s, "records": records,
+            "state_check": state_rates(robot, problems), "n_spheres": int(len(R.collision_spheres(robot).radius)),
+            "sphere_excess_m": float(R.collision_spheres(robot).max_excess)}
 
 
 def main() -> None:

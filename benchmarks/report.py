@@ -24,7 +24,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 RESULTS = ROOT / "benchmarks" / "results"
 DOCUMENTS = (ROOT / "README.md", ROOT / "BENCHMARKS.md", ROOT / "docs" / "theory.md", ROOT / "docs" / "docking.md",
-             ROOT / "docs" / "hover.md")
+             ROOT / "docs" / "hover.md", ROOT / "docs" / "planning.md")
 BLOCK = re.compile(r"(<!-- report:(?P<name>[a-z0-9_]+) -->\n)(?P<body>.*?)(<!-- /report:(?P=name) -->)", re.S)
 
 
@@ -829,6 +829,65 @@ def plan_benchmark() -> str:
             f"{v['valid_fraction_uniform']:.0%} valid):\n\n" + _table(["call", "checks/s"], checks) + "\n")
 
 
+def _ms(v: float) -> str:
+    return f"{v:.1f}" if v < 100 else f"{v:.0f}"
+
+
+def mbm_benchmark() -> str:
+    """The MotionBenchMaker Panda set on the CPU: the query path beside OMPL with MuJoCo."""
+    d = _load("mbm_cpu.json")
+    peer = "ompl_mujoco" in next(iter(d["families"].values()))
+    rows = []
+    for family, f in d["families"].items():
+        q = f["query"]
+        row = [family, str(q["valid"]), f"{q['solved']}", _ms(q["median_ms"]), _ms(q["p95_ms"]), _ms(q["max_ms"]),
+               str(q["rechecked_free"])]
+        if peer:
+            o = f["ompl_mujoco"]
+            row += [str(o["solved"]), str(o["rechecked_free"]), _ms(o["median_ms"]), _ms(o["p95_ms"]), _ms(o["max_ms"])]
+        rows.append(row)
+    t = d["query_total"]
+    header = ["family", "valid", "solved", "median [ms]", "p95 [ms]", "max [ms]", "re-checked free"]
+    if peer:
+        header += ["OMPL+MuJoCo solved", "re-checked free", "median [ms]", "p95 [ms]", "max [ms]"]
+    invalid = ", ".join(f"{n} {reason}" for reason, n in sorted(d["invalid"].items()))
+    checks = d["state_check"]
+    spheres = sorted(c["spheres_us"] for c in checks.values())
+    verdict = sorted(c["verdict_us"] for c in checks.values())
+    mujoco = sorted(c["mujoco_us"] for c in checks.values())
+    maybe = sorted(c["maybe_fraction"] for c in checks.values())
+    return (f"`{d['command']}` ({d['device']}, 2 cores; `benchmarks/results/mbm_cpu.json`): the Panda with its own "
+            f"hand and fingers from its URDF ({d['n_spheres']} covering spheres, largest excess "
+            f"{d['sphere_excess_m'] * 1e3:.0f} mm), fingers at {d['opening_m']:g} m (the requests' "
+            f"{d['request_opening_m']:g} m is past the URDF's limit), {d['budget_s']:g} s budget per problem, "
+            f"a failure counted at the whole budget. Every returned path re-checked by MuJoCo with the real "
+            f"fingers, densified to {d['recheck_rad']:g} rad.\n\n" + _table(header, rows)
+            + f"\n\nAll families: {t['solved']}/{t['valid']} model-valid problems solved ({t['success_rate']:.1%}), "
+            f"median {_ms(t['median_ms'])} ms, p95 {_ms(t['p95_ms'])} ms, {t['rechecked_free']} of the {t['solved']} "
+            f"returned paths free for MuJoCo. "
+            f"Invalid in the model (MuJoCo on the description's geometry; limits in float64): {invalid}. "
+            f"Numba compile or cache load {d['compile_s']:.1f} s before any timing.\n\n"
+            f"Per state, one call over 4096 uniform random configurations (range over the seven families' first "
+            f"worlds): the spheres alone {spheres[0]:.1f}–{spheres[-1]:.1f} µs ({maybe[-1]:.0%} or fewer "
+            f"undecided), the verdicts with MuJoCo settling those {verdict[0]:.1f}–{verdict[-1]:.1f} µs, MuJoCo "
+            f"alone {mujoco[0]:.1f}–{mujoco[-1]:.1f} µs.\n")
+
+
+def mbm_gpu() -> str:
+    """The MotionBenchMaker Panda set in one batched call on a GPU (``benchmarks/mbm_gpu.py``)."""
+    d = _load("mbm_gpu_h200.json")
+    t = d["totals"]
+    rows = [[f.removesuffix("_panda"), str(v["problems"]), str(v["endpoints_free"]), str(v["solved"]),
+             str(v["rechecked_free"])] for f, v in d["families"].items()]
+    return (f"`python benchmarks/mbm_gpu.py --device gpu` ({d['device']}, jax {d['jax']}, {d['dtype']}; "
+            f"`benchmarks/results/mbm_gpu_h200.json`): all {d['n_problems']} problems in one jitted call, "
+            f"{d['n_spheres']} covering spheres, no MuJoCo on the GPU (a state the spheres cannot tell counts as "
+            f"a collision). Compile {d['compile_s']:.1f} s, run {min(d['run_s']):.0f} s; {t['solved']} solved, "
+            f"every one free for MuJoCo at {d['settings']['resolution']:g} rad; {t['endpoints_free']} have a start "
+            f"and goal the spheres call free.\n\n"
+            + _table(["family", "problems", "ends free (spheres)", "solved", "re-checked free"], rows) + "\n")
+
+
 def pipeline_arms() -> str:
     d = _load("pipeline_arms_cpu.json")
     rows = []
@@ -876,7 +935,7 @@ def hover_levelling() -> str:
 BLOCKS = {f.__name__: f for f in (docking_certify, test_suite, hover_vehicle, kin_roofline, scale_out, surrogate_roofline, docking_ga, docking_panel, pipeline_arms, plan_benchmark, sched_benchmark, hw_runner, hw_acceptance, kin_indices_cpu, kin_indices_accuracy, kin_indices_gpu, demo, docking_search, docking_fitness, docking_map, docking_collision,
                                    kin_summary, papers, hover_mjx, hover_robustness, surrogate_networks,
                                    surrogate_paper_sizes_cpu, surrogate_paper_sizes_h100, surrogate_sizes, own_arm,
-                                   weights_sweep, hover_levelling)}
+                                   weights_sweep, hover_levelling, mbm_benchmark, mbm_gpu)}
 
 
 def render(text: str) -> str:

@@ -109,6 +109,7 @@ def test_settings_are_checked(bad):
         BatchSettings(**bad)
 
 
+@pytest.mark.slow
 def test_mbm_script_on_cpu(tmp_path):
     """benchmarks/mbm_gpu.py on two problems of two families on the CPU (the tests' MBM files laid
     out as the set is): the record holds the timings and counts, and every path the batch

@@ -102,6 +102,7 @@ def _bracket(side, worlds, index, Q, got, tol):
     return np.mean(got != numba_states_free(Q, model))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("dtype", [np.float64, np.float32])
 def test_mbm_verdicts_match_numba_batched(panda, side, dtype):
     """Three MBM worlds as one padded batch (B, k, n) through jit and vmap: each world's verdicts
@@ -119,7 +120,7 @@ def test_mbm_verdicts_match_numba_batched(panda, side, dtype):
         assert all(_bracket(side, batch, b, Q[b], got[b], TOL[dtype]) == 0 for b in range(len(worlds)))
 
 
-@pytest.mark.parametrize("shape", [(4000,), (50, 80), (2, 5, 400)])
+@pytest.mark.parametrize("shape", [(4000,), pytest.param((50, 80), marks=pytest.mark.slow), (2, 5, 400)])
 def test_every_primitive_and_batch_shape(panda, side, tmp_path, shape):
     """The five kinds and an allowed pair, one world padded to more rows and faces than it has;
     states in batches of several shapes, one jitted call each."""

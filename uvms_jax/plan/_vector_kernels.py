@@ -190,7 +190,12 @@ def _groups_touch(g1, g2, model, R, t, cc) -> bool:
     cluster bounds (world centres ``cc (C, 3)``) against cluster bounds, then their spheres."""
     groups, spheres, margin, clusters = model[1], model[2], model[6], model[7]
     b1, b2 = int(groups[g1, 2]), int(groups[g2, 2])
+    # g2's bound in the world: the clusters of g1 outside it meet none of g2's.
+    x2, y2, z2 = _to_world(R, t, b2, groups[g2, 3], groups[g2, 4], groups[g2, 5])
     for c1 in range(int(groups[g1, 7]), int(groups[g1, 8])):
+        r = clusters[c1, 5] + groups[g2, 6] + margin
+        if (cc[c1, 0] - x2) ** 2 + (cc[c1, 1] - y2) ** 2 + (cc[c1, 2] - z2) ** 2 >= r * r:
+            continue
         for c2 in range(int(groups[g2, 7]), int(groups[g2, 8])):
             r = clusters[c1, 5] + clusters[c2, 5] + margin
             if (cc[c1, 0] - cc[c2, 0]) ** 2 + (cc[c1, 1] - cc[c2, 1]) ** 2 + (cc[c1, 2] - cc[c2, 2]) ** 2 >= r * r:
