@@ -873,6 +873,22 @@ def mbm_benchmark() -> str:
             f"alone {mujoco[0]:.1f}–{mujoco[-1]:.1f} µs.\n")
 
 
+def mbm_summary() -> str:
+    """docs/planning.md's summary of the MotionBenchMaker run (``benchmarks/mbm.py``)."""
+    d = _load("mbm_cpu.json")
+    t = d["query_total"]
+    peer = [f["ompl_mujoco"] for f in d["families"].values() if "ompl_mujoco" in f]
+    line = (f"{t['solved']}/{t['valid']} model-valid problems solved ({t['success_rate']:.1%}), median "
+            f"{_ms(t['median_ms'])} ms and p95 {_ms(t['p95_ms'])} ms per problem, {t['rechecked_free']} of the "
+            f"{t['solved']} returned paths free for MuJoCo at {d['recheck_rad']:g} rad")
+    if peer:
+        line += (f"; OMPL's RRT-Connect with MuJoCo's checks solved {sum(p['solved'] for p in peer)} with family "
+                 f"medians of {_ms(min(p['median_ms'] for p in peer))}–{_ms(max(p['median_ms'] for p in peer))} ms")
+    invalid = ", ".join(f"{n} {reason}" for reason, n in sorted(d["invalid"].items()))
+    return (line + f". Invalid in the model: {invalid} (`benchmarks/results/mbm_cpu.json`, {d['device']}, "
+            f"{d['budget_s']:g} s budget).\n")
+
+
 def mbm_gpu() -> str:
     """The MotionBenchMaker Panda set in one batched call on a GPU (``benchmarks/mbm_gpu.py``)."""
     d = _load("mbm_gpu_h200.json")
@@ -935,7 +951,7 @@ def hover_levelling() -> str:
 BLOCKS = {f.__name__: f for f in (docking_certify, test_suite, hover_vehicle, kin_roofline, scale_out, surrogate_roofline, docking_ga, docking_panel, pipeline_arms, plan_benchmark, sched_benchmark, hw_runner, hw_acceptance, kin_indices_cpu, kin_indices_accuracy, kin_indices_gpu, demo, docking_search, docking_fitness, docking_map, docking_collision,
                                    kin_summary, papers, hover_mjx, hover_robustness, surrogate_networks,
                                    surrogate_paper_sizes_cpu, surrogate_paper_sizes_h100, surrogate_sizes, own_arm,
-                                   weights_sweep, hover_levelling, mbm_benchmark, mbm_gpu)}
+                                   weights_sweep, hover_levelling, mbm_benchmark, mbm_gpu, mbm_summary)}
 
 
 def render(text: str) -> str:
