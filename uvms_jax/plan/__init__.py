@@ -28,7 +28,11 @@ as the thesis's test cage (thesis ch. 4–5).
 * metrics: :func:`trajectory_metrics`, :class:`EdgeMetrics` (fields: ``uvms_jax.sched.METRICS``),
   :func:`static_torques` (the arm's weight and buoyancy and the held object's load);
 * task graph: :func:`task_edges`, :func:`plan_edge`, :func:`metric_tensor` (the input of
-  ``uvms_jax.sched.normalise_metrics``), :func:`plan_from_edges`.
+  ``uvms_jax.sched.normalise_metrics``), :func:`plan_from_edges`;
+* query path: :func:`plan_query` → :class:`QueryResult` (a robot in a :class:`World`, compiled
+  :class:`VectorChecker` with MuJoCo's :class:`ExactChecker`); a scene in a context as a world:
+  :func:`scene_world`, :func:`held_shapes`, :func:`scene_checker`, an edge on it:
+  :func:`plan_scene_query` (``PlanSettings.checker = "query"``).
 
 The package never imports ``uvms_jax.hw``: plans meet the hardware only through
 :mod:`uvms_jax.planfile`.
@@ -106,3 +110,7 @@ from uvms_jax.plan._vector import LIMIT_TOL
 from uvms_jax.plan._vector import VectorChecker
 from uvms_jax.plan._worlds import World
 from uvms_jax.plan._vector import check_in_limits
+from uvms_jax.plan._scenequery import held_shapes
+from uvms_jax.plan._scenequery import plan_scene_query
+from uvms_jax.plan._scenequery import scene_checker
+from uvms_jax.plan._scenequery import scene_world
