@@ -27,8 +27,8 @@ import mujoco
 import numpy as np
 from scipy.cluster.vq import kmeans2
 
-from uvms_jax.plan._vector_kernels import (make_scratch, motion_free, pairs_touching, settle, states_status,
-                                           without_exact)
+from uvms_jax.plan._vector_kernels import (make_scratch, motion_free, pairs_touching, settle, state_free,
+                                           states_status, without_exact)
 from uvms_jax.plan._worlds import World, add_obstacles, obstacle_rows
 from uvms_jax.robot import (BASE, Robot, RobotSpheres, Shape, base_body, card_jaws, collision_spheres, inscribed_spheres,
                             robot_mjcf)
@@ -364,6 +364,11 @@ class VectorChecker:
         checked): the spheres' verdict, MuJoCo's where the spheres cannot tell."""
         Q = self._rows(Q)
         return settle(Q, states_status(Q, *self.model[:9]), self.model)
+
+    def state_free(self, q) -> bool:
+        """Whether the robot at ``q (n,)`` [rad] touches nothing (limits not checked), in one
+        serial compiled call: :meth:`states_free` of a single state (an OMPL callback's)."""
+        return bool(state_free(np.asarray(q, dtype=np.float64), self.model, self._scratch))
 
     def motion_free(self, q0, q1, resolution: float) -> bool:
         """Whether the straight motion ``q0 → q1`` is free at every sample ``resolution`` [rad]
