@@ -147,15 +147,11 @@ def scene_world(scene: Scene, context: Context) -> World:
 def scene_checker(scene: Scene, context: Context, margin: float) -> VectorChecker:
     """The compiled checker of the arm in ``scene_world(scene, context)`` with the held object,
     the jaws at the scene's opening and ``margin`` [m]; built once per context and margin and
-    kept by the scene. Building it also runs a query from the start to itself: the compiled
-    planner's first call in a process loads it (~0.1 s from Numba's cache), which is then in
-    no edge's planning time."""
+    kept by the scene."""
     key = ("query_checker", context, float(margin))
     if key not in scene.derived:
-        vc = VectorChecker(scene.robot, scene_world(scene, context), scene.spec.jaws_open, margin,
-                           attached=held_shapes(scene, context))
-        plan_query(scene.robot, vc.world, scene.start_q, scene.start_q, opening=vc.side.opening, checker=vc, exact=False)
-        scene.derived[key] = vc
+        scene.derived[key] = VectorChecker(scene.robot, scene_world(scene, context), scene.spec.jaws_open, margin,
+                                           attached=held_shapes(scene, context))
     return scene.derived[key]
 
 

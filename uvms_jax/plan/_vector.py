@@ -27,6 +27,7 @@ import mujoco
 import numpy as np
 from scipy.cluster.vq import kmeans2
 
+from uvms_jax.plan._rrtc import load
 from uvms_jax.plan._vector_kernels import (make_scratch, motion_free, pairs_touching, settle, state_free,
                                            states_status, without_exact)
 from uvms_jax.plan._worlds import World, add_obstacles, obstacle_rows
@@ -346,6 +347,8 @@ class VectorChecker:
         self.model = self.side.model(world, margin, self.exact)
         self.lower, self.upper = robot.lower, robot.upper
         self._scratch = make_scratch(self.model)
+        q = np.zeros((1, robot.n_joints))
+        self.states_free(q), self.motion_free(q[0], q[0], 1.0), load(self.model, robot.n_joints)  # see load
 
     def _rows(self, Q) -> np.ndarray:
         Q = np.ascontiguousarray(np.atleast_2d(Q), dtype=np.float64)
