@@ -120,7 +120,7 @@ class PlanSettings:
     seed: int = 0
     planners: tuple[str, ...] = PLANNERS
     planner_params: dict[str, dict[str, float | int | bool]] = dataclasses.field(default_factory=dict)
-    checker: str = "spheres"
+    checker: str = "query"
     budget_s: float = 5.0
     resolution: float = 0.02
     recheck_resolution: float = 0.01
