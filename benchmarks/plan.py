@@ -13,10 +13,10 @@ simplification, the MuJoCo re-check, time parameterisation, trajectory check, me
 clearance; ``other`` is the rest). ``graph_wall_s`` sums the planners' graph times per checker.
 Compilation (Numba, XLA) and the query path's checkers (one per context: the world, the held
 object's spheres, MuJoCo's model; ``query_checkers_s``) are made in a warm-up before any timing
-and reported apart. Prints one JSON object.
+and reported apart. Writes one JSON object to ``--out`` and prints it.
 
     .venv/bin/python benchmarks/plan.py [--planners RRTConnect PRM] [--checkers query spheres]
-        [--params '{"BKPIECE1": {"range": 1.0}}']
+        [--params '{"BKPIECE1": {"range": 1.0}}'] [--out benchmarks/results/plan_cpu.json]
 """
 
 from __future__ import annotations
@@ -111,6 +111,7 @@ def main() -> None:
     ap.add_argument("--checks", type=int, default=20000)
     ap.add_argument("--params", type=json.loads, default={},
                     help='planner parameters as JSON, e.g. \'{"BKPIECE1": {"range": 1.0}}\' (default: OMPL\'s)')
+    ap.add_argument("--out", type=Path, default=Path(__file__).parent / "results" / "plan_cpu.json")
     args = ap.parse_args()
     jax.config.update("jax_enable_x64", True)
     P.seed_ompl(args.seed)
@@ -162,7 +163,7 @@ def main() -> None:
             per_checker[name]["motions"] = fast.n_motions - n0[0]
             per_checker[name]["samples_checked"] = fast.n_states - n0[1]
             per_checker[name]["rejections_confirmed_by_mujoco"] = fast.n_confirmed - n0[2]
-    print(json.dumps({
+    text = json.dumps({
         "command": " ".join(["python benchmarks/plan.py", *sys.argv[1:]]),
         "device": f"{platform.machine()} CPU, Python {platform.python_version()}",
         "planner_params": settings.planner_params,
@@ -174,7 +175,9 @@ def main() -> None:
         "warmup_s": round(warmup_s, 2),
         "validity_checks": {k: round(v, 3) if isinstance(v, float) else v for k, v in checks.items()},
         "checkers": per_checker,
-    }, indent=1))
+    }, indent=1)
+    args.out.write_text(text + "\n")
+    print(text)
 
 
 if __name__ == "__main__":
