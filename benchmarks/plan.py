@@ -1,7 +1,9 @@
 """Planning benchmark (uvms_jax.plan): the thesis task graph planned with every planner, side by
-side with the two motion checkers in one process — MuJoCo state by state (OMPL's own motion
-checks) and the compiled sphere checker (one call per motion, MuJoCo confirming rejections) —
-plus validity checks per second.
+side in one process on the query path (``PlanSettings.checker = "query"``: :func:`plan_query` on
+the scene as a world, compiled RRT-Connect, the other planners in OMPL on the same compiled
+checker) and with OMPL on the scene's two motion checkers — MuJoCo state by state (OMPL's own
+motion checks) and the compiled sphere checker (one call per motion, MuJoCo confirming
+rejections) — plus validity checks per second.
 
 Per checker and planner: planning time per edge (median, mean, max), edges planned and
 re-checked (every path is re-checked with MuJoCo at margin 0 either way), the wall time of the
@@ -9,11 +11,12 @@ whole graph (planning, time parameterisation, re-check, metrics) and where it go
 each step of :func:`uvms_jax.plan.plan_edge` (``steps_s``: the planner's solve and
 simplification, the MuJoCo re-check, time parameterisation, trajectory check, metrics,
 clearance; ``other`` is the rest). ``graph_wall_s`` sums the planners' graph times per checker.
-Compilation (Numba, XLA) is done in a warm-up before any timing and reported apart. Prints one
-JSON object.
+Compilation (Numba, XLA) and the query path's checkers (one per context: the world, the held
+object's spheres, MuJoCo's model; ``query_checkers_s``) are made in a warm-up before any timing
+and reported apart. Writes one JSON object to ``--out`` and prints it.
 
-    .venv/bin/python benchmarks/plan.py [--planners RRTConnect PRM] [--checkers spheres]
-        [--params '{"BKPIECE1": {"range": 1.0}}']
+    .venv/bin/python benchmarks/plan.py [--planners RRTConnect PRM] [--checkers query spheres]
+        [--params '{"BKPIECE1": {"range": 1.0}}'] [--out benchmarks/results/plan_cpu.json]
 """
 
 from __future__ import annotations
@@ -21,6 +24,7 @@ from __future__ import annotations
 import argparse
 import collections
 import contextlib
+import dataclasses
 import functools
 import json
 import sys
@@ -35,10 +39,12 @@ import yaml
 from uvms_jax import plan as P
 from uvms_jax.plan import _collision, _spheres, _tasks
 
-# The steps of plan_edge, as (namespace, attribute, label); plan_motion's time includes the
-# re-check, reported apart and subtracted. The clearance is either MuJoCo's at every sample or
-# the sphere checker's min_clearance (which calls MuJoCo's single-state clearance, not the batch).
-_STEPS = ((_collision.CollisionChecker, "path_is_valid", "recheck_mujoco"), (_tasks, "plan_motion", "plan_motion"),
+# The steps of plan_edge, as (namespace, attribute, label); the planners' time (plan_motion or
+# plan_scene_query) includes the re-check, reported apart and subtracted. The clearance is either
+# MuJoCo's at every sample or the sphere checker's min_clearance (which calls MuJoCo's
+# single-state clearance, not the batch).
+_STEPS = ((_collision.CollisionChecker, "path_is_valid", "recheck_mujoco"), (_tasks, "plan_motion", "plan"),
+          (_tasks, "plan_scene_query", "plan"),
           (_tasks, "time_parameterize", "time_parameterize"), (_tasks, "check_trajectory", "check_trajectory"),
           (_tasks, "trajectory_metrics", "metrics"), (_collision.CollisionChecker, "clearance_batch", "clearance"),
           (_spheres.SphereChecker, "min_clearance", "clearance"))
@@ -88,8 +94,8 @@ def _graph(scene, checker, fast, targets, edges, planner, settings) -> dict:
             ok += r.success
             reval += r.revalidated
     wall = time.perf_counter() - t0
-    steps = {"plan_motion": acc["plan_motion"] - acc["recheck_mujoco"]}
-    steps |= {label: acc[label] for _, _, label in _STEPS if label != "plan_motion"}  # labels may repeat
+    steps = {"plan": acc["plan"] - acc["recheck_mujoco"]}
+    steps |= {label: acc[label] for _, _, label in _STEPS if label != "plan"}  # labels may repeat
     steps["other"] = wall - sum(steps.values())
     t = np.array(list(times.values()))
     return {"success": ok, "revalidated": reval, "edges": len(edges), "median_ms": float(np.median(t)),
@@ -105,6 +111,7 @@ def main() -> None:
     ap.add_argument("--checks", type=int, default=20000)
     ap.add_argument("--params", type=json.loads, default={},
                     help='planner parameters as JSON, e.g. \'{"BKPIECE1": {"range": 1.0}}\' (default: OMPL\'s)')
+    ap.add_argument("--out", type=Path, default=Path(__file__).parent / "results" / "plan_cpu.json")
     args = ap.parse_args()
     jax.config.update("jax_enable_x64", True)
     P.seed_ompl(args.seed)
@@ -121,10 +128,15 @@ def main() -> None:
     ik_s = time.perf_counter() - t0
     edges = P.task_edges(scene)
     t0 = time.perf_counter()
-    for planner in args.planners:  # warm-up: XLA compiles of the metrics, first OMPL calls
-        for f in (None, fast):
+    contexts = {P.edge_endpoints(scene, targets, src, dst)[2] for src, dst in edges}
+    query = {ctx: P.scene_checker(scene, ctx, settings.margin) for ctx in contexts}
+    query_s = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    for planner in args.planners:  # warm-up: Numba and XLA compiles, first OMPL calls
+        for name in args.checkers:
             for src, dst in edges[:: max(1, len(edges) // 6)]:
-                P.plan_edge(scene, checker, targets, src, dst, planner, settings, fast=f)
+                P.plan_edge(scene, checker, targets, src, dst, planner, dataclasses.replace(settings, checker=name),
+                            fast=fast if name == "spheres" else None)
     warmup_s = time.perf_counter() - t0
 
     Q = np.random.default_rng(args.seed).uniform(checker.lower, checker.upper, (args.checks, len(checker.lower)))
@@ -135,6 +147,7 @@ def main() -> None:
         "mujoco_ompl_callback_per_s": _rate(lambda: [valid(q) for q in Q], len(Q)),
         "mujoco_batched_is_valid_per_s": _rate(lambda: checker.is_valid_batch(Q, ctx), len(Q)),
         "spheres_one_call_per_state_per_s": _rate(lambda: fast.spheres_free(Q, ctx), len(Q)),
+        "query_batched_states_free_per_s": _rate(lambda: query[ctx].states_free(Q), len(Q)),
         "valid_fraction_uniform": float(checker.is_valid_batch(Q, ctx).mean()),
     }
     per_checker = {}
@@ -142,14 +155,15 @@ def main() -> None:
         f = fast if name == "spheres" else None
         n0 = (fast.n_motions, fast.n_states, fast.n_confirmed)
         t0 = time.perf_counter()
-        runs = {planner: _graph(scene, checker, f, targets, edges, planner, settings) for planner in args.planners}
+        runs = {planner: _graph(scene, checker, f, targets, edges, planner, dataclasses.replace(settings, checker=name))
+                for planner in args.planners}
         per_checker[name] = {"graph_all_planners_wall_s": round(time.perf_counter() - t0, 3),
                              "graph_wall_s": {p: r["graph_wall_s"] for p, r in runs.items()}, "planners": runs}
         if f is not None:
             per_checker[name]["motions"] = fast.n_motions - n0[0]
             per_checker[name]["samples_checked"] = fast.n_states - n0[1]
             per_checker[name]["rejections_confirmed_by_mujoco"] = fast.n_confirmed - n0[2]
-    print(json.dumps({
+    text = json.dumps({
         "command": " ".join(["python benchmarks/plan.py", *sys.argv[1:]]),
         "device": f"{platform.machine()} CPU, Python {platform.python_version()}",
         "planner_params": settings.planner_params,
@@ -157,10 +171,13 @@ def main() -> None:
         "budget_s": settings.budget_s,
         "ik_targets_s_incl_compile": round(ik_s, 2),
         "numba_compile_or_cache_load_s": round(numba_s, 2),
+        "query_checkers_s": round(query_s, 2),
         "warmup_s": round(warmup_s, 2),
         "validity_checks": {k: round(v, 3) if isinstance(v, float) else v for k, v in checks.items()},
         "checkers": per_checker,
-    }, indent=1))
+    }, indent=1)
+    args.out.write_text(text + "\n")
+    print(text)
 
 
 if __name__ == "__main__":

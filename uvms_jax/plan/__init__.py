@@ -32,7 +32,13 @@ as the thesis's test cage (thesis ch. 4–5).
   :func:`static_torques` (the arm's weight and buoyancy and the held object's load);
 * task graph: :func:`task_edges`, :func:`plan_edge`, :func:`metric_tensor` (the input of
   ``uvms_jax.sched.normalise_metrics``), :func:`plan_from_edges` (:func:`gripper_steps`: how an arm
-  without a gripper takes its gripper steps).
+  without a gripper takes its gripper steps);
+* query path: :func:`plan_query` → :class:`QueryResult` (a robot in a :class:`World`, compiled
+  :class:`VectorChecker` with MuJoCo's :class:`ExactChecker`; MoveIt scenes and requests:
+  :func:`load_moveit_scene`, :func:`load_moveit_request`); a scene in a context as a world:
+  :func:`scene_world`, :func:`held_shapes`, :func:`scene_checker`, an edge on it:
+  :func:`plan_scene_query` (``PlanSettings.checker = "query"``); many problems in one jitted
+  call on a GPU: :func:`plan_batch` (:class:`BatchSettings`, :class:`BatchPlan`).
 
 The package never imports ``uvms_jax.hw``: plans meet the hardware only through
 :mod:`uvms_jax.planfile`.
@@ -118,3 +124,7 @@ from uvms_jax.plan._vector_jax import sphere_worlds
 from uvms_jax.plan._batch_jax import BatchPlan
 from uvms_jax.plan._batch_jax import BatchSettings
 from uvms_jax.plan._batch_jax import plan_batch
+from uvms_jax.plan._scenequery import held_shapes
+from uvms_jax.plan._scenequery import plan_scene_query
+from uvms_jax.plan._scenequery import scene_checker
+from uvms_jax.plan._scenequery import scene_world

@@ -25,8 +25,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from uvms_jax.plan._scene import (ARM_BITS, BASE_BITS, FIRST_BITS, MOUNT_BITS, OFF_BITS, SCENE_BITS, SHOULDER_BITS,
-                                  Context, Scene)
+from uvms_jax.plan._scene import Context, Scene
 
 __all__ = ["BOUND_SLACK", "CollisionChecker", "densify"]
 
@@ -130,42 +129,8 @@ class CollisionChecker:
 
     def _bits_of(self, context: Context) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """``(ngeom,)`` ``contype`` and ``conaffinity`` of the validity models, then of the
-        clearance model, in ``context``; ValueError for an unknown held object or obstacle."""
-        sc = self.scene
-        if context.held is not None and context.held not in sc.held_geoms:
-            raise ValueError(f"unknown held object node {context.held} (objects: {sorted(sc.held_geoms)})")
-        for key in context.ignore:
-            if key not in sc.obstacle_geoms:
-                raise ValueError(f"cannot ignore unknown obstacle {key!r} (known: {list(sc.obstacle_geoms)})")
-        off = set()
-        for key in context.ignore:
-            off.update(sc.obstacle_geoms[key])
-        if context.held is not None:
-            off.update(sc.obstacle_geoms.get(context.held, ()))
-        held_on = sc.held_geoms.get(context.held) if context.held is not None else None
-        moving = set(sc.arm_geoms)
-        out = np.zeros((4, sc.model.ngeom), dtype=self._m.geom_contype.dtype)
-        for g in range(sc.model.ngeom):
-            if g in sc.base_geoms:
-                bits = BASE_BITS
-            elif g in sc.first_geoms:
-                bits = FIRST_BITS
-            elif g in sc.shoulder_geoms:
-                bits = SHOULDER_BITS
-            elif g in moving or g == held_on:
-                bits = ARM_BITS
-            elif g in sc.held_geoms.values():
-                bits = OFF_BITS
-            else:
-                bits = OFF_BITS if g in off else MOUNT_BITS if g in sc.mount_geoms else SCENE_BITS
-            # Clearance model: only the clearance geoms (and the held object) against the scene.
-            if g in sc.clearance_geoms or g == held_on:
-                cbits = (1, 0)
-            elif bits in (SCENE_BITS, MOUNT_BITS):
-                cbits = (0, 1)
-            else:
-                cbits = OFF_BITS
-            out[:, g] = (*bits, *cbits)
+        clearance model, in ``context`` (:meth:`Scene.geom_bits`)."""
+        out = self.scene.geom_bits(context).astype(self._m.geom_contype.dtype)
         out.flags.writeable = False
         return out[0], out[1], out[2], out[3]
 

@@ -31,7 +31,7 @@ from uvms_jax.plan._planners import check_parameters, make_planner
 from uvms_jax.plan._scene import Context
 from uvms_jax.plan._spheres import SphereChecker
 
-__all__ = ["PLANNERS", "PlanResult", "Trajectory", "plan_motion", "seed_ompl", "time_parameterize"]
+__all__ = ["PLANNERS", "PlanResult", "Trajectory", "check_ends", "plan_motion", "seed_ompl", "time_parameterize"]
 
 PLANNERS = ("RRTConnect", "BKPIECE1", "PRM")  # the thesis's three (any of ompl_planners() works)
 # Planners that can grow trees from the valid part of a rejected motion (OMPL's checkMotion
@@ -149,6 +149,17 @@ class _SegmentValidator(ob.MotionValidator):
         return self._motion_is_valid(s1[0:n], s2[0:n], self._context, self._resolution)
 
 
+def check_ends(checker: CollisionChecker, q_start, q_goal, context: Context) -> tuple[np.ndarray, np.ndarray]:
+    """``q_start``, ``q_goal`` ``(n,)`` [rad] as float arrays, both valid in ``context`` with the
+    checker's safety margin; a ValueError naming the contacts (or the limits) otherwise."""
+    q_start, q_goal = np.asarray(q_start, dtype=float), np.asarray(q_goal, dtype=float)
+    for label, q in (("start", q_start), ("goal", q_goal)):
+        if not checker.is_valid(q, context):
+            raise ValueError(f"{label} {np.round(q, 4).tolist()} is invalid: "
+                             f"{checker.contacts(q, context) or 'outside the limits'}")
+    return q_start, q_goal
+
+
 def plan_motion(
     checker: CollisionChecker,
     q_start,
@@ -196,11 +207,7 @@ def plan_motion(
     if not isinstance(context, Context):  # e.g. a planner name where the context goes
         raise TypeError(f"context must be a plan.Context, got {context!r}")
     check_parameters(planner, params or {})
-    q_start, q_goal = np.asarray(q_start, dtype=float), np.asarray(q_goal, dtype=float)
-    for label, q in (("start", q_start), ("goal", q_goal)):
-        if not checker.is_valid(q, context):
-            raise ValueError(f"{label} {np.round(q, 4).tolist()} is invalid: "
-                             f"{checker.contacts(q, context) or 'outside the limits'}")
+    q_start, q_goal = check_ends(checker, q_start, q_goal, context)
     n = len(q_start)
     space = ob.RealVectorStateSpace(n)
     bounds = ob.RealVectorBounds(n)

@@ -79,7 +79,7 @@ def _ompl_path(checker: VectorChecker, start, goal, planner: str, deadline: floa
     space.setBounds(bounds)
     ss = og.SimpleSetup(space)
     si = ss.getSpaceInformation()
-    ss.setStateValidityChecker(lambda s: bool(checker.states_free(np.array([s[i] for i in range(n)]))[0]))
+    ss.setStateValidityChecker(lambda s: checker.state_free(s[0:n]))
 
     class Motions(ob.MotionValidator):
         def checkMotion(self, s1, s2) -> bool:  # noqa: N802 — OMPL's name

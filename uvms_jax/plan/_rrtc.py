@@ -202,3 +202,11 @@ def shortcut(path, resolution, deadline, tries, seed, model):
     if _now() <= deadline:
         path = _reduce(path, resolution, model, scratch)
     return path
+
+
+def load(model, n: int) -> None:
+    """Load (or compile) the planner's kernels for ``model``'s types now, with ``n`` joints: a
+    first call in a process costs ~0.1 s from Numba's cache, which no query's budget should pay."""
+    q = np.zeros(n)
+    rrt_connect(q, q, q - 1.0, q + 1.0, 1.0, 1.0, 2, 0.0, 0, model)
+    shortcut(np.stack([q, q]), 1.0, 0.0, 0, 0, model)

@@ -19,7 +19,8 @@ All world geoms share one body, so MuJoCo never tests them against each other; p
 link pairs are filtered by MuJoCo, and the other pairs that are in contact in every sampled
 configuration (:func:`uvms_jax.robot.self_collision_pairs`, as MoveIt's setup assistant finds
 them) by ``<exclude>``. The in-hand copies of the objects (``held_<name>``, fixed to the last
-link at the grasp) are off until a :class:`Context` turns one on.
+link at the grasp) are compiled ``16/16`` — a bit of their own, so they meet nothing, while
+MuJoCo keeps them in its bounding volumes — until a :class:`Context` turns one on.
 """
 
 from __future__ import annotations
@@ -47,6 +48,11 @@ SHOULDER_BITS = (1, 11)  # links always in contact with the base link: not again
 FIRST_BITS = (1, 3)  # the first link: it turns about its axis at the base, touching neither base nor mount
 BASE_BITS = (4, 0)  # fixed base link: only against the other moving links, jaws and held object
 OFF_BITS = (0, 0)
+# The in-hand copies of the objects as compiled: a bit no other geom has, so that by default they
+# meet nothing (copies on one body are never tested together), yet MuJoCo puts them in its
+# bounding volumes (it leaves out geoms compiled with 0/0, and switching bits on later would
+# not bring them back: such a copy would then never collide).
+HELD_BITS = (16, 16)
 # Self-collision pairs nearer than this in every sampled configuration are skipped: at least the
 # planner's safety margin (PlanSettings.margin, 0.005 m), so that no pair reads as a collision in
 # every pose.
@@ -140,6 +146,50 @@ class Scene:
         self.default_bits = (m.geom_contype.copy(), m.geom_conaffinity.copy())
         self.derived: dict[str, Any] = {}
         self.start_q = np.asarray(spec.start_q if spec.start_q is not None else self._start_configuration(), float)
+
+    def geom_bits(self, context: Context) -> np.ndarray:
+        """``(4, ngeom)`` int: per geom its ``contype`` and ``conaffinity`` for validity, then
+        for clearance, in ``context`` (held object on, its table copy and the ignored geoms off;
+        the module docstring gives the groups).
+
+        Raises:
+          ValueError: an unknown held object or obstacle.
+        """
+        if context.held is not None and context.held not in self.held_geoms:
+            raise ValueError(f"unknown held object node {context.held} (objects: {sorted(self.held_geoms)})")
+        for key in context.ignore:
+            if key not in self.obstacle_geoms:
+                raise ValueError(f"cannot ignore unknown obstacle {key!r} (known: {list(self.obstacle_geoms)})")
+        off = set()
+        for key in context.ignore:
+            off.update(self.obstacle_geoms[key])
+        if context.held is not None:
+            off.update(self.obstacle_geoms.get(context.held, ()))
+        held_on = self.held_geoms.get(context.held) if context.held is not None else None
+        moving, held = set(self.arm_geoms), set(self.held_geoms.values())
+        out = np.zeros((4, self.model.ngeom), dtype=int)
+        for g in range(self.model.ngeom):
+            if g in self.base_geoms:
+                bits = BASE_BITS
+            elif g in self.first_geoms:
+                bits = FIRST_BITS
+            elif g in self.shoulder_geoms:
+                bits = SHOULDER_BITS
+            elif g in moving or g == held_on:
+                bits = ARM_BITS
+            elif g in held:
+                bits = OFF_BITS
+            else:
+                bits = OFF_BITS if g in off else MOUNT_BITS if g in self.mount_geoms else SCENE_BITS
+            # Clearance model: only the clearance geoms (and the held object) against the scene.
+            if g in self.clearance_geoms or g == held_on:
+                cbits = (1, 0)
+            elif bits in (SCENE_BITS, MOUNT_BITS):
+                cbits = (0, 1)
+            else:
+                cbits = OFF_BITS
+            out[:, g] = (*bits, *cbits)
+        return out
 
     def _start_configuration(self, clearance: float = SELF_COLLISION_MARGIN, per_ring: int = 64,
                              seed: int = 0) -> np.ndarray:
@@ -265,12 +315,12 @@ class Scene:
                 world.append(f'<geom name="{o.name}" type="sphere" size="{o.dims[0]!r}" {pose} {bits}/>')
             elif o.shape == "capsule":  # primitive: arm capsule vs capsule is exact in MuJoCo
                 world.append(f'<geom name="{o.name}" type="capsule" size="{o.dims[0]!r} {o.dims[1] / 2!r}" {pose} {bits}/>')
-            elif o.shape == "mesh":  # MuJoCo reads the file and collides with its convex hull
+            elif o.shape == "mesh" and not o.vertices:  # MuJoCo reads the file and collides with its convex hull
                 mname = f"m_obstacle_{o.name}"
                 assets.append(f'<mesh name="{mname}" file={quoteattr(str(Path(o.file).resolve()))} '
                               f'scale="{_fmt([o.scale] * 3)}"/>')
                 world.append(f'<geom name="{o.name}" type="mesh" mesh="{mname}" {pose} {bits}/>')
-            else:  # boxes and cylinders as convex meshes (see the module docstring)
+            else:  # boxes and cylinders as convex meshes (see the module docstring), meshes of vertices
                 mname = mesh(f"m_obstacle_{o.name}", o.hull_vertices())
                 world.append(f'<geom name="{o.name}" type="mesh" mesh="{mname}" {pose} {bits}/>')
         for b in s.bases:
@@ -314,7 +364,8 @@ class Scene:
             mname = f"m_{o.name}"
             ET.SubElement(last, "geom", {
                 "name": f"held_{o.name}", "type": "mesh", "mesh": mname, "pos": _fmt(T[:3, 3]),
-                "quat": _fmt(frames.matrix_quat(T[:3, :3])), "rgba": "1 0.55 0.1 0.8", "contype": "0", "conaffinity": "0",
+                "quat": _fmt(frames.matrix_quat(T[:3, :3])), "rgba": "1 0.55 0.1 0.8", "contype": str(HELD_BITS[0]),
+                "conaffinity": str(HELD_BITS[1]),
             })
         excludes = "".join(f'<exclude body1="{a}" body2="{b}"/>' for a, b in self.self_collision["always"]
                            if base not in (a, b))

@@ -16,7 +16,7 @@ from uvms_jax.plan._planning import PLANNERS
 
 __all__ = ["CHECKERS", "IkSettings", "PlanJsonSettings", "PlanSettings"]
 
-CHECKERS = ("spheres", "mujoco")  # see PlanSettings.checker
+CHECKERS = ("query", "spheres", "mujoco")  # see PlanSettings.checker
 
 
 def _require(ok: bool, message: str) -> None:
@@ -94,10 +94,13 @@ class PlanSettings:
         :func:`~uvms_jax.plan.ompl_planners`; the thesis's three by default).
       planner_params: planner → its parameters (:func:`~uvms_jax.plan.planner_parameters`),
         e.g. ``{"RRTConnect": {"range": 1.0}}``; planners left out keep OMPL's defaults.
-      checker: what the planners check motions with: ``spheres`` (one compiled call per
-        motion, :class:`~uvms_jax.plan.SphereChecker`, MuJoCo confirming its rejections) or
-        ``mujoco`` (OMPL's state-by-state checks with MuJoCo). Every result is re-checked with
-        MuJoCo either way.
+      checker: how edges are planned: ``query`` (:func:`~uvms_jax.plan.plan_query` on the
+        scene as a world, :func:`~uvms_jax.plan.scene_checker`: ``RRTConnect`` compiled, any
+        other planner in OMPL on the same compiled checker; ``planner_params`` and
+        ``simplify_s`` not used), or OMPL checking motions with ``spheres`` (one compiled call
+        per motion, :class:`~uvms_jax.plan.SphereChecker`, MuJoCo confirming its rejections)
+        or with ``mujoco`` (state by state). Every result is re-checked with the scene's
+        MuJoCo checker either way.
       budget_s: planning budget per edge, all attempts together [s].
       resolution: the planner's motion-check step [rad].
       recheck_resolution: joint step of the re-check of every result, of the metrics and of
@@ -121,7 +124,7 @@ class PlanSettings:
     seed: int = 0
     planners: tuple[str, ...] = PLANNERS
     planner_params: dict[str, dict[str, float | int | bool]] = dataclasses.field(default_factory=dict)
-    checker: str = "spheres"
+    checker: str = "query"
     budget_s: float = 5.0
     resolution: float = 0.02
     recheck_resolution: float = 0.01

@@ -119,6 +119,7 @@ class Base:
     fits: tuple[int, ...]
 
 
+_FLAT = 1e-9  # [m] points spread less than this across a plane are flat: no convex solid
 _QUAT_TOL = 1e-6  # |q| − 1 allowed in a given quaternion: files carry 6–17 significant digits
 _OBSTACLE_DIMS = {"box": ("size",), "cylinder": ("radius", "height"), "sphere": ("radius",),
                   "capsule": ("radius", "length"), "mesh": ()}
@@ -133,11 +134,13 @@ class Obstacle:
       shape: ``box`` (``size``: full edges x, y, z), ``cylinder`` (``radius``, ``height``; axis
         z), ``sphere`` (``radius``), ``capsule`` (``radius``, ``length`` of its axis segment,
         along z) or ``mesh`` (``file``: an STL or OBJ file that MuJoCo reads, path absolute or
-        relative to the working directory, times ``scale``; MuJoCo collides with its convex
-        hull).
+        relative to the working directory, times ``scale``; or ``vertices``; MuJoCo collides
+        with its convex hull).
       pos, rpy: pose of its centre (the mesh file's origin).
       dims: the numbers of ``shape`` above, in that order.
       quat: its orientation as a unit quaternion ``(w, x, y, z)`` instead of ``rpy`` (None: rpy).
+      vertices: a mesh given by its points instead of a file: flat ``(3k,)`` [m] in its frame
+        (``scale`` not applied), k >= 4 not all in one plane.
     """
 
     name: str
@@ -148,6 +151,7 @@ class Obstacle:
     file: str = ""
     scale: float = 1.0
     quat: tuple[float, float, float, float] | None = None
+    vertices: tuple[float, ...] = ()
 
     def __post_init__(self) -> None:
         if self.quat is not None and (len(self.quat) != 4 or not np.all(np.isfinite(self.quat))
@@ -161,7 +165,15 @@ class Obstacle:
         if len(self.dims) != n or (n and min(self.dims) <= 0):
             raise ValueError(f"obstacle {self.name!r}: a {self.shape} needs {n} positive numbers "
                              f"({', '.join(_OBSTACLE_DIMS[self.shape]) or 'none'}), got {list(self.dims)}")
-        if self.shape == "mesh":
+        if self.vertices and (self.shape != "mesh" or self.file):
+            raise ValueError(f"obstacle {self.name!r}: vertices are for a mesh without a file")
+        if self.vertices:
+            v = np.asarray(self.vertices, dtype=float)
+            if v.size % 3 or v.size < 12 or not np.all(np.isfinite(v)) or np.linalg.matrix_rank(
+                    v.reshape(-1, 3) - v.reshape(-1, 3).mean(0), tol=_FLAT) < 3:
+                raise ValueError(f"obstacle {self.name!r}: vertices must be k >= 4 finite points (x, y, z) "
+                                 f"not all in one plane, got {v.size} numbers")
+        elif self.shape == "mesh":
             if not self.scale > 0:
                 raise ValueError(f"obstacle {self.name!r}: scale must be > 0, got {self.scale}")
             if not Path(self.file).is_file():
@@ -180,8 +192,11 @@ class Obstacle:
         return frames.pose(R, self.pos)
 
     def hull_vertices(self) -> np.ndarray:
-        """``(k, 3)`` vertices of the convex mesh standing for a box or a cylinder, in its frame
-        [m]. A cylinder is the prism *around* it (circumscribed polygon): never smaller."""
+        """``(k, 3)`` vertices of the convex mesh standing for a box or a cylinder, or of a mesh
+        given by its vertices, in its frame [m]. A cylinder is the prism *around* it
+        (circumscribed polygon): never smaller."""
+        if self.vertices:
+            return np.asarray(self.vertices, dtype=float).reshape(-1, 3)
         if self.shape == "box":
             return box_vertices(self.dims)
         if self.shape == "cylinder":

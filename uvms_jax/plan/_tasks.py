@@ -26,6 +26,7 @@ from uvms_jax.plan._collision import CollisionChecker, densify
 from uvms_jax.plan._metrics import EdgeMetrics, trajectory_metrics
 from uvms_jax.plan._planning import PlanResult, Trajectory, check_trajectory, plan_motion, time_parameterize
 from uvms_jax.plan._scene import Context, Scene
+from uvms_jax.plan._scenequery import plan_scene_query
 from uvms_jax.plan._settings import PlanSettings
 from uvms_jax.plan._spheres import SphereChecker
 from uvms_jax.plan._targets import NodeTarget, node_contexts
@@ -130,8 +131,9 @@ def plan_edge(
 ) -> EdgeResult:
     """Plan one edge, time-parameterise it, re-check it and measure its metrics.
 
-    ``settings`` give the budget, the resolutions, the time parameterisation's limits and
-    the planner's parameters. Metrics are measured on the path interpolated at
+    ``settings`` give the path (``checker``: the query path, :func:`plan_scene_query`, or
+    OMPL on the scene's checkers, :func:`plan_motion`), the budget, the resolutions, the time
+    parameterisation's limits and the planner's parameters. Metrics are measured on the path interpolated at
     ``settings.recheck_resolution`` (clearance at ``clearance_resolution``), torques from the arm's own weight and buoyancy plus the held
     object's load (edges out of an object), gravity rotated into the arm's base frame. With ``fast`` (a
     :class:`SphereChecker` on ``checker``) the planner checks motions with it; every result is
@@ -140,8 +142,11 @@ def plan_edge(
     s = settings
     q0, q1, ctx = edge_endpoints(scene, targets, src, dst)
     recheck_resolution = s.recheck_resolution
-    res = plan_motion(checker, q0, q1, ctx, planner, s.budget_s, s.resolution, recheck_resolution, s.simplify_s,
-                      fast=fast, params=s.planner_params.get(planner), straight_shortcut=s.straight_shortcut)
+    if s.checker == "query":
+        res = plan_scene_query(scene, checker, q0, q1, ctx, planner, s)
+    else:
+        res = plan_motion(checker, q0, q1, ctx, planner, s.budget_s, s.resolution, recheck_resolution, s.simplify_s,
+                          fast=fast, params=s.planner_params.get(planner), straight_shortcut=s.straight_shortcut)
     if not res.success:
         return EdgeResult(planner, src, dst, res, None, None, {})
     traj = time_parameterize(res.path, s.joint_velocity(scene.robot), s.max_acceleration)

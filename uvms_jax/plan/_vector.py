@@ -8,10 +8,13 @@ exact geometry too (up to the sphere fit's coverage, checked by the tests); the 
 not hold (a sphere bulges past its shape by at most the fit's stated excess).
 
 Self-collision: the robot's links form groups (a moving body with the fixed links folded into
-it; each finger on its own). A pair of groups is skipped when they are adjacent (a link and its
-parent, a finger and its hand, the two fingers of one opening), when their spheres touch in
-every sampled pose (MoveIt's "always in collision"), or when the world's allowed collision
-matrix allows every link pair between them.
+it; each finger on its own; the card's jaws, :func:`uvms_jax.robot.card_jaws`, and each shape
+attached for the query — an object in the hand — on their own too). A pair of groups is
+skipped when they are adjacent (on one body, or on a body and its parent: a link and its
+parent, a finger and its hand, the two fingers of one opening, as MuJoCo filters them), when
+their spheres touch in every sampled pose (MoveIt's "always in collision"), or when the world's
+allowed collision matrix allows every link pair between them. The base link's groups are never
+tested against the world: both are fixed (MuJoCo does not test geoms welded together either).
 """
 
 from __future__ import annotations
@@ -24,10 +27,12 @@ import mujoco
 import numpy as np
 from scipy.cluster.vq import kmeans2
 
-from uvms_jax.plan._vector_kernels import (make_scratch, motion_free, pairs_touching, settle, states_status,
-                                           without_exact)
+from uvms_jax.plan._rrtc import load
+from uvms_jax.plan._vector_kernels import (make_scratch, motion_free, pairs_touching, settle, state_free,
+                                           states_status, without_exact)
 from uvms_jax.plan._worlds import World, add_obstacles, obstacle_rows
-from uvms_jax.robot import BASE, Robot, RobotSpheres, base_body, collision_spheres, inscribed_spheres, robot_mjcf
+from uvms_jax.robot import (BASE, Robot, RobotSpheres, Shape, base_body, card_jaws, collision_spheres, inscribed_spheres,
+                            robot_mjcf)
 
 __all__ = ["LIMIT_TOL", "ExactChecker", "RobotSpheresModel", "VectorChecker", "check_in_limits", "robot_spheres_model"]
 
@@ -84,10 +89,11 @@ class RobotSpheresModel:
       kin: ``(n, 16)`` joint rows; groups: ``(G, 11)``; spheres: ``(S, 4)``; clusters:
         ``(C, 6)``; inner: ``(I, 4)`` inscribed spheres (:mod:`uvms_jax.plan._vector_kernels`).
       group_links: per group, the description's links in it.
-      group_bodies: per group, the moving body it belongs to (``-1`` the base) and its finger
-        (``-1`` none).
+      group_bodies: per group, the moving body it belongs to (``-1`` the base) and its part
+        (``-1`` none; ``0 … F-1`` the fingers, then the card's jaws, then ``attached``).
       skipped: group pairs never checked against each other, with the reason
-        (``"adjacent"`` or ``"always"``).
+        (``"adjacent"``: one body, or a body and its parent; ``"always"``).
+      attached: the shapes fixed to the arm for this model (besides the card's jaws).
     """
 
     robot: Robot
@@ -100,6 +106,7 @@ class RobotSpheresModel:
     group_links: tuple[frozenset[str], ...]
     group_bodies: tuple[tuple[int, int], ...]
     skipped: dict[tuple[int, int], str]
+    attached: tuple[Shape, ...] = ()
 
     def pairs(self, world: World) -> np.ndarray:
         """``(P, 2)`` group pairs checked in ``world``: every pair not skipped and not allowed by
@@ -148,45 +155,67 @@ def _posed(robot: Robot, spheres: RobotSpheres, opening: float) -> np.ndarray:
 
 
 def _opening(robot: Robot, opening: float | None) -> float:
+    """The opening [m] the hand is posed at: the gripper joint's value for the description's
+    fingers (within its limits), the gap between the boxes for the card's jaws (any length
+    >= 0, as :func:`uvms_jax.robot.mjcf_body` takes it: a scene's ``jaws_open``)."""
     g = robot.gripper
     if g is None:
         if opening not in (None, 0.0):
             raise ValueError(f"robot {robot.name!r} has no gripper: opening must be None, got {opening}")
         return 0.0
     value = g.upper if opening is None else float(opening)
+    if not robot.fingers:
+        if not (np.isfinite(value) and value >= 0):
+            raise ValueError(f"the jaws' opening must be a finite gap >= 0 [m], got {value}")
+        return value
     if not (g.lower - LIMIT_TOL <= value <= g.upper + LIMIT_TOL):
         raise ValueError(f"gripper joint {g.joint!r} at {value:.6g} is outside its limits [{g.lower:.6g}, "
                          f"{g.upper:.6g}] (tolerance {LIMIT_TOL:g})")
     return value
 
 
+def _group_spheres(robot: Robot, opening: float, spheres: RobotSpheres, attached: tuple[Shape, ...]) -> list:
+    """Per collision group: ``(body, part)``, its links, covering centres ``(k, 3)`` and radii
+    ``(k,)``, inscribed centres and radii, in the body's frame at ``opening`` [m]. Parts: the
+    fingers ``0 … F-1``, then the card's jaws and the ``attached`` shapes, one group each."""
+    fingers = robot.fingers
+    keys = [(BASE, -1)] + [(b, -1) for b in range(robot.n_joints)] + [(f.body, k) for k, f in enumerate(fingers)]
+    links = [{robot.base_link}] + [{name} for name in robot.link_names] + [{f.link} for f in fingers]
+    for shape in robot.shapes:
+        links[shape.body + 1].add(shape.link)
+    inner = inscribed_spheres(robot)
+    centre, inner_centre = (_posed(robot, sp, opening) for sp in (spheres, inner))
+    out = []
+    for key, link_set in zip(keys, links):
+        sel = (spheres.body == key[0]) & (spheres.finger == key[1])
+        own = (inner.body == key[0]) & (inner.finger == key[1])
+        out.append((key, link_set, centre[sel], np.asarray(spheres.radius, dtype=np.float64)[sel], inner_centre[own],
+                    np.asarray(inner.radius, dtype=np.float64)[own]))
+    for j, shape in enumerate(card_jaws(robot, opening) + attached):
+        cover, inside = collision_spheres(robot, shapes=(shape,)), inscribed_spheres(robot, shapes=(shape,))
+        out.append(((shape.body, len(fingers) + j), {shape.link}, cover.centre, cover.radius, inside.centre,
+                    inside.radius))
+    return [g for g in out if len(g[3])]
+
+
 @functools.lru_cache(maxsize=16)
-def robot_spheres_model(robot: Robot, opening: float | None = None,
-                        spheres: RobotSpheres | None = None) -> RobotSpheresModel:
+def robot_spheres_model(robot: Robot, opening: float | None = None, spheres: RobotSpheres | None = None,
+                        attached: tuple[Shape, ...] = ()) -> RobotSpheresModel:
     """The robot's side of the checker at a finger ``opening`` [m] (default: the gripper's
-    largest), from ``spheres`` (default: :func:`uvms_jax.robot.collision_spheres`). Cached."""
+    largest), from ``spheres`` (default: :func:`uvms_jax.robot.collision_spheres`), with the
+    card's jaws (:func:`uvms_jax.robot.card_jaws`) and the ``attached`` shapes (e.g. an object
+    in the hand: ``Shape.body`` the body it is fixed to, its pose in that body's frame) as
+    groups of their own, each fitted with its covering and inscribed spheres. Cached."""
     opening = _opening(robot, opening)
     spheres = collision_spheres(robot) if spheres is None else spheres
     n = robot.n_joints
-    fingers = robot.fingers
-    keys = [(BASE, -1)] + [(b, -1) for b in range(n)] + [(f.body, k) for k, f in enumerate(fingers)]
-    links = [{robot.base_link}] + [{robot.link_names[b]} for b in range(n)] + [{f.link} for f in fingers]
-    for s in robot.shapes:
-        links[s.body + 1].add(s.link)
-    inner = inscribed_spheres(robot)
-    centre, inner_centre = (_posed(robot, sp, opening) for sp in (spheres, inner))
     rows, cluster_rows, inner_rows, group_rows, group_links, group_bodies = [], [], [], [], [], []
-    for key, link_set in zip(keys, links):
-        sel = (spheres.body == key[0]) & (spheres.finger == key[1])
-        if not np.any(sel):
-            continue
-        c, r = centre[sel], np.asarray(spheres.radius, dtype=np.float64)[sel]
+    for key, link_set, c, r, inner_c, inner_r in _group_spheres(robot, opening, spheres, attached):
         first_sphere, first_cluster, first_inner = len(rows), len(cluster_rows), len(inner_rows)
         for members in _clusters(c):
             cluster_rows.append([len(rows), len(rows) + len(members), *_bound(c[members], r[members])])
             rows += [[*c[i], r[i]] for i in members]
-        own = (inner.body == key[0]) & (inner.finger == key[1])
-        inner_rows += [[*ci, ri] for ci, ri in zip(inner_centre[own], inner.radius[own])]
+        inner_rows += [[*ci, ri] for ci, ri in zip(inner_c, inner_r)]
         group_rows.append([first_sphere, len(rows), key[0], *_bound(c, r), first_cluster, len(cluster_rows),
                            first_inner, len(inner_rows)])
         group_links.append(frozenset(link_set))
@@ -194,11 +223,9 @@ def robot_spheres_model(robot: Robot, opening: float | None = None,
     kin, groups, sphere_rows = _kin_rows(robot), np.array(group_rows, dtype=np.float64), np.array(rows)
     clusters = np.array(cluster_rows, dtype=np.float64)
     inner_rows = np.array(inner_rows, dtype=np.float64).reshape(-1, 4)
-    skipped = {}
-    for a, b in itertools.combinations(range(len(groups)), 2):
-        (ba, fa), (bb, fb) = group_bodies[a], group_bodies[b]
-        if (fa < 0 and fb < 0 and (bb == ba + 1)) or ((fa >= 0 or fb >= 0) and ba == bb):
-            skipped[(a, b)] = "adjacent"
+    # Adjacent: groups of one body or of a body and its parent (MuJoCo's filter of the exact check).
+    skipped = {(a, b): "adjacent" for a, b in itertools.combinations(range(len(groups)), 2)
+               if abs(group_bodies[a][0] - group_bodies[b][0]) <= 1}
     candidates = np.array([p for p in itertools.combinations(range(len(groups)), 2) if p not in skipped],
                           dtype=np.int64).reshape(-1, 2)
     Q = np.random.default_rng(0).uniform(robot.lower, robot.upper, (_ALWAYS_SAMPLES, n))
@@ -209,12 +236,28 @@ def robot_spheres_model(robot: Robot, opening: float | None = None,
         if always:
             skipped[(int(a), int(b))] = "always"
     return RobotSpheresModel(robot, opening, kin, groups, sphere_rows, clusters, inner_rows, tuple(group_links),
-                             tuple(group_bodies), skipped)
+                             tuple(group_bodies), skipped, attached)
+
+
+def _part_of(side: RobotSpheresModel):
+    """``part(geom name) -> int``: the part of the exact model's geom (robot_mjcf's names: a
+    finger's ``geom_<finger joint>_<k>``, a jaw's or attached shape's ``geom_<link>``), ``-1``
+    for a body's own geoms and ``-2`` for the world's."""
+    robot = side.robot
+    fingers = [f"geom_{f.joint}_" for f in robot.fingers]
+    shapes = {f"geom_{s.link}": len(fingers) + j for j, s in enumerate(card_jaws(robot, side.opening) + side.attached)}
+
+    def part(name: str) -> int:
+        if name.startswith(_OBSTACLE):
+            return -2
+        return shapes.get(name, next((k for k, prefix in enumerate(fingers) if name.startswith(prefix)), -1))
+
+    return part
 
 
 class ExactChecker:
     """MuJoCo's collision test of the robot's own geometry (meshes, primitives, the fingers at
-    the opening) against the world's, with the same skipped and allowed pairs as the spheres
+    the opening, the card's jaws, attached shapes) against the world's, with the same skipped and allowed pairs as the spheres
     (MuJoCo excludes body pairs: a body pair is checked where any of its group pairs is).
 
     Args:
@@ -224,7 +267,8 @@ class ExactChecker:
 
     def __init__(self, side: RobotSpheresModel, world: World):
         robot = side.robot
-        spec = mujoco.MjSpec.from_string(robot_mjcf(robot, jaws_open=side.opening if robot.gripper else None))
+        spec = mujoco.MjSpec.from_string(robot_mjcf(robot, jaws_open=side.opening if robot.gripper else None,
+                                                    attached=side.attached))
         add_obstacles(spec, world.obstacles, _OBSTACLE)
         # The fingers are geoms of their arm body in this model, fixed at the opening: a body
         # pair is left out only where every group pair between the two bodies is.
@@ -239,15 +283,11 @@ class ExactChecker:
         self.data = mujoco.MjData(self.model)
         self._arm = np.array([self.model.joint(j).qposadr[0] for j in robot.joint_names])
         m = self.model
-        names = [m.geom(g).name for g in range(m.ngeom)]
-        fingers = tuple(f"geom_{f.joint}_" for f in robot.fingers)  # the fingers' geoms (robot_mjcf's names)
+        part = _part_of(side)
         ranges, geoms = [], []
-        for (body, finger), body_name in zip(side.group_bodies, on):
-            if finger >= 0:
-                own = [g for g, name in enumerate(names) if name.startswith(fingers[finger])]
-            else:
-                own = [g for g, name in enumerate(names) if m.body(m.geom_bodyid[g]).name == body_name
-                       and not name.startswith(fingers or ("\0",)) and not name.startswith(_OBSTACLE)]
+        for (body, k), body_name in zip(side.group_bodies, on):
+            own = [g for g in range(m.ngeom) if part(m.geom(g).name) == k
+                   and (k >= 0 or m.body(m.geom_bodyid[g]).name == body_name)]
             ranges.append([len(geoms), len(geoms) + len(own)])
             geoms += own
         self._ranges, self._geoms = np.array(ranges, np.int64).reshape(-1, 2), np.array(geoms, np.int32)
@@ -288,21 +328,27 @@ class VectorChecker:
     Args:
       robot: the robot.
       world: its world.
-      opening: the finger opening [m] (default: the gripper's largest).
+      opening: the finger opening [m] (default: the gripper's largest; the card's jaws: the
+        gap between them).
       margin: safety distance [m] added to every sphere.
       spheres: the robot's spheres (default: :func:`uvms_jax.robot.collision_spheres`).
+      attached: shapes fixed to the arm's bodies for this checker, e.g. an object in the hand
+        (``Shape.body`` its body, its pose in that body's frame, ``Shape.link`` its name):
+        covered and inscribed by their own spheres, and in MuJoCo's model.
     """
 
     def __init__(self, robot: Robot, world: World, opening: float | None = None, margin: float = 0.0,
-                 spheres: RobotSpheres | None = None):
+                 spheres: RobotSpheres | None = None, attached: tuple[Shape, ...] = ()):
         if not (np.isfinite(margin) and margin >= 0):
             raise ValueError(f"margin must be finite and >= 0 [m], got {margin}")
         self.robot, self.world = robot, world
-        self.side = robot_spheres_model(robot, opening, spheres)
+        self.side = robot_spheres_model(robot, opening, spheres, tuple(attached))
         self.exact = ExactChecker(self.side, world)
         self.model = self.side.model(world, margin, self.exact)
         self.lower, self.upper = robot.lower, robot.upper
         self._scratch = make_scratch(self.model)
+        q = np.zeros((1, robot.n_joints))
+        self.states_free(q), self.motion_free(q[0], q[0], 1.0), load(self.model, robot.n_joints)  # see load
 
     def _rows(self, Q) -> np.ndarray:
         Q = np.ascontiguousarray(np.atleast_2d(Q), dtype=np.float64)
@@ -321,6 +367,11 @@ class VectorChecker:
         checked): the spheres' verdict, MuJoCo's where the spheres cannot tell."""
         Q = self._rows(Q)
         return settle(Q, states_status(Q, *self.model[:9]), self.model)
+
+    def state_free(self, q) -> bool:
+        """Whether the robot at ``q (n,)`` [rad] touches nothing (limits not checked), in one
+        serial compiled call: :meth:`states_free` of a single state (an OMPL callback's)."""
+        return bool(state_free(np.asarray(q, dtype=np.float64), self.model, self._scratch))
 
     def motion_free(self, q0, q1, resolution: float) -> bool:
         """Whether the straight motion ``q0 → q1`` is free at every sample ``resolution`` [rad]

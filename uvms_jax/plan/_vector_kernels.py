@@ -282,6 +282,8 @@ def state_status(q, model, scratch) -> int:
             cc[c, 0], cc[c, 1], cc[c, 2] = _to_world(R, t, b, clusters[c, 2], clusters[c, 3], clusters[c, 4])
     status, posed = FREE, False
     for g in range(G):
+        if groups[g, 2] < 0:  # the base's groups: fixed, as the world is
+            continue
         gr = groups[g, 6]
         for m in range(obstacles.shape[0]):
             o = obstacles[m]

@@ -51,7 +51,9 @@ class World:
 
 
 def _mesh_vertices(o: Obstacle) -> np.ndarray:
-    """``(v, 3)`` vertices of a mesh obstacle's file as MuJoCo reads it, scaled, in its frame."""
+    """``(v, 3)`` vertices of a mesh obstacle (its file's as MuJoCo reads it, scaled), in its frame."""
+    if o.vertices:
+        return o.hull_vertices()
     spec = mujoco.MjSpec()
     spec.add_mesh(name="m", file=o.file, scale=[o.scale] * 3)
     spec.worldbody.add_geom(type=mujoco.mjtGeom.mjGEOM_MESH, meshname="m")
@@ -94,14 +96,14 @@ def obstacle_rows(obstacles: Iterable[Obstacle]) -> tuple[np.ndarray, np.ndarray
 def add_obstacles(spec: mujoco.MjSpec, obstacles: Iterable[Obstacle], prefix: str = "obstacle_") -> list[str]:
     """Add ``obstacles`` to ``spec``'s world body as MuJoCo geoms named ``prefix + name``: boxes
     as 8-vertex convex meshes (MuJoCo's primitive capsule–box test misses a capsule whose axis
-    crosses a thin box), the other primitives as themselves, meshes from their files. Returns
-    the geom names."""
+    crosses a thin box), the other primitives as themselves, meshes from their files or
+    vertices. Returns the geom names."""
     names = []
     for o in obstacles:
         T = o.T_world
         name = prefix + o.name
         kw = dict(name=name, pos=T[:3, 3], quat=frames.matrix_quat(T[:3, :3]))
-        if o.shape == "box":
+        if o.shape == "box" or o.vertices:
             spec.add_mesh(name="m_" + name, uservert=o.hull_vertices().reshape(-1))
             spec.worldbody.add_geom(type=mujoco.mjtGeom.mjGEOM_MESH, meshname="m_" + name, **kw)
         elif o.shape == "mesh":

@@ -21,6 +21,7 @@ from uvms_jax.robot._load import robot_from_config
 from uvms_jax.robot._load import shipped_arms
 from uvms_jax.robot._mjcf import TOOL_SITE
 from uvms_jax.robot._mjcf import base_body
+from uvms_jax.robot._mjcf import card_jaws
 from uvms_jax.robot._mjcf import geom_name
 from uvms_jax.robot._mjcf import link_capsules
 from uvms_jax.robot._mjcf import mjcf_assets

@@ -13,8 +13,9 @@ needs). A site ``tool`` marks the tool frame. The hand: a robot whose descriptio
 hang from at the opening asked for (a kinematic model: the planning scene, the self-collision
 pairs), or, with ``finger_joints``, as finger bodies named as the description names them, each
 on its slide joint (the simulated arm, which ties the mimics to the gripper joint:
-:func:`uvms_jax.hw.add_drives`). Without fingers a gripper adds two finger boxes, the opening
-along the tool's x axis, reaching forward along its z axis.
+:func:`uvms_jax.hw.add_drives`). Without fingers a gripper adds two finger boxes (:func:`card_jaws`), the
+opening along the tool's x axis, reaching forward along its z axis. Shapes fixed to the arm for
+one use of its model (an object in the hand) come as ``attached`` shapes.
 """
 
 from __future__ import annotations
@@ -30,7 +31,7 @@ from uvms_jax.kin._chain import REVOLUTE
 from uvms_jax.robot._geometry import Shape
 from uvms_jax.robot._model import BASE, Robot
 
-__all__ = ["TOOL_SITE", "base_body", "geom_name", "link_capsules", "mjcf_assets", "mjcf_body", "robot_mjcf",
+__all__ = ["TOOL_SITE", "base_body", "card_jaws", "geom_name", "link_capsules", "mjcf_assets", "mjcf_body", "robot_mjcf",
            "self_collision_pairs"]
 
 TOOL_SITE = "tool"
@@ -106,11 +107,26 @@ def _hull_vertices(shape: Shape) -> np.ndarray:
     return np.concatenate([np.c_[ring, np.full(len(a), -length / 2)], np.c_[ring, np.full(len(a), length / 2)]])
 
 
-def mjcf_assets(robot: Robot) -> list[str]:
+def _attached_named(robot: Robot, attached) -> list[tuple[Shape, str]]:
+    """Shapes fixed to the arm's bodies for one use of its model (e.g. an object in the hand)
+    with their geom names ``geom_<link>``; ValueError for a bad body or a repeated name."""
+    named = [(s, f"geom_{s.link}") for s in attached]
+    taken = {n for _, n in _all_shapes(robot)} | {f"geom_{s.link}" for s in card_jaws(robot)}
+    for s, name in named:
+        if not BASE <= s.body < robot.n_joints:
+            raise ValueError(f"attached shape {s.link!r}: body {s.body} is not -1 … {robot.n_joints - 1}")
+        if name in taken:
+            raise ValueError(f"attached shape {s.link!r}: its geom name {name!r} is taken (give it another link name)")
+        taken.add(name)
+    return named
+
+
+def mjcf_assets(robot: Robot, attached: tuple[Shape, ...] = ()) -> list[str]:
     """The ``<mesh>`` entries of an ``<asset>`` element that :func:`mjcf_body`'s geoms use
-    (none for a robot of capsules), its fingers' included. Mesh names are ``m_<geom name>``."""
+    (none for a robot of capsules), its fingers' and the ``attached`` shapes' included. Mesh
+    names are ``m_<geom name>``."""
     assets = []
-    for s, name in _all_shapes(robot):
+    for s, name in _all_shapes(robot) + _attached_named(robot, attached):
         if s.kind == "mesh" and s.file:
             assets.append(f'<mesh name="m_{name}" file={quoteattr(s.file)} scale="{_fmt(s.scale)}"/>')
         elif s.kind == "mesh":
@@ -178,7 +194,7 @@ def _inertial(robot: Robot, body: int) -> str:
 
 
 def mjcf_body(robot: Robot, pos=(0.0, 0.0, 0.0), quat=(1.0, 0.0, 0.0, 0.0), jaws_open: float | None = None,
-              inertial: bool = False, finger_joints: bool = False) -> str:
+              inertial: bool = False, finger_joints: bool = False, attached: tuple[Shape, ...] = ()) -> str:
     """MJCF ``<body>`` tree of the robot (radians), for a ``<worldbody>`` whose
     ``<compiler angle="radian"/>`` is set.
 
@@ -192,10 +208,15 @@ def mjcf_body(robot: Robot, pos=(0.0, 0.0, 0.0), quat=(1.0, 0.0, 0.0, 0.0), jaws
         queries do not). The fingers' masses stay folded into the body they hang from.
       finger_joints: the description's fingers as bodies on their slide joints (at value 0:
         ``jaws_open`` is not used) rather than fixed at ``jaws_open``.
+      attached: shapes fixed to the arm's bodies for this model (e.g. an object in the hand;
+        ``Shape.body`` the body, its pose in that body's frame), geoms named ``geom_<link>``
+        (their meshes: :func:`mjcf_assets` with the same shapes).
 
     Raises:
-      ValueError: ``jaws_open`` outside the gripper's limits for a robot with fingers.
+      ValueError: ``jaws_open`` outside the gripper's limits for a robot with fingers, or an
+        attached shape on no body of the arm or with a geom name already taken.
     """
+    named = _attached_named(robot, attached)
     g = robot.gripper
     opening = None if g is None else (g.upper if jaws_open is None else float(jaws_open))
     if robot.fingers and not g.lower <= opening <= g.upper:
@@ -211,6 +232,7 @@ def mjcf_body(robot: Robot, pos=(0.0, 0.0, 0.0), quat=(1.0, 0.0, 0.0, 0.0), jaws
         lines.append("  " + _inertial(robot, BASE))
     lines += ["  " + g for g in _body_geoms(robot, BASE, ends[BASE])]
     lines += ["  " + g for g in _finger_lines(robot, BASE, opening, finger_joints)]
+    lines += ["  " + _shape_geom(s, name) for s, name in named if s.body == BASE]
     previous = np.eye(4)
     for i in range(n):
         pad = "  " * (i + 1)
@@ -228,28 +250,48 @@ def mjcf_body(robot: Robot, pos=(0.0, 0.0, 0.0), quat=(1.0, 0.0, 0.0, 0.0), jaws
         lines.append(f'{pad}  <joint name="{robot.joint_names[i]}" type="{kind}" axis="{_fmt(axis)}" '
                      f'range="{float(chain.lower[i])!r} {float(chain.upper[i])!r}" limited="true"/>')
         lines += [f"{pad}  " + g for g in geoms + _finger_lines(robot, i, opening, finger_joints)]
+        lines += [f"{pad}  " + _shape_geom(s, name) for s, name in named if s.body == i]
         previous = T_joint[i]
     pad = "  " * (n + 1)
     T_link_tool = np.linalg.inv(T_joint[-1]) @ tool
     tool_quat = _fmt(frames.matrix_quat(T_link_tool[:3, :3]))
     lines.append(f'{pad}<site name="{TOOL_SITE}" pos="{_fmt(T_link_tool[:3, 3])}" quat="{tool_quat}" size="0.01"/>')
-    if g is not None and not robot.fingers:
-        fx, fy, fz = g.finger_size
-        for side, sign in (("left", 1.0), ("right", -1.0)):
-            p = T_link_tool @ np.array([sign * (opening / 2.0 + fx / 2.0), 0.0, fz / 2.0, 1.0])
-            lines.append(f'{pad}<geom name="geom_jaw_{side}" type="box" pos="{_fmt(p[:3])}" quat="{tool_quat}" '
-                         f'size="{_fmt(np.array(g.finger_size) / 2)}"/>')
+    for s in card_jaws(robot, opening):
+        T = s.T
+        lines.append(f'{pad}<geom name="geom_{s.link}" type="box" pos="{_fmt(T[:3, 3])}" '
+                     f'quat="{_fmt(frames.matrix_quat(T[:3, :3]))}" size="{_fmt(np.array(s.size) / 2)}"/>')
     for d in range(n, -1, -1):
         lines.append("  " * d + "</body>")
     return "\n".join(lines)
 
 
-def robot_mjcf(robot: Robot, jaws_open: float | None = None, inertial: bool = False) -> str:
-    """A complete MJCF model of the robot alone, its base link at the world origin, no gravity."""
-    assets = "".join(f"\n    {a}" for a in mjcf_assets(robot))
+def card_jaws(robot: Robot, opening: float | None = None) -> tuple[Shape, ...]:
+    """The finger boxes that stand for the hand of an arm whose card gives a gripper but whose
+    description has no fingers, as box shapes of :attr:`Gripper.finger_size` on the last body
+    (named ``jaw_left`` and ``jaw_right``; their geoms in :func:`mjcf_body`: ``geom_jaw_left``,
+    ``geom_jaw_right``): ``opening`` [m] apart along the tool's x axis (default: the gripper's
+    largest), reaching forward along its z axis. Empty without a gripper or with fingers."""
+    g = robot.gripper
+    if g is None or robot.fingers:
+        return ()
+    opening = g.upper if opening is None else float(opening)
+    T_joint = np.asarray(robot.chain.T_base_joint0, dtype=np.float64)
+    T_link_tool = np.linalg.inv(T_joint[-1]) @ np.asarray(robot.chain.T_base_tool0, dtype=np.float64)
+    fx, _, fz = g.finger_size
+    return tuple(Shape(robot.n_joints - 1, "box", tuple(float(v) for v in (T_link_tool @ frames.pose(
+        p=(sign * (opening / 2.0 + fx / 2.0), 0.0, fz / 2.0))).reshape(16)), tuple(g.finger_size), link=f"jaw_{side}")
+        for side, sign in (("left", 1.0), ("right", -1.0)))
+
+
+def robot_mjcf(robot: Robot, jaws_open: float | None = None, inertial: bool = False,
+               attached: tuple[Shape, ...] = ()) -> str:
+    """A complete MJCF model of the robot alone (with the ``attached`` shapes of
+    :func:`mjcf_body`), its base link at the world origin, no gravity."""
+    assets = "".join(f"\n    {a}" for a in mjcf_assets(robot, attached))
     return (f'<mujoco model="{robot.name}">\n  <compiler angle="radian"/>\n  <option gravity="0 0 0"/>\n'
             + (f"  <asset>{assets}\n  </asset>\n" if assets else "") +
-            f"  <worldbody>\n{mjcf_body(robot, jaws_open=jaws_open, inertial=inertial)}\n  </worldbody>\n</mujoco>\n")
+            f"  <worldbody>\n{mjcf_body(robot, jaws_open=jaws_open, inertial=inertial, attached=attached)}\n"
+            "  </worldbody>\n</mujoco>\n")
 
 
 def self_collision_pairs(robot: Robot, n_samples: int = 200, seed: int = 0, jaws_open: float | None = None,

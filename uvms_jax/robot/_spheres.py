@@ -277,14 +277,26 @@ def _key(robot: Robot, shapes: list[tuple[int, Shape]], max_excess: float) -> st
     return hashlib.sha256(text.encode()).hexdigest()
 
 
-def collision_spheres(robot: Robot, max_excess: float = 0.01) -> RobotSpheres:
+def _shapes(robot: Robot, shapes) -> list[tuple[int, Shape]]:
+    """``(finger index or -1, shape)`` of the robot's collision model and its fingers, or of
+    the ``shapes`` given (finger -1)."""
+    if shapes is not None:
+        return [(-1, s) for s in shapes]
+    return ([(-1, s) for s in (robot.shapes or _capsule_shapes(robot))]
+            + [(k, s) for k, f in enumerate(robot.fingers) for s in f.shapes])
+
+
+def collision_spheres(robot: Robot, max_excess: float = 0.01, shapes: tuple[Shape, ...] | None = None) -> RobotSpheres:
     """Spheres covering the robot's collision model (:attr:`Robot.shapes` or the link
-    capsules) and its fingers', each reaching at most ``max_excess`` [m] beyond the convex hull
-    of the shape it stands for (where a shape allows; the excess reached is returned). Cached
-    under :func:`spheres_cache_dir`; a second call loads them.
+    capsules) and its fingers', or the ``shapes`` given (e.g. the card's jaws,
+    :func:`~uvms_jax.robot.card_jaws`, or an object in the hand), each reaching at most
+    ``max_excess`` [m] beyond the convex hull of the shape it stands for (where a shape allows;
+    the excess reached is returned). Cached under :func:`spheres_cache_dir`; a second call
+    loads them.
 
     The card's finger boxes of a robot without fingers (:attr:`Robot.fingers`) are not
-    included: they move with the opening and have no finger to hang from.
+    part of its collision model here: they move with the opening and have no finger to hang
+    from (fit them as ``shapes`` at an opening).
 
     Raises:
       ValueError: ``max_excess`` not a finite length above the samples' spacing.
@@ -292,8 +304,7 @@ def collision_spheres(robot: Robot, max_excess: float = 0.01) -> RobotSpheres:
     if not (np.isfinite(max_excess) and max_excess > 2 * _GAP):
         raise ValueError(f"max_excess must be a length above {2 * _GAP} m (the surface samples' spacing), "
                          f"got {max_excess}")
-    shapes = [(-1, s) for s in (robot.shapes or _capsule_shapes(robot))]
-    shapes += [(k, s) for k, f in enumerate(robot.fingers) for s in f.shapes]
+    shapes = _shapes(robot, shapes)
     path = spheres_cache_dir() / f"{_key(robot, shapes, max_excess)}.npz"
     if path.is_file():
         with np.load(path) as z:
@@ -340,14 +351,14 @@ def _inscribed(shape: Shape, count: int) -> tuple[np.ndarray, np.ndarray]:
     return np.array(centres).reshape(-1, 3), np.array(radii)
 
 
-def inscribed_spheres(robot: Robot, per_shape: int = _INSCRIBED) -> RobotSpheres:
-    """Spheres inside the robot's collision shapes (and its fingers'), at most ``per_shape``
-    each: an obstacle that reaches one of them certainly touches the robot (where
-    :func:`collision_spheres` only says it may). ``max_excess`` is 0: they reach nowhere outside."""
+def inscribed_spheres(robot: Robot, per_shape: int = _INSCRIBED, shapes: tuple[Shape, ...] | None = None) -> RobotSpheres:
+    """Spheres inside the robot's collision shapes (and its fingers'), or inside the ``shapes``
+    given, at most ``per_shape`` each: an obstacle that reaches one of them certainly touches
+    the robot (where :func:`collision_spheres` only says it may). ``max_excess`` is 0: they
+    reach nowhere outside."""
     if per_shape < 1:
         raise ValueError(f"per_shape must be >= 1, got {per_shape}")
-    shapes = [(-1, s) for s in (robot.shapes or _capsule_shapes(robot))]
-    shapes += [(k, s) for k, f in enumerate(robot.fingers) for s in f.shapes]
+    shapes = _shapes(robot, shapes)
     body, finger, centre, radius = [], [], [], []
     for k, s in shapes:
         c, r = _inscribed(s, per_shape)
