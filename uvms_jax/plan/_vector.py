@@ -292,6 +292,15 @@ class ExactChecker:
             geoms += own
         self._ranges, self._geoms = np.array(ranges, np.int64).reshape(-1, 2), np.array(geoms, np.int32)
         self._obstacles = np.array([m.geom(_OBSTACLE + o.name).id for o in world.obstacles], np.int32)
+        # MuJoCo excludes body pairs; the spheres skip group pairs. A contact between two of the
+        # robot's geoms counts only where the spheres check their groups' pair, so both checkers
+        # judge the same pairs: True where a geom pair's contact counts.
+        group = np.full(m.ngeom, -1)
+        for k, (a, b) in enumerate(self._ranges):
+            group[self._geoms[a:b]] = k
+        pairs = {tuple(p) for p in side.pairs(world)}
+        self._counts = np.array([[group[a] < 0 or group[b] < 0 or (min(group[a], group[b]), max(group[a], group[b]))
+                                  in pairs for b in range(m.ngeom)] for a in range(m.ngeom)], dtype=bool)
 
     def arrays(self, rows) -> tuple:
         """The compiled checker's view of this model (see :mod:`uvms_jax.plan._vector_kernels`),
@@ -299,26 +308,29 @@ class ExactChecker:
         return (self.model._address, self.data._address, self.data.qpos, self._arm.astype(np.int64), self._ranges,
                 self._geoms, self._obstacles[rows])
 
-    def free(self, q) -> bool:
-        """Whether ``q (n,)`` [rad] is free of penetrating contacts."""
+    def _penetrating(self, q) -> np.ndarray:
+        """Indices of the contacts at ``q (n,)`` [rad] that penetrate and count."""
         m, d = self.model, self.data
         d.qpos[self._arm] = q
         mujoco.mj_kinematics(m, d)
         mujoco.mj_collision(m, d)
-        return not (d.ncon and np.any(d.contact.dist < 0))
+        if not d.ncon:
+            return np.zeros(0, int)
+        geom = d.contact.geom
+        return np.flatnonzero((d.contact.dist < 0) & self._counts[geom[:, 0], geom[:, 1]])
+
+    def free(self, q) -> bool:
+        """Whether ``q (n,)`` [rad] is free of penetrating contacts."""
+        return not len(self._penetrating(q))
 
     def contacts(self, Q) -> list[tuple[int, str, str, float]]:
         """Penetrating contacts at the rows of ``Q (k, n)`` [rad]: ``(row, geom, geom, depth [m])``."""
         m, d = self.model, self.data
         out = []
         for i, q in enumerate(np.atleast_2d(Q)):
-            d.qpos[self._arm] = q
-            mujoco.mj_kinematics(m, d)
-            mujoco.mj_collision(m, d)
-            if d.ncon:
-                dist, geom = d.contact.dist, d.contact.geom
-                for k in np.flatnonzero(dist < 0):
-                    out.append((i, m.geom(geom[k, 0]).name, m.geom(geom[k, 1]).name, float(-dist[k])))
+            for k in self._penetrating(q):
+                g1, g2 = d.contact.geom[k]
+                out.append((i, m.geom(g1).name, m.geom(g2).name, float(-d.contact.dist[k])))
         return out
 
 
