@@ -49,18 +49,12 @@ def panda() -> R.Robot:
 
 def _ompl_mujoco(exact: P.ExactChecker, robot: R.Robot, start, goal, budget_s: float) -> tuple[bool, float, np.ndarray]:
     """The peer: OMPL RRT-Connect, MuJoCo's state checks, OMPL's motion checks at 0.01 rad."""
-    from ompl import base as ob
     from ompl import geometric as og
 
+    from uvms_jax.plan._planners import joint_space
+
     n = robot.n_joints
-    space = ob.RealVectorStateSpace(n)
-    bounds = ob.RealVectorBounds(n)
-    for i in range(n):
-        bounds.setLow(i, float(robot.lower[i]))
-        bounds.setHigh(i, float(robot.upper[i]))
-    space.setBounds(bounds)
-    ss = og.SimpleSetup(space)
-    si = ss.getSpaceInformation()
+    space, ss, si = joint_space(robot.lower, robot.upper)
     ss.setStateValidityChecker(lambda s: not exact.contacts(np.array([[s[i] for i in range(n)]])))
     si.setStateValidityCheckingResolution(RECHECK / space.getMaximumExtent())
     ss.setPlanner(og.RRTConnect(si))

@@ -18,12 +18,26 @@ from typing import Any
 from ompl import base as ob
 from ompl import geometric as og
 
-__all__ = ["make_planner", "ompl_planners", "planner_parameters"]
+__all__ = ["joint_space", "make_planner", "ompl_planners", "planner_parameters"]
 
 _SETTER = re.compile(r"^set\w*\(self, \w+: (float|int|bool)\) -> None")
 _TYPES = {"float": float, "int": int, "bool": bool}
 # Left out: destroying an AORRTC planner segfaults in the Python bindings of OMPL 2.0.1.
 _UNUSABLE = frozenset({"AORRTC"})
+
+
+def joint_space(lower, upper) -> tuple:
+    """OMPL's joint space of the box ``lower``–``upper`` ``(n,)`` [rad or m] and a planning setup
+    on it: ``(space, SimpleSetup, SpaceInformation)``."""
+    n = len(lower)
+    space = ob.RealVectorStateSpace(n)
+    bounds = ob.RealVectorBounds(n)
+    for i in range(n):
+        bounds.setLow(i, float(lower[i]))
+        bounds.setHigh(i, float(upper[i]))
+    space.setBounds(bounds)
+    ss = og.SimpleSetup(space)
+    return space, ss, ss.getSpaceInformation()
 
 
 def _snake(name: str) -> str:

@@ -22,12 +22,11 @@ from typing import Any
 
 import numpy as np
 from ompl import base as ob
-from ompl import geometric as og
 from ompl import util as ou
 
 from uvms_jax.motion import synchronised_move
 from uvms_jax.plan._collision import CollisionChecker, densify
-from uvms_jax.plan._planners import check_parameters, make_planner
+from uvms_jax.plan._planners import check_parameters, joint_space, make_planner
 from uvms_jax.plan._scene import Context
 from uvms_jax.plan._spheres import SphereChecker
 
@@ -209,14 +208,7 @@ def plan_motion(
     check_parameters(planner, params or {})
     q_start, q_goal = check_ends(checker, q_start, q_goal, context)
     n = len(q_start)
-    space = ob.RealVectorStateSpace(n)
-    bounds = ob.RealVectorBounds(n)
-    for i in range(n):
-        bounds.setLow(i, float(checker.lower[i]))
-        bounds.setHigh(i, float(checker.upper[i]))
-    space.setBounds(bounds)
-    ss = og.SimpleSetup(space)
-    si = ss.getSpaceInformation()
+    space, ss, si = joint_space(checker.lower, checker.upper)
     # States: MuJoCo (one call per state is what it is fastest at). Motions: OMPL's state-by-
     # state checks, or one SphereChecker call per motion.
     ss.setStateValidityChecker(checker.state_validator(n, context))

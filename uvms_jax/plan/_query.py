@@ -16,7 +16,7 @@ import time
 import numpy as np
 
 from uvms_jax.plan._collision import densify
-from uvms_jax.plan._planners import make_planner
+from uvms_jax.plan._planners import joint_space, make_planner
 from uvms_jax.plan._rrtc import FULL, SOLVED, TIMEOUT, rrt_connect, shortcut
 from uvms_jax.plan._vector import VectorChecker, check_in_limits
 from uvms_jax.plan._worlds import World
@@ -65,20 +65,12 @@ class QueryResult:
 def _ompl_path(checker: VectorChecker, start, goal, planner: str, deadline: float, resolution: float, seed: int):
     """Plan with an OMPL planner on the sphere checker; ``(path or None, iterations = 0)``."""
     from ompl import base as ob
-    from ompl import geometric as og
 
     from uvms_jax.plan._planning import seed_ompl
 
     seed_ompl(seed)
     n = len(start)
-    space = ob.RealVectorStateSpace(n)
-    bounds = ob.RealVectorBounds(n)
-    for i in range(n):
-        bounds.setLow(i, float(checker.lower[i]))
-        bounds.setHigh(i, float(checker.upper[i]))
-    space.setBounds(bounds)
-    ss = og.SimpleSetup(space)
-    si = ss.getSpaceInformation()
+    space, ss, si = joint_space(checker.lower, checker.upper)
     ss.setStateValidityChecker(lambda s: checker.state_free(s[0:n]))
 
     class Motions(ob.MotionValidator):

@@ -184,6 +184,20 @@ def _hits_obstacle(g, o, model, R, t, cc) -> bool:
     return False
 
 
+@numba.njit(cache=True, inline="always")
+def _spheres_meet(rows, lo1, hi1, b1, lo2, hi2, b2, margin, R, t) -> bool:
+    """Whether a sphere of ``rows[lo1:hi1]`` (on body ``b1``) and one of ``rows[lo2:hi2]`` (on
+    ``b2``) are nearer than ``margin`` [m]; ``rows (S, 4)``: centre in the body frame, radius."""
+    for s1 in range(lo1, hi1):
+        x1, y1, z1 = _to_world(R, t, b1, rows[s1, 0], rows[s1, 1], rows[s1, 2])
+        for s2 in range(lo2, hi2):
+            x2, y2, z2 = _to_world(R, t, b2, rows[s2, 0], rows[s2, 1], rows[s2, 2])
+            r = rows[s1, 3] + rows[s2, 3] + margin
+            if (x1 - x2) ** 2 + (y1 - y2) ** 2 + (z1 - z2) ** 2 < r * r:
+                return True
+    return False
+
+
 @numba.njit(cache=True)
 def _groups_touch(g1, g2, model, R, t, cc) -> bool:
     """Whether a sphere of group ``g1`` is nearer than the margin to one of group ``g2``:
@@ -200,13 +214,9 @@ def _groups_touch(g1, g2, model, R, t, cc) -> bool:
             r = clusters[c1, 5] + clusters[c2, 5] + margin
             if (cc[c1, 0] - cc[c2, 0]) ** 2 + (cc[c1, 1] - cc[c2, 1]) ** 2 + (cc[c1, 2] - cc[c2, 2]) ** 2 >= r * r:
                 continue
-            for s1 in range(int(clusters[c1, 0]), int(clusters[c1, 1])):
-                u1, v1, w1 = _to_world(R, t, b1, spheres[s1, 0], spheres[s1, 1], spheres[s1, 2])
-                for s2 in range(int(clusters[c2, 0]), int(clusters[c2, 1])):
-                    u2, v2, w2 = _to_world(R, t, b2, spheres[s2, 0], spheres[s2, 1], spheres[s2, 2])
-                    r = spheres[s1, 3] + spheres[s2, 3] + margin
-                    if (u1 - u2) ** 2 + (v1 - v2) ** 2 + (w1 - w2) ** 2 < r * r:
-                        return True
+            if _spheres_meet(spheres, int(clusters[c1, 0]), int(clusters[c1, 1]), b1, int(clusters[c2, 0]),
+                             int(clusters[c2, 1]), b2, margin, R, t):
+                return True
     return False
 
 
@@ -227,15 +237,8 @@ def _inner_hits_obstacle(g, o, model, R, t) -> bool:
 @numba.njit(cache=True)
 def _inner_groups_touch(g1, g2, model, R, t) -> bool:
     groups, margin, inner = model[1], model[6], model[8]
-    b1, b2 = int(groups[g1, 2]), int(groups[g2, 2])
-    for s1 in range(int(groups[g1, 9]), int(groups[g1, 10])):
-        x1, y1, z1 = _to_world(R, t, b1, inner[s1, 0], inner[s1, 1], inner[s1, 2])
-        for s2 in range(int(groups[g2, 9]), int(groups[g2, 10])):
-            x2, y2, z2 = _to_world(R, t, b2, inner[s2, 0], inner[s2, 1], inner[s2, 2])
-            r = inner[s1, 3] + inner[s2, 3] + margin
-            if (x1 - x2) ** 2 + (y1 - y2) ** 2 + (z1 - z2) ** 2 < r * r:
-                return True
-    return False
+    return _spheres_meet(inner, int(groups[g1, 9]), int(groups[g1, 10]), int(groups[g1, 2]), int(groups[g2, 9]),
+                         int(groups[g2, 10]), int(groups[g2, 2]), margin, R, t)
 
 
 @numba.njit(cache=True)
