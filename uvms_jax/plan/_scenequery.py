@@ -152,7 +152,8 @@ def scene_checker(scene: Scene, context: Context, margin: float) -> VectorChecke
     kept by the scene."""
     key = ("query_checker", context, float(margin))
     if key not in scene.derived:
-        scene.derived[key] = VectorChecker(scene.robot, scene_world(scene, context), scene.spec.jaws_open, margin,
+        opening = scene.spec.jaws_open if scene.robot.gripper is not None else None  # no jaws: nothing opens
+        scene.derived[key] = VectorChecker(scene.robot, scene_world(scene, context), opening, margin,
                                            attached=held_shapes(scene, context))
     return scene.derived[key]
 
