@@ -208,3 +208,15 @@ def test_another_arm_with_another_hand_plans_in_a_moveit_scene(tmp_path):
     assert not checker.exact.contacts(densify(result.path, 0.01))
     assert any(g.startswith("geom_jaw") for g in (checker.exact.model.geom(k).name
                                                   for k in range(checker.exact.model.ngeom)))
+
+
+def test_numba_cache_goes_to_the_users_cache(tmp_path):
+    """Compiled kernels are cached under the user's cache folder, not beside the installed source."""
+    import os
+    import subprocess
+    import sys
+
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"} | {"XDG_CACHE_HOME": str(tmp_path)}
+    out = subprocess.run([sys.executable, "-c", "import uvms_jax.plan, numba; print(numba.config.CACHE_DIR)"],
+                         env=env, capture_output=True, text=True, check=True).stdout.strip()
+    assert out == str(tmp_path / "uvms_jax" / "numba")
