@@ -892,12 +892,12 @@ def mbm_summary() -> str:
 
 def mbm_gpu() -> str:
     """The MotionBenchMaker Panda set in one batched call on a GPU (``benchmarks/mbm_gpu.py``)."""
-    d = _load("mbm_gpu_h200.json")
+    d = _load("mbm_gpu_h100.json")
     t = d["totals"]
     rows = [[f.removesuffix("_panda"), str(v["problems"]), str(v["endpoints_free"]), str(v["solved"]),
              str(v["rechecked_free"])] for f, v in d["families"].items()]
     return (f"`python benchmarks/mbm_gpu.py --device gpu` ({d['device']}, jax {d['jax']}, {d['dtype']}; "
-            f"`benchmarks/results/mbm_gpu_h200.json`): all {d['n_problems']} problems in one jitted call, "
+            f"`benchmarks/results/mbm_gpu_h100.json`): all {d['n_problems']} problems in one jitted call, "
             f"{d['n_spheres']} covering spheres, no MuJoCo on the GPU (a state the spheres cannot tell counts as "
             f"a collision). Compile {d['compile_s']:.1f} s, run {min(d['run_s']):.0f} s; {t['solved']} solved, "
             f"every one free for MuJoCo at {d['settings']['resolution']:g} rad; {t['endpoints_free']} have a start "
