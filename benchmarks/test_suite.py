@@ -8,6 +8,9 @@ The clone starts without a virtual environment or a JAX compilation cache. ``mak
     python benchmarks/test_suite.py > benchmarks/results/test_suite_cpu.json
 
 Usage: python benchmarks/test_suite.py [--keep DIR]   # DIR: clone there and keep it
+       python benchmarks/test_suite.py --isa AVX --targets test > benchmarks/results/test_suite_avx_cpu.json
+           # the fast suite with XLA's CPU code generation held to an older instruction set
+           # (XLA_FLAGS=--xla_cpu_max_isa=AVX): results must not depend on the CPU's rounding
 """
 
 from __future__ import annotations
@@ -44,16 +47,22 @@ def pytest_counts(output: str) -> dict:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--keep", type=Path, default=None, help="clone into this (new) folder and keep it")
+    ap.add_argument("--targets", nargs="+", choices=TARGETS, default=list(TARGETS), help="make targets to time")
+    ap.add_argument("--isa", default=None, help="XLA's highest CPU instruction set (--xla_cpu_max_isa), e.g. AVX")
     args = ap.parse_args()
     commit = subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True, text=True, check=True).stdout.strip()
     where = args.keep or Path(tempfile.mkdtemp(prefix="uvms_ci_")) / "clone"
     subprocess.run(["git", "clone", "-q", str(ROOT), str(where)], check=True)
     env = {k: v for k, v in os.environ.items() if not k.startswith(("JAX_", "XLA_", "VIRTUAL_ENV", "PYTHONPATH"))}
     env["JAX_PLATFORMS"] = "cpu"  # as .ci/run sets it
-    record = {"benchmark": "test_suite", "command": "python benchmarks/test_suite.py", "commit": commit,
+    if args.isa:
+        env["XLA_FLAGS"] = f"--xla_cpu_max_isa={args.isa}"
+    command = " ".join(["python benchmarks/test_suite.py", *(["--isa", args.isa] if args.isa else []),
+                        *(["--targets", *args.targets] if args.targets != list(TARGETS) else [])])
+    record = {"benchmark": "test_suite", "command": command, "commit": commit, "xla_flags": env.get("XLA_FLAGS", ""),
               "cpu_count": os.cpu_count(), "load_average_start": os.getloadavg(), "targets": {}}
     start = time.perf_counter()
-    for target in STEPS:
+    for target in ("setup", *args.targets):
         t0 = time.perf_counter()
         run = subprocess.run(["make", target], cwd=where, env=env, capture_output=True, text=True)
         seconds = time.perf_counter() - t0
