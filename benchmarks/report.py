@@ -424,6 +424,16 @@ def test_suite() -> str:
             f"average {d['load_average_start'][0]:.1f} at the start.\n")
 
 
+def test_suite_isa() -> str:
+    """The fast suite with XLA's CPU code held to an older instruction set (``--isa``)."""
+    d = _load("test_suite_avx_cpu.json")
+    t = d["targets"]["test"]
+    failed = f", {t['failed']} failed" if t.get("failed") else ""
+    return (f"With XLA's CPU code generation held to AVX (`XLA_FLAGS={d['xla_flags']}`; `{d['command']}`, "
+            f"`benchmarks/results/test_suite_avx_cpu.json`), from a fresh clone of commit {d['commit'][:7]}: the "
+            f"{t['passed']} fast tests passed{failed} in {_minutes(t['seconds'])}, as with XLA's default code path.\n")
+
+
 def docking_certify() -> str:
     """A certified docking run of the demo's fitness on a GPU (docs/docking.md), from its
     ``summary.json`` kept as ``docking_certify_demo_h100.json``."""
@@ -952,7 +962,7 @@ def hover_levelling() -> str:
 BLOCKS = {f.__name__: f for f in (docking_certify, test_suite, hover_vehicle, kin_roofline, scale_out, surrogate_roofline, docking_ga, docking_panel, pipeline_arms, plan_benchmark, sched_benchmark, hw_runner, hw_acceptance, kin_indices_cpu, kin_indices_accuracy, kin_indices_gpu, demo, docking_search, docking_fitness, docking_map, docking_collision,
                                    kin_summary, papers, hover_mjx, hover_robustness, surrogate_networks,
                                    surrogate_paper_sizes_cpu, surrogate_paper_sizes_h100, surrogate_sizes, own_arm,
-                                   weights_sweep, hover_levelling, mbm_benchmark, mbm_gpu, mbm_summary)}
+                                   weights_sweep, hover_levelling, mbm_benchmark, mbm_gpu, mbm_summary, test_suite_isa)}
 
 
 def render(text: str) -> str:

@@ -29,8 +29,6 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 #: The make targets of .ci/run, in its order.
 TARGETS = ("test", "test-slow")
-#: Targets timed, ``setup`` apart so that the tests' times leave the installation out.
-STEPS = ("setup", *TARGETS)
 #: pytest's summary line, e.g. "810 passed, 1 skipped in 300.12s (0:05:00)" (-q leaves out the rules).
 SUMMARY = re.compile(r"^=*\s*(?P<counts>\d+ \w+(?:, \d+ \w+)*) in (?P<seconds>[\d.]+)s", re.M)
 
@@ -62,7 +60,7 @@ def main() -> None:
     record = {"benchmark": "test_suite", "command": command, "commit": commit, "xla_flags": env.get("XLA_FLAGS", ""),
               "cpu_count": os.cpu_count(), "load_average_start": os.getloadavg(), "targets": {}}
     start = time.perf_counter()
-    for target in ("setup", *args.targets):
+    for target in ("setup", *args.targets):  # setup apart: the tests' times leave the installation out
         t0 = time.perf_counter()
         run = subprocess.run(["make", target], cwd=where, env=env, capture_output=True, text=True)
         seconds = time.perf_counter() - t0
