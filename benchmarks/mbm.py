@@ -155,9 +155,9 @@ def run(problems: Path, budget_s: float, per_family: int, peer: bool) -> dict:
             records.append(rec)
         families[family] = {name: _summary(t, s, valid, ok) for name, (t, s, ok) in rows.items()
                             if name == "query" or peer}
+    spheres = R.collision_spheres(robot)
     return {"families": families, "invalid": invalid, "compile_s": compile_s, "records": records,
-            "state_check": state_rates(robot, problems), "n_spheres": int(len(R.collision_spheres(robot).radius)),
-            "sphere_excess_m": float(R.collision_spheres(robot).max_excess)}
+            "state_check": state_rates(robot, problems), "n_spheres": len(spheres), "sphere_excess_m": spheres.max_excess}
 
 
 def main() -> None:

