@@ -64,7 +64,8 @@ class Check:
 
     Attributes:
       ge, gt, le, lt: bounds (``>=``, ``>``, ``<=``, ``<``) of a number.
-      choices: the allowed values (e.g. names of solvers or dtypes).
+      choices: the allowed values (e.g. names of dtypes), or a mapping whose keys are (a
+        registry such as the scheduling solvers: read when checked, so names added later count).
       file: the value is the path of an existing file (relative: to the working directory);
         with ``choices``, one of those or an existing file.
     """
@@ -73,7 +74,7 @@ class Check:
     gt: float | None = None
     le: float | None = None
     lt: float | None = None
-    choices: tuple[Any, ...] | None = None
+    choices: tuple[Any, ...] | Mapping[Any, Any] | None = None
     file: bool = False
 
     def allowed(self) -> str:
@@ -126,7 +127,7 @@ class Check:
 
 def setting(default: Any = dataclasses.MISSING, *, default_factory: Any = dataclasses.MISSING,
             ge: float | None = None, gt: float | None = None, le: float | None = None, lt: float | None = None,
-            choices: tuple[Any, ...] | None = None, file: bool = False) -> Any:
+            choices: tuple[Any, ...] | Mapping[Any, Any] | None = None, file: bool = False) -> Any:
     """A dataclass field whose allowed values :func:`from_mapping` checks (see :class:`Check`).
 
     >>> @dataclasses.dataclass(frozen=True)
@@ -137,7 +138,9 @@ def setting(default: Any = dataclasses.MISSING, *, default_factory: Any = datacl
     ...
     uvms_jax.settings.SettingsError: sched.names[1]: expected one of ['greedy', 'exact'], got 'bogus'
     """
-    check = Check(ge=ge, gt=gt, le=le, lt=lt, choices=None if choices is None else tuple(choices), file=file)
+    # A mapping stays live (a registry: names added later are allowed too).
+    live = choices is None or isinstance(choices, Mapping)
+    check = Check(ge=ge, gt=gt, le=le, lt=lt, choices=choices if live else tuple(choices), file=file)
     return dataclasses.field(default=default, default_factory=default_factory, metadata={"check": check})
 
 

@@ -250,12 +250,12 @@ def schedule(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
     results = sched.write_schedule(run, out, plots=s.sched.plots)
     winner = run.best
     t1 = md_table(["solver", "schedule", "cost", "time [ms] (ours)", "thesis Table 5.5 [ms] (eq. 4.1 matrix)"],
-                  [[r.solver, r.path_str(), r.cost, r.wall_time_s * 1e3, THESIS_SOLVER_MS.get(r.solver)]
+                  [[sched.SOLVERS[r.solver].label, r.path_str(), r.cost, r.wall_time_s * 1e3, THESIS_SOLVER_MS.get(r.solver)]
                    for r in run.solved.values()])
     thesis = sched.solve_all(key, sched.thesis_problem(), s.sched)
     thesis_path = "-".join(map(str, sched.THESIS_EQ41_GREEDY_PATH))
     t2 = md_table(["solver", "schedule (ours)", "cost", "thesis schedule", "time [ms] (ours)", "thesis [ms]"],
-                  [[n, r.path_str(), r.cost, thesis_path if n == "greedy" else None, r.wall_time_s * 1e3,
+                  [[sched.SOLVERS[n].label, r.path_str(), r.cost, thesis_path if n == "greedy" else None, r.wall_time_s * 1e3,
                     THESIS_SOLVER_MS.get(n)] for n, r in thesis.items()])
     res = {"source": run.note, "weights": run.weights.name, "winner": winner.solver, "winner_path": winner.path_str(),
            "winner_cost": winner.cost, "optimal_cost": run.optimal_cost,
@@ -278,8 +278,9 @@ def schedule(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
         planning.write_plan(flow.plan, out)
         notes.append(f"`schedule/plan.json`: the winner's moves ({planner} trajectories) with the grasp/release "
                      "steps, in the `uvms_jax.planfile` format.")
-    return StageReport("schedule", "Schedules: cost matrix → greedy / GRASP / A* / exact (docs/theory.md §5, "
-                       "thesis Tables 5.2, 5.5)", [t1], res, notes)
+    solvers = " / ".join(sched.SOLVERS[n].label for n in s.sched.solvers)
+    return StageReport("schedule", f"Schedules: cost matrix → {solvers} (docs/theory.md §5, thesis Tables 5.2, 5.5)",
+                       [t1], res, notes)
 
 
 def execute(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:

@@ -14,6 +14,8 @@ batch of schedules in one jitted call. Example::
 
 The move rules live in one place (``_rules.allowed_next``). The stage as a whole:
 ``run_schedule(key, SchedSettings(...))`` → ``ScheduleRun`` → ``write_schedule(run, out)``.
+The stage runs the solvers named in its settings from the registry ``SOLVERS``; a new solver is
+one ``register_solver(name, run, label=..., line=...)`` call (``Solver``).
 """
 
 from uvms_jax.sched._astar import astar
@@ -51,7 +53,9 @@ from uvms_jax.sched._source import WeightSettings
 from uvms_jax.sched._source import load_source
 from uvms_jax.sched._source import problem_from_metrics
 from uvms_jax.sched._source import read_edges_csv
-from uvms_jax.sched._stage import SOLVERS
+from uvms_jax.sched._solvers import SOLVERS
+from uvms_jax.sched._solvers import Solver
+from uvms_jax.sched._solvers import register_solver
 from uvms_jax.sched._stage import GraspSettings
 from uvms_jax.sched._stage import SchedSettings
 from uvms_jax.sched._stage import ScheduleRun
@@ -96,6 +100,7 @@ __all__ = [
     "ScheduleEdge",
     "ScheduleRun",
     "Scores",
+    "Solver",
     "Source",
     "SourceSettings",
     "SweepPoint",
@@ -118,6 +123,7 @@ __all__ = [
     "random_metrics",
     "random_problem",
     "read_edges_csv",
+    "register_solver",
     "run_schedule",
     "schedule_edges",
     "schedule_results",

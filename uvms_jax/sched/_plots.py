@@ -8,22 +8,25 @@ from typing import Mapping, Sequence
 from uvms_jax.plotting import pyplot
 from uvms_jax.sched._problem import PickPlaceProblem
 from uvms_jax.sched._schedule import Schedule
+from uvms_jax.sched._solvers import SOLVERS
 from uvms_jax.sched._thesis import THESIS_NODE_NAMES
 
 
 def plot_sweep(out: Path, sweep: Sequence, solved: Mapping[str, Schedule]) -> None:
     """``grasp_iterations.png``: GRASP cost and time versus iterations (thesis Figs 5.9–5.12),
-    with greedy / A* / exact as horizontal lines. ``sweep``: ``SweepPoint``s."""
+    with each solved solver that has a line style (:class:`~uvms_jax.sched.Solver`) as a
+    horizontal line. ``sweep``: ``SweepPoint``s."""
     plt = pyplot()
     it = [r.iterations for r in sweep]
     fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4.2), layout="constrained")
     a.plot(it, [r.cost_mean for r in sweep], "o-", label="GRASP (mean)")
     a.fill_between(it, [r.cost_min for r in sweep], [r.cost_max for r in sweep], alpha=0.2, label="GRASP (min–max)")
     b.plot(it, [r.time_ms for r in sweep], "o-", label="GRASP")
-    for name, style in (("greedy", "r--"), ("astar", "g--"), ("exact", "k:")):
-        if name in solved:
-            a.axhline(solved[name].cost, color=style[0], ls=style[1:], label=name)
-            b.axhline(solved[name].wall_time_s * 1e3, color=style[0], ls=style[1:], label=name)
+    for name, s in solved.items():
+        style = SOLVERS[name].line if name in SOLVERS else None
+        if style:
+            a.axhline(s.cost, color=style[0], ls=style[1:], label=SOLVERS[name].label)
+            b.axhline(s.wall_time_s * 1e3, color=style[0], ls=style[1:], label=SOLVERS[name].label)
     a.set(xscale="log", xlabel="GRASP iterations", ylabel="schedule cost", title="Cost vs iterations (Figs 5.9–5.10)")
     b.set(xscale="log", yscale="log", xlabel="GRASP iterations", ylabel="wall time [ms]", title="Time vs iterations (Figs 5.11–5.12)")
     handles, labels = a.get_legend_handles_labels()

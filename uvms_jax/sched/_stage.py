@@ -15,21 +15,15 @@ from typing import Any, Mapping, Sequence
 import jax
 import numpy as np
 
-from uvms_jax.sched._astar import astar
 from uvms_jax.sched._costs import METRICS, path_metric_sums
-from uvms_jax.sched._exact import exact
 from uvms_jax.sched._grasp import DEFAULT_ROUNDS, LOCAL_SEARCHES, THESIS_ALPHAS, THESIS_NEIGHBOURHOOD, grasp
-from uvms_jax.sched._greedy import greedy
 from uvms_jax.sched._problem import PickPlaceProblem
 from uvms_jax.sched._schedule import Schedule
+from uvms_jax.sched._solvers import SOLVERS
 from uvms_jax.sched._source import SourceSettings, WeightSettings, load_source, problem_from_metrics
 from uvms_jax.settings import setting
 
 log = logging.getLogger(__name__)
-
-#: The solvers ``solve`` knows, by name.
-SOLVERS = ("greedy", "grasp", "astar", "exact")
-
 
 @dataclass(frozen=True)
 class GraspSettings:
@@ -67,7 +61,7 @@ class SchedSettings:
     Attributes:
       source: where the costs come from (default: the thesis's eq. 4.1 matrix).
       weights: metric weights (default: thesis Table 4.3, all 1/5).
-      solvers: solver names, a subset of ``SOLVERS``.
+      solvers: solver names, keys of ``SOLVERS`` (default: those built in).
       grasp: GRASP settings.
       timing_repeats: each solver is timed this often (median reported), after a warm-up; ≥ 1.
       iterations_sweep: GRASP iteration counts of the sweep (thesis Figs 5.9–5.12), each ≥ 1;
@@ -78,7 +72,7 @@ class SchedSettings:
 
     source: SourceSettings = field(default_factory=SourceSettings)
     weights: WeightSettings = field(default_factory=WeightSettings)
-    solvers: tuple[str, ...] = setting(SOLVERS, choices=SOLVERS)
+    solvers: tuple[str, ...] = setting(tuple(SOLVERS), choices=SOLVERS)
     grasp: GraspSettings = field(default_factory=GraspSettings)
     timing_repeats: int = setting(20, ge=1)
     iterations_sweep: tuple[int, ...] = setting((1, 10, 50, 100, 250, 500, 1000, 2000, 3000), ge=1)
@@ -138,20 +132,15 @@ def solve(
     solver: str,
     grasp_settings: GraspSettings = GraspSettings(),
 ) -> Schedule:
-    """Solves ``problem`` with the solver named ``solver`` (``key`` is used by GRASP only).
+    """Solves ``problem`` with the solver registered as ``solver`` (``key``: for randomised
+    solvers such as GRASP).
 
     Raises:
-      ValueError: ``solver`` is not one of ``SOLVERS``.
+      ValueError: no solver of that name is registered.
     """
-    if solver == "greedy":
-        return greedy(problem)
-    if solver == "grasp":
-        return grasp(key, problem, **grasp_settings.kwargs())
-    if solver == "astar":
-        return astar(problem)
-    if solver == "exact":
-        return exact(problem)
-    raise ValueError(f"unknown solver {solver!r}; choose from {SOLVERS}")
+    if solver not in SOLVERS:
+        raise ValueError(f"unknown solver {solver!r}; choose from {list(SOLVERS)}")
+    return SOLVERS[solver].run(key, problem, grasp_settings.kwargs())
 
 
 def solve_all(key: jax.Array, problem: PickPlaceProblem, settings: SchedSettings) -> dict[str, Schedule]:
@@ -162,7 +151,7 @@ def solve_all(key: jax.Array, problem: PickPlaceProblem, settings: SchedSettings
     """
     for name in settings.solvers:
         if name not in SOLVERS:
-            raise ValueError(f"unknown solver {name!r}; choose from {SOLVERS}")
+            raise ValueError(f"unknown solver {name!r}; choose from {list(SOLVERS)}")
     if settings.timing_repeats < 1:
         raise ValueError(f"timing_repeats must be >= 1; got {settings.timing_repeats}")
     out = {}
