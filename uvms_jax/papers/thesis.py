@@ -19,8 +19,8 @@ import numpy as np
 from uvms_jax import progress
 from uvms_jax.papers._data import T22_PLANNER_TABLES, T22_SCENARIO_TABLES, T22_TABLES
 from uvms_jax.papers._preset import Preset, join_and, save_figure
-from uvms_jax.pipeline import md_table
 from uvms_jax.plotting import pyplot
+from uvms_jax.text import md_table
 
 #: Thesis algorithm name → our solver name.
 SOLVER_OF = {"Dijkstra": "greedy", "GRASP": "grasp", "A*": "astar"}
