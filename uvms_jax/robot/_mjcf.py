@@ -27,7 +27,7 @@ import mujoco
 import numpy as np
 
 from uvms_jax import frames
-from uvms_jax.kin._chain import REVOLUTE
+from uvms_jax.kin import REVOLUTE
 from uvms_jax.robot._geometry import Shape
 from uvms_jax.robot._model import BASE, Robot
 from uvms_jax.text import numbers
