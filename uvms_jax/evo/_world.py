@@ -36,6 +36,7 @@ import numpy as np
 from jax import Array
 
 from uvms_jax import kin
+from uvms_jax.robot import capsule_spheres
 from uvms_jax.evo import _world_gpu
 from uvms_jax.evo._geometry import (
     SLACK,
@@ -193,8 +194,6 @@ def capsule_world(chain: kin.Chain, link_radius: float, T_vehicle_base, vehicle_
       spacing: sphere spacing along the capsules [m].
       dtype: float dtype.
     """
-    from uvms_jax.robot import capsule_spheres
-
     T0 = np.asarray(chain.T_base_joint0, dtype=np.float64)
     ends = np.concatenate([T0[:, :3, 3], np.asarray(chain.T_base_tool0, dtype=np.float64)[None, :3, 3]])
     body, centre, radius, scene_only = [], [], [], []

@@ -11,10 +11,11 @@ from pathlib import Path
 import jax
 import numpy as np
 
-from uvms_jax import kin
+from uvms_jax import kin, surrogate
 from uvms_jax.papers._data import D16_NETWORKS, D16_TABLE3
 from uvms_jax.papers._preset import Preset, save_figure
 from uvms_jax.plotting import pyplot
+from uvms_jax.settings import from_mapping
 from uvms_jax.text import cell, md_table
 
 log = logging.getLogger(__name__)
@@ -31,9 +32,6 @@ def _label(name: str) -> str:
 
 def surrogate_runs(p: Preset) -> dict:
     """``run_surrogates`` for both Jacobian forms with the preset's sizes: form → SurrogateRun."""
-    from uvms_jax import surrogate
-    from uvms_jax.settings import from_mapping
-
     runs = {}
     for form in FORMS:
         t0 = time.perf_counter()
