@@ -32,7 +32,7 @@ import numpy as np
 import pytorch_kinematics as pk
 import torch
 
-from uvms_jax import indices, kin
+from uvms_jax import indices, kin, robot
 from uvms_jax.indices import _gpu
 from uvms_jax.indices._indices import _kci_of, _manipulability_of, _safe_inverse, _safe_sqrt, _vectors
 
@@ -150,7 +150,7 @@ def main() -> None:
     task = args.task if args.task in ("full", "position", "orientation") else tuple(args.task.split(","))
     task_idx = list(indices.task_rows(task))
 
-    chain = kin.uvms12() if args.urdf is None else kin.from_urdf(args.urdf, base_link=args.base, tip_link=args.tip)
+    chain = kin.uvms12() if args.urdf is None else robot.chain_from_urdf(args.urdf, base_link=args.base, tip_link=args.tip)
     lo = np.maximum(np.asarray(chain.lower), -1.0)
     hi = np.minimum(np.asarray(chain.upper), 1.0)
     w_fn = jax.jit(lambda q: indices.manipulability_of(chain, q, task))

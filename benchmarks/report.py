@@ -21,6 +21,8 @@ import re
 import sys
 from pathlib import Path
 
+from uvms_jax.text import md_table
+
 ROOT = Path(__file__).resolve().parent.parent
 RESULTS = ROOT / "benchmarks" / "results"
 DOCUMENTS = (ROOT / "README.md", ROOT / "BENCHMARKS.md", ROOT / "docs" / "theory.md", ROOT / "docs" / "docking.md",
@@ -49,11 +51,6 @@ def _batch(n: int) -> str:
     return f"{mantissa}e{int(exponent)}"
 
 
-def _table(header: list[str], rows: list[list[str]]) -> str:
-    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-    return "\n".join(lines + ["| " + " | ".join(r) + " |" for r in rows])
-
-
 def kin_indices_cpu() -> str:
     d = _load("kin_indices_uvms12_cpu.json")
     rows = [[_batch(r["batch"]), _rate(r["uvms_jax_w_per_s"]), _rate(r["gram_w_per_s"]), _rate(r["peer_w_per_s"]),
@@ -62,7 +59,7 @@ def kin_indices_cpu() -> str:
     b7 = _load("kin_indices_bravo7_cpu.json")["results"][0]
     return (f"**2-core CPU ({d['machine']}), jax {d['jax']}, torch {d['torch']}**, 12-DOF UVMS\n"
             f"(`python benchmarks/kin_indices.py --batches 1e3,1e5`):\n\n"
-            + _table(["batch", "w/s", "w/s (Gram)", "peer w/s", "w speed-up", "KCI/s", "KCI/s (Gram)",
+            + md_table(["batch", "w/s", "w/s (Gram)", "peer w/s", "w speed-up", "KCI/s", "KCI/s (Gram)",
                       "peer KCI/s", "KCI speed-up"], rows)
             + "\n\nThe Bravo 7 alone (`--urdf uvms_jax/robot/descriptions/bravo7.urdf --tip tool --batches 1e5`):\n"
             f"w {_rate(b7['uvms_jax_w_per_s'])}/s (Gram {_rate(b7['gram_w_per_s'])}), "
@@ -83,7 +80,7 @@ def kin_indices_accuracy() -> str:
     w = [r["uvms_jax_w_per_s"] / r["gram_w_per_s"] - 1 for r in cpu]
     k = [r["uvms_jax_kci_per_s"] / r["gram_kci_per_s"] - 1 for r in cpu]
     uvms = _load("kin_indices_uvms12_cpu.json")["accuracy"]["gram_w_max_abs_err"]
-    return (_table(["chain (device)", "median σ_min of the near-singular poses", "w: J factored", "w: Gram",
+    return (md_table(["chain (device)", "median σ_min of the near-singular poses", "w: J factored", "w: Gram",
                     "KCI: J factored", "KCI: Gram"], rows)
             + f"\n\n(The UVMS is never singular — its vehicle's six DOF keep J at full rank — but its large σ1\n"
             f"alone costs the Gram form {uvms:.1e}.) On the CPU, factoring J changes w's rate by "
@@ -100,7 +97,7 @@ def kin_indices_gpu() -> str:
     best_peer = max(r.get("peer_w_per_s", 0.0) for r in d["results"])
     kci_diff = max(r["kernel_vs_xla_max_abs_diff_kci"] for r in d["results"])
     w_same = all(r["kernel_vs_xla_max_abs_diff_w"] == 0 for r in d["results"])
-    return (_table(["batch", "w/s (kernel)", "w/s (Gram kernel)", "w/s (XLA)", "peer w/s", "KCI/s (kernel)",
+    return (md_table(["batch", "w/s (kernel)", "w/s (Gram kernel)", "w/s (XLA)", "peer w/s", "KCI/s (kernel)",
                     "KCI/s (Gram kernel)", "KCI/s (XLA)", "peer KCI/s"], rows)
             + f"\n\nThe kernel and the XLA path give {'the same w to the bit' if w_same else 'w within round-off'} "
             f"and KCI within {kci_diff:.1e}. At {_batch(last['batch'])}, w runs at **{_rate(last['uvms_jax_w_per_s'])}/s**, "
@@ -153,7 +150,7 @@ def demo() -> str:
                          + "; ".join(run(label, m) for label, m in runs.items()), f"{t['hover']:.1f}"])
     change = fixed["executed_s"] / docked["executed_s"] - 1
     return (f"Pipeline {d['total_seconds']:.1f} s (compilation cache warm):\n\n"
-            + _table(["stage", "result", "wall [s]"], rows)
+            + md_table(["stage", "result", "wall [s]"], rows)
             + f"\n\nSo the docked arm is more dexterous over the targets (M_a {docked['M_a'] / fixed['M_a'] - 1:+.0%}), and the "
             f"fixed mount's run is\n{abs(change):.0%} {'shorter' if change < 0 else 'longer'}: from the cage top the arm's "
             f"tool travels {fixed['ee_distance_m']:.1f} m against {docked['ee_distance_m']:.1f} m docked.\n")
@@ -178,7 +175,7 @@ def docking_search() -> str:
             f"(ratio {s['ratio_min']:.4f} at worst, median {s['ratio_median']:.4f}), each with "
             f"{min(r['evaluations'] for r in runs):,}–{max(r['evaluations'] for r in runs):,} evaluations in "
             f"{s['wall_s_median']:.0f} s (median, compilation cache warm).\n\n"
-            + _table(["seed", "best", "best / reference", "GA runs' best", "lattice's best", "after zoom",
+            + md_table(["seed", "best", "best / reference", "GA runs' best", "lattice's best", "after zoom",
                       "evaluations", "wall [s]"], rows)
             + "".join(f"\n\nSeed {r['seed']} misses: its lattice's best scores {r['coarse_grid_best']:.3f} and its GA runs' "
                       f"{r['ga_best']:.3f} (eq. 15 is −b·D where a target is out of reach): no start lies in the optimum's "
@@ -205,7 +202,7 @@ def hover_mjx() -> str:
             f"without our buoyancy and control: {_rate(cpu_file['cpu_mujoco_mj_step_only']['steps_per_s'])} and "
             f"{_rate(gpu['cpu_mujoco_mj_step_only']['steps_per_s'])}); the last column is the batch against `HoverSim` "
             "on the same machine.\n\n"
-            + _table(["device", "scenarios", "compile [s]", "run [s]", "env-steps/s", "scenarios/s", "vs CPU MuJoCo"],
+            + md_table(["device", "scenarios", "compile [s]", "run [s]", "env-steps/s", "scenarios/s", "vs CPU MuJoCo"],
                      rows) + "\n")
 
 
@@ -224,7 +221,7 @@ def hover_robustness() -> str:
             f"{len(poses)} poses × {d['currents']} currents = {d['scenarios']} scenarios, {d['simulated_s']:.0f} s "
             f"each, {d['gates']} gates, in one MJX call ({d['compile_s']:.1f} s compile, {d['run_s']:.1f} s run). "
             f"Poses [x, y, z, ψ]: {listing}.{left}\n\n"
-            + _table(["current [m/s]"] + [f"{n}: gates reached (worst direction) / worst tool error [mm]" for n in names],
+            + md_table(["current [m/s]"] + [f"{n}: gates reached (worst direction) / worst tool error [mm]" for n in names],
                      rows) + "\n")
 
 
@@ -262,7 +259,7 @@ def surrogate_networks() -> str:
             f"design parameters. Evaluations/s at {join_and([_batch(int(b)) for b in batches])} inputs, speed-up "
             "over the analytic index of the same quantity and form in brackets; XLA flops per sample from XLA's cost "
             "analysis of each jitted function on the CPU:\n\n"
-            + _table(["network", "Jacobian", "units", "max rel. test error", "ops (paper convention)",
+            + md_table(["network", "Jacobian", "units", "max rel. test error", "ops (paper convention)",
                       "XLA flops/sample"] + [f"{_batch(int(b))} inputs/s" for b in batches], rows)
             + f"\n\n(Paper: {paper}.) Over the sampled window w ∈ [{ranges['geometric']['w'][0]:.2f}, "
               f"{ranges['geometric']['w'][1]:.2f}] in both forms; KCI ∈ [{ranges['geometric']['kci'][0]:.3f}, "
@@ -304,7 +301,7 @@ def _surrogate_paper_sizes(name: str, device: str) -> str:
     return (f"`{d['command']}` ({device}, jax {d['jax']}; `benchmarks/results/{name}`; {d['networks']}: FFBN-w {u['ffbn_w']}, FFBN-KCI "
             f"{u['ffbn_kci']}, RBFN-w {u['rbfn_w']}, RBFN-KCI {u['rbfn_kci']} units; the cost of a network does not "
             "depend on its weights), evaluations/s:\n\n"
-            + _table(["batch", "analytic w", "FFBN-w", "RBFN-w", "analytic KCI", "FFBN-KCI", "RBFN-KCI"], rows)
+            + md_table(["batch", "analytic w", "FFBN-w", "RBFN-w", "analytic KCI", "FFBN-KCI", "RBFN-KCI"], rows)
             + f"\n\nGrid of {_batch(g['points'])} points, same run: analytic w {_rate(g['analytic_w_stored']['per_second'])}/s; "
               f"FFBN-w stored {_rate(g['ffbn_w_stored']['per_second'])}/s ({g['ffbn_w_stored']['speedup_vs_analytic']:.1f}×), "
               f"from grid index {_rate(g['ffbn_w_from_grid_index']['per_second'])}/s "
@@ -349,7 +346,7 @@ def scale_out() -> str:
                      f"{d['single_s']:.3g} s ({_rate(d['single_per_s'])}/s)",
                      f"{d['sharded_s']:.3g} s ({_rate(d['sharded_per_s'])}/s)", f"{d['speedup']:.2f}×",
                      "yes" if d["same_optimum"] else "**no**"])
-    return _table(["devices", "command", "candidates", "single device", "sharded", "speed-up", "same optimum"], rows) + "\n"
+    return md_table(["devices", "command", "candidates", "single device", "sharded", "speed-up", "same optimum"], rows) + "\n"
 
 
 #: The H100 and H200 issue 132 SMs × 128 FP32 lanes at 1.98 GHz (datasheet boost clock) [instructions/s].
@@ -394,7 +391,7 @@ def hover_vehicle() -> str:
 
     limits = sorted(set(d["thrust_limit_n"]))
     return (f"`{d['command']}` (`benchmarks/results/hover_vehicle.json`):\n\n"
-            + _table(["figure", "value"], [
+            + md_table(["figure", "value"], [
                 ["thrust configuration matrix", f"rank {d['thrust_matrix_rank']}, {d['thrusters']} thrusters of "
                                                 f"±{'/'.join(f'{x:g}' for x in limits)} N"],
                 ["largest pure effort", f"surge {e['surge']:.0f} N, sway {e['sway']:.0f} N, heave {e['heave']:.0f} N, "
@@ -554,7 +551,7 @@ def docking_fitness() -> str:
             f"(132 SMs × 128 lanes × 1.98 GHz, a multiply-add as two flops), which bounds the fitness near "
             f"{_sci(ceiling / flops)} poses/s. On the CPU at {_int(chol['batch'])} poses the written-out Cholesky runs "
             f"{chol['poses_per_s'] / lu['poses_per_s']:.2f}× the LU solve.\n\n"
-            + _table(["device", "batch", "variant", "poses/s", "compile [s]", "fitness sum"], rows) + "\n\n"
+            + md_table(["device", "batch", "variant", "poses/s", "compile [s]", "fitness sum"], rows) + "\n\n"
             + "\n".join(_fitness_stages(_load(n)) for n in names))
 
 
@@ -619,7 +616,7 @@ def docking_ga() -> str:
             + on(f"`{d['command']}` ({d['device_kind']}, jax {d['jax']})" for d in gpus)
             + "; files " + ", ".join(f"`benchmarks/results/{f}`" for f in files) + ". Times after compilation, best "
             "of the repeats (median in brackets).\n\n"
-            + _table(["device", "what", "time", "rate", "compile + first call"], rows)
+            + md_table(["device", "what", "time", "rate", "compile + first call"], rows)
             + f"\n\nGA against CMA-ES, evaluations/s: {cpu['ga_over_cmaes_evaluations_per_s']:.2f}× on the CPU, "
             + on(f"{d['ga_over_cmaes_evaluations_per_s']:.2f}× on the {d['device_kind']}" for d in gpus)
             + f". On the CPU the {cpu['ga']['runs']} GA runs reach "
@@ -654,7 +651,7 @@ def docking_panel() -> str:
             f"{_int(g['candidates'])} candidates ({' × '.join(map(str, g['counts']))}) {g['seconds']:.0f} s "
             f"({_int(s['grid_candidates_per_s'])} candidates/s), its {len(g['refined']['stages'])} zoom stages "
             f"({_int(g['refined']['candidates'])} candidates) {g['refined']['seconds']:.0f} s with their compilation.\n\n"
-            + _table(["reference", "fitness", "GA / reference, 7 runs", "runs ≥ 0.99"],
+            + md_table(["reference", "fitness", "GA / reference, 7 runs", "runs ≥ 0.99"],
                      [[f"grid {' × '.join(map(str, g['counts']))}", f"{g['fitness']:.4f}",
                        ", ".join(f"{r:.3f}" for r in s["ga_ratio_to_grid"]), str(s["ga_runs_within_0.99_of_grid"])],
                       [f"grid + {len(g['refined']['stages'])} zoom stages", f"{g['refined']['fitness']:.4f}",
@@ -689,7 +686,7 @@ def docking_map() -> str:
             f"{r0['map_vehicle_pose_equivalents']:.0f} docking evaluations of this task cost; the amortised ratio counts "
             f"them in one run. Reference: {d['reference_fitness']:.4f} (dense grid + zoom, "
             f"`benchmarks/results/docking_reference_demo_h100.json`).\n\n"
-            + _table(["device", "seed", "analytic search: best", "its evaluations", "map: best candidate (analytic)",
+            + md_table(["device", "seed", "analytic search: best", "its evaluations", "map: best candidate (analytic)",
                       "map route: refined (analytic)", "/ reference", "its analytic evaluations", "loss of optimum",
                       "evaluation ratio", "amortised ratio (map counted)", "wall [s] analytic / map route"], rows) + "\n")
 
@@ -711,10 +708,10 @@ def docking_collision() -> str:
                      f"{d['capsules']['run_s']:.3f}", f"{d['spheres']['run_s']:.3f}",
                      f"{d['spheres_over_capsules_time']:.1f}×", f"{d['fitness']['run_s']:.2f}",
                      f"{d['host']['load_average'][0]:.1f}"])
-    return (_table(["arm", "command (2-core CPU)", "configurations", "free: JAX / spheres / MuJoCo [%]",
+    return (md_table(["arm", "command (2-core CPU)", "configurations", "free: JAX / spheres / MuJoCo [%]",
                     "agrees with spheres [%]", "agrees with MuJoCo [%]", "JAX collision where spheres / MuJoCo free",
                     "JAX free where either collides"], rows) + "\n\n"
-            + _table(["arm", "spheres per target", "sphere pairs per target", "batch (poses × tool poses × seeds)",
+            + md_table(["arm", "spheres per target", "sphere pairs per target", "batch (poses × tool poses × seeds)",
                       "capsules [s]", "world [s]", "world / capsules", "whole fitness call [s]",
                       "load average (shared CPU)"], cost) + "\n"
             + _mesh_cost(_load("docking_collision_demo_cpu.json"), _load("docking_collision_panda_cpu.json"))
@@ -759,7 +756,7 @@ def hw_runner() -> str:
          f"{st['polled']['packets_sent_per_state']} request per state", ""],
     ]
     return (f"`{d['command']}` ({d['device']}; `benchmarks/results/hw_cpu.json`):\n\n"
-            + _table(["what", "project", "peer", "ratio"], rows) + "\n")
+            + md_table(["what", "project", "peer", "ratio"], rows) + "\n")
 
 
 def hw_acceptance() -> str:
@@ -802,13 +799,13 @@ def sched_benchmark() -> str:
     return (f"`{d['command']}` ({d['device']}; `benchmarks/results/sched_cpu.json`; medians over repeats after a "
             f"warm-up, GRASP's one-off compile of {t['grasp_compile_s']:.1f} s excluded).\n\n"
             "Thesis instance (eq. 4.1, 10 nodes):\n\n"
-            + _table(["solver", "cost", "time [ms]", "thesis (Table 5.5) [ms]"], rows)
+            + md_table(["solver", "cost", "time [ms]", "thesis (Table 5.5) [ms]"], rows)
             + f"\n\nBatch scoring (`score`, {sc['batch']:,} schedules of 13 nodes, about half of them shuffled and "
             f"invalid): {_sci(sc['schedules_per_s'])} schedules/s (best run {_sci(sc['schedules_per_s_best'])}); the "
             f"same checks in NumPy: {_sci(sc['peer_numpy_schedules_per_s'])}/s "
             f"({sc['schedules_per_s'] / sc['peer_numpy_schedules_per_s']:.1f}×).\n\n"
             "10 objects / 10 bases (random costs; gaps to the exact optimum):\n\n"
-            + _table(["instance", "exact DP", "GRASP 1000 it (gap mean / best of 5)", "OR-Tools first solution",
+            + md_table(["instance", "exact DP", "GRASP 1000 it (gap mean / best of 5)", "OR-Tools first solution",
                       "OR-Tools GLS 1 s", "OR-Tools GLS 5 s"], big) + "\n")
 
 
@@ -828,7 +825,7 @@ def plan_benchmark() -> str:
     steps = sp["planners"]["RRTConnect"]["steps_s"]
     return (f"`{d['command']}` ({d['device']}; `benchmarks/results/plan_cpu.json`): {d['budget_s']:g} s per-edge budget, "
             f"the straight-segment shortcut {'on' if d['straight_shortcut'] else 'off (each planner its own path, simplified)'}."
-            "\n\n" + _table(["checker", "planner", "planned", "re-checked OK", "median [ms]", "mean [ms]", "max [ms]",
+            "\n\n" + md_table(["checker", "planner", "planned", "re-checked OK", "median [ms]", "mean [ms]", "max [ms]",
                                 "whole graph [s]"], rows)
             + f"\n\nWhole task graph with all three planners: {sp['graph_all_planners_wall_s']:.2f} s with the sphere checker"
             + (f" against {mj['graph_all_planners_wall_s']:.2f} s with MuJoCo state by state" if mj else "")
@@ -837,7 +834,7 @@ def plan_benchmark() -> str:
             + f". IK targets (one batched `kin.numeric_ik` call, compilation included, warm cache) "
             f"{d['ik_targets_s_incl_compile']:.1f} s; the sphere checker's Numba compile or cache load "
             f"{d['numba_compile_or_cache_load_s']:.2f} s.\n\nValidity checks (uniform random configurations, "
-            f"{v['valid_fraction_uniform']:.0%} valid):\n\n" + _table(["call", "checks/s"], checks) + "\n")
+            f"{v['valid_fraction_uniform']:.0%} valid):\n\n" + md_table(["call", "checks/s"], checks) + "\n")
 
 
 def _ms(v: float) -> str:
@@ -872,7 +869,7 @@ def mbm_benchmark() -> str:
             f"{d['sphere_excess_m'] * 1e3:.0f} mm), fingers at {d['opening_m']:g} m (the requests' "
             f"{d['request_opening_m']:g} m is past the URDF's limit), {d['budget_s']:g} s budget per problem, "
             f"a failure counted at the whole budget. Every returned path re-checked by MuJoCo with the real "
-            f"fingers, densified to {d['recheck_rad']:g} rad.\n\n" + _table(header, rows)
+            f"fingers, densified to {d['recheck_rad']:g} rad.\n\n" + md_table(header, rows)
             + f"\n\nAll families: {t['solved']}/{t['valid']} model-valid problems solved ({t['success_rate']:.1%}), "
             f"median {_ms(t['median_ms'])} ms, p95 {_ms(t['p95_ms'])} ms, {t['rechecked_free']} of the {t['solved']} "
             f"returned paths free for MuJoCo. "
@@ -912,7 +909,7 @@ def mbm_gpu() -> str:
             f"a collision). Compile {d['compile_s']:.1f} s, run {min(d['run_s']):.0f} s; {t['solved']} solved, "
             f"every one free for MuJoCo at {d['settings']['resolution']:g} rad; {t['endpoints_free']} have a start "
             f"and goal the spheres call free.\n\n"
-            + _table(["family", "problems", "ends free (spheres)", "solved", "re-checked free"], rows) + "\n")
+            + md_table(["family", "problems", "ends free (spheres)", "solved", "re-checked free"], rows) + "\n")
 
 
 def pipeline_arms() -> str:
@@ -928,7 +925,7 @@ def pipeline_arms() -> str:
                      f"{r['run']}, {r['gates']} gates, {r['executed_s']:.1f} s"])
     return (f"`{d['command']}` ({d['machine']['cpus']}-core CPU; `benchmarks/results/pipeline_arms_cpu.json`; preset "
             f"{d['preset']}, collision geometry from the {d['collision']}):\n\n"
-            + _table(["arm", "joints", "docking [s]", "plan [s]", "schedule [s]", "hw [s]", "stages [s]", "process [s]",
+            + md_table(["arm", "joints", "docking [s]", "plan [s]", "schedule [s]", "hw [s]", "stages [s]", "process [s]",
                       "edges planned", "schedule", "executed (simulated)"], rows) + "\n")
 
 

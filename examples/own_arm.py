@@ -16,7 +16,7 @@ URDF, TIP = str(robot.DESCRIPTIONS / "bravo7.urdf"), "tool"
 
 
 def main() -> None:
-    arm = kin.from_urdf(URDF, tip_link=TIP)  # fixed joints folded into the geometry, limits kept
+    arm = robot.chain_from_urdf(URDF, tip_link=TIP)  # fixed joints folded into the geometry, limits kept
     mount = np.diag([1.0, -1.0, -1.0, 1.0])  # arm base under the hull's front, hanging down
     mount[:3, 3] = [0.35, 0.0, -0.2]
     rov = kin.uvms(arm, mount=mount, vehicle_dofs=("x", "y", "z", "yaw"))  # 4 vehicle DOFs + the arm

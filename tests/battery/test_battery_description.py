@@ -13,12 +13,12 @@ import numpy as np
 import pytest
 from _battery import CASE_LIMIT_S, ROOT, USAGE_EXIT
 
-from uvms_jax import kin
+from uvms_jax import robot
 from uvms_jax.hw import cli
-from uvms_jax.kin._import import read_urdf
 from uvms_jax.robot import load_arm
 from uvms_jax.robot._geometry import Shape
 from uvms_jax.robot._mjcf import mjcf_assets
+from uvms_jax.robot._parse import read_urdf
 
 LIMIT = '<limit lower="-3" upper="3" effort="1" velocity="1"/>'
 
@@ -70,8 +70,8 @@ def test_uvms_hw_refuses_an_arm_card_of_a_bad_urdf(tmp_path, capsys, name):
 
 
 def test_parallel_axes_are_warned_about(caplog):
-    with caplog.at_level(logging.WARNING, logger="uvms_jax.kin._import"):
-        kin.from_urdf(_urdf(6, axes=("0 0 1",)))
+    with caplog.at_level(logging.WARNING, logger="uvms_jax.robot._parse"):
+        robot.chain_from_urdf(_urdf(6, axes=("0 0 1",)))
     [record] = caplog.records
     assert "its Jacobian has rank 3 at best" in record.getMessage()
     assert "the dexterity index w is 0 at every pose" in record.getMessage()
@@ -80,8 +80,8 @@ def test_parallel_axes_are_warned_about(caplog):
 @pytest.mark.parametrize("axes", [("0 0 1",), ("0 0 1", "0 1 0")])
 def test_full_rank_chains_load_quietly(caplog, axes):
     """A planar 2R (rank 2 = its joints) and a spatial 2R: w > 0 somewhere, no warning."""
-    with caplog.at_level(logging.WARNING, logger="uvms_jax.kin._import"):
-        kin.from_urdf(_urdf(2, axes))
+    with caplog.at_level(logging.WARNING, logger="uvms_jax.robot._parse"):
+        robot.chain_from_urdf(_urdf(2, axes))
         load_arm("bravo7")
     assert not caplog.records
 

@@ -37,8 +37,8 @@ def test_tiny_run_writes_every_file(tmp_path):
     assert run.poses.shape == (2, 4) and run.fitness.shape == (2,) and len(run.histories) == 2
     assert run.refined_grid.fitness >= run.grid.fitness
     summary = evo.write_docking(run, tmp_path)
-    names = {"runs.csv", "grid_optimum.json", "cmaes.json", "wmax.json", "wmax_best.png",
-             "wmax_ill_placed.png", "convergence.png", "summary.json"}
+    names = {"runs.csv", "grid_optimum.json", "cmaes.json", "wmax.json", "wmax_best.png", "convergence.png",
+             "summary.json"}
     assert names <= {p.name for p in tmp_path.iterdir()}
     assert json.loads((tmp_path / "summary.json").read_text())["ga_fitness"] == summary["ga_fitness"]
     # A dense grid (one polish start) is a reference: the GA's best against it certifies.

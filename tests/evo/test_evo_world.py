@@ -11,7 +11,8 @@ import pytest
 
 from uvms_jax import evo, frames, kin
 from uvms_jax.evo._collide import capsules_hit_boxes, link_points
-from uvms_jax.evo._world import _segment_distance, obstacles_in_base
+from uvms_jax.evo._geometry import segment_distance
+from uvms_jax.evo._world import obstacles_in_base
 from uvms_jax.robot import load_arm
 
 GRID = 400  # parameters per segment of the brute-force distance oracle
@@ -24,7 +25,7 @@ BRAVO7 = load_arm("bravo7")
 def test_segment_distance_matches_dense_sampling():
     rng = np.random.default_rng(0)
     s = np.linspace(0.0, 1.0, GRID)
-    dist = jax.jit(jax.vmap(_segment_distance))
+    dist = jax.jit(jax.vmap(segment_distance))
     cases = [rng.uniform(-0.5, 0.5, (4, 3)) for _ in range(40)]
     a = rng.uniform(-0.5, 0.5, 3)
     cases += [np.stack([a, a + [0.3, 0, 0], a + [0, 0.1, 0], a + [0.3, 0.1, 0]]),  # parallel

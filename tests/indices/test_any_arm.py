@@ -6,14 +6,14 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from uvms_jax import indices, kin
+from uvms_jax import indices, kin, robot
 
 RTOL = 1e-9  # float64 Cholesky / Jacobi vs LAPACK: round-off only
 
 
 def _bravo_to(link: str) -> kin.Chain:
     """The first joints of the Bravo 7, up to ``link`` (4 joints to link_D, 5 to link_C)."""
-    return kin.from_urdf(kin.bravo7_urdf(), tip_link=link)
+    return robot.chain_from_urdf(kin.bravo7_urdf(), tip_link=link)
 
 
 def random_q(chain, n, seed):

@@ -13,7 +13,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from uvms_jax import indices, kin
+from uvms_jax import indices, kin, robot
 from uvms_jax.robot import load_arm
 
 W_TOL = 1e-5  # |w32 − w64| over the set's largest w
@@ -30,9 +30,9 @@ ARMS = {
     "bravo7": (kin.bravo7, "full"),
     "uvms12": (kin.uvms12, "full"),
     "docking_arm": (kin.docking_arm, "full"),
-    "bravo7_to_link_D": (lambda: kin.from_urdf(kin.bravo7_urdf(), tip_link="link_D"), ("vx", "vy", "vz", "wz")),
+    "bravo7_to_link_D": (lambda: robot.chain_from_urdf(kin.bravo7_urdf(), tip_link="link_D"), ("vx", "vy", "vz", "wz")),
     "alpha5": (lambda: load_arm("alpha5").chain, ("vx", "vy", "vz", "wz")),
-    "panda": (lambda: kin.from_urdf(str(ROBOTS / "panda_description/urdf/panda.urdf"), tip_link="panda_hand_tcp"),
+    "panda": (lambda: robot.chain_from_urdf(str(ROBOTS / "panda_description/urdf/panda.urdf"), tip_link="panda_hand_tcp"),
               "full"),
 }
 

@@ -3,6 +3,7 @@ the thesis helpers, and the entry point experiments/papers.py with its templates
 
 from __future__ import annotations
 
+import inspect
 import json
 import math
 import string
@@ -38,16 +39,15 @@ def test_thesis_tables_are_transcribed_consistently():
 
 def test_configs_repeat_the_paper_data():
     """The YAML configs must stay literal: they hold the docking paper's values as written in
-    uvms_jax.papers, and the scene config equals the settings' defaults (which read them)."""
+    uvms_jax.papers, and the scene config equals the settings' defaults (literals of their stage)."""
     scene = yaml.safe_load((ROOT / "configs" / "docking" / "scene" / "paper.yaml").read_text())
     assert tuple(scene["block_size"]) == papers.D11_BLOCK_SIZE
     assert scene["task_size"] == papers.D11_TASK_SIZE
     assert tuple(scene["p_init"]) == papers.D11_P_INIT and tuple(scene["p_bp"]) == papers.D11_P_BP
     assert tuple(scene["arm_lengths"]) == papers.D11_ARM_LENGTHS
     assert from_mapping(evo.SceneSettings, scene) == evo.SceneSettings()
-    docking_yaml = yaml.safe_load((ROOT / "configs" / "docking.yaml").read_text())
-    assert tuple(docking_yaml["ill_placed_pose"]) == papers.D11_ILL_PLACED_POSE
-    assert evo.DockingSettings().ill_placed_pose == papers.D11_ILL_PLACED_POSE
+    arm_defaults = inspect.signature(kin.docking_arm).parameters
+    assert tuple(arm_defaults[n].default for n in ("l0", "l1", "l2")) == papers.D11_ARM_LENGTHS
 
 
 def test_heading_and_distance():

@@ -4,7 +4,7 @@ and where — never a lenient second parse, never a traceback from deep inside a
 import numpy as np
 import pytest
 
-from uvms_jax import kin, robot
+from uvms_jax import robot
 
 BRAVO7_URDF = (robot.DESCRIPTIONS / "bravo7.urdf").read_text()
 N_CUTS = 56
@@ -15,7 +15,7 @@ def test_every_truncation_is_malformed_xml_with_its_position():
     column, whether the file is read as a robot or as a URDF."""
     end = len(BRAVO7_URDF.rstrip())
     for cut in np.linspace(1, end - 1, N_CUTS).astype(int):
-        for load in (lambda t: robot.load_robot(t, link_radius=0.04), lambda t: kin.from_urdf(t, tip_link="tool")):
+        for load in (lambda t: robot.load_robot(t, link_radius=0.04), lambda t: robot.chain_from_urdf(t, tip_link="tool")):
             with pytest.raises(ValueError, match=r"is not well-formed XML: .*line \d+, column \d+"):
                 load(BRAVO7_URDF[:cut])
 
@@ -49,7 +49,7 @@ def _joint(name="j1", p="base", c="a", xyz="0 0 0.1", axis="0 0 1") -> str:
 ])
 def test_bad_urdfs_are_refused_by_name(text, message):
     with pytest.raises(ValueError, match=message):
-        kin.from_urdf(text)
+        robot.chain_from_urdf(text)
     with pytest.raises(ValueError, match=message):
         robot.load_robot(text, link_radius=0.04)
 
@@ -57,10 +57,10 @@ def test_bad_urdfs_are_refused_by_name(text, message):
 def test_the_wrong_format_is_named():
     mjcf = robot.robot_mjcf(robot.load_arm("bravo7"))
     with pytest.raises(ValueError, match=r"<text> is MJCF \(<mujoco>\), not URDF \(<robot>\)"):
-        kin.from_urdf(mjcf)
+        robot.chain_from_urdf(mjcf)
     with pytest.raises(ValueError, match=r"<text> is URDF \(<robot>\), not MJCF \(<mujoco>\)"):
-        kin.from_mjcf(BRAVO7_URDF)
+        robot.chain_from_mjcf(BRAVO7_URDF)
     with pytest.raises(ValueError, match="is not well-formed XML"):
-        kin.from_urdf(b"\x89PNG\r\n\x1a\n")
+        robot.chain_from_urdf(b"\x89PNG\r\n\x1a\n")
     with pytest.raises(ValueError, match="empty string"):
-        kin.from_urdf("")
+        robot.chain_from_urdf("")

@@ -80,11 +80,11 @@ from uvms_jax.evo._settings import PanelSettings
 from uvms_jax.evo._settings import SceneSettings
 from uvms_jax.evo._settings import WmaxSettings
 from uvms_jax.evo._shard import ShardedProblem
-from uvms_jax.evo._world import SLACK
-from uvms_jax.evo._world import SphereWorld
-from uvms_jax.evo._world import WorldRows
+from uvms_jax.evo._geometry import SLACK
+from uvms_jax.evo._geometry import SphereWorld
+from uvms_jax.evo._geometry import WorldRows
 from uvms_jax.evo._world import capsule_world
-from uvms_jax.evo._world import make_sphere_world
+from uvms_jax.evo._geometry import make_sphere_world
 from uvms_jax.evo._world import world_collides
 from uvms_jax.evo._shard import device_mesh
 from uvms_jax.evo._shard import shard_over_devices

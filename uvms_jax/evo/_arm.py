@@ -36,7 +36,8 @@ from jax import Array
 from uvms_jax import indices, kin
 from uvms_jax.evo._collide import boxes_overlap
 from uvms_jax.evo._problem import DockingEval, base_transform, docking_fitness
-from uvms_jax.evo._world import SphereWorld, capsule_world, world_collides
+from uvms_jax.evo._geometry import SphereWorld
+from uvms_jax.evo._world import capsule_world, world_collides
 from uvms_jax.kin import Chain
 from uvms_jax.robot import SPHERE_SPACING
 

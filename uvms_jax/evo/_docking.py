@@ -140,8 +140,8 @@ class DockingRun:
         (best first; K ≤ ``grid.refine_starts``) and ``(K,)`` their fitness: the docking
         poses to compare further, e.g. hovering (:func:`uvms_jax.hover.batch_candidates`).
       cmaes: the CMA-ES baseline, or None when disabled.
-      wmax_best, wmax_ill_placed: w_max maps of the best GA pose and the ill-placed pose
-        (paper scene; None for an arm scene).
+      wmax_best: w_max map of the best GA pose (paper scene; None for an arm scene). The
+        paper's ill-placed pose (Fig. 10) is mapped beside it by :mod:`uvms_jax.papers.docking`.
       pose_checks: per GA run, where its pose lies (see :func:`pose_checks`; paper scene,
         empty for an arm scene).
       best: the run's best pose, of the GA runs and the grid search (:class:`BestPose`).
@@ -166,7 +166,6 @@ class DockingRun:
     candidate_fitness: np.ndarray
     cmaes: CMAESRuns | None
     wmax_best: PoseMap | None
-    wmax_ill_placed: PoseMap | None
     pose_checks: tuple[dict, ...]
     best: BestPose
     load_average: tuple[float, float, float]
@@ -347,7 +346,6 @@ def run_docking(settings: DockingSettings, task: ArmTask | None = None, robot=No
         candidate_fitness=candidate_fitness,
         cmaes=cmaes,
         wmax_best=_pose_map(problem, poses[best_ga], s.wmax.n_per_side) if paper else None,
-        wmax_ill_placed=_pose_map(problem, list(s.ill_placed_pose), s.wmax.n_per_side) if paper else None,
         pose_checks=tuple(pose_checks(problem, x, s.scene.p_init, tol) for x in poses) if paper else (),
         best=BestPose(np.asarray(scored[best_row]), float(refined.fitness if best_row == R + 1 else fitness[best_ga]),
                       float(terms.M_a[best_row]), "grid search" if best_row == R + 1 else "analytic GA",

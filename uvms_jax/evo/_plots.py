@@ -4,8 +4,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import jax.numpy as jnp
 import numpy as np
 
+from uvms_jax import kin
+from uvms_jax.evo._collide import link_points
+from uvms_jax.evo._problem import base_transform
 from uvms_jax.evo._wmax import WmaxMap
 from uvms_jax.plotting import pyplot
 
@@ -62,12 +66,6 @@ def plot_docked_top_view(problem, pose, q, ok, w, path: Path, margin: float = 0.
     solution (from ``q (k, n)`` NaN where none, ``ok (k,)``, ``w (k,)`` per demanded tool pose),
     coloured by w (crosses: no valid solution). The view spans the vehicle, the arm and the
     targets plus ``margin`` [m]."""
-    import jax.numpy as jnp
-
-    from uvms_jax import kin
-    from uvms_jax.evo._collide import link_points
-    from uvms_jax.evo._problem import base_transform
-
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(7.5, 6.5), layout="constrained")
     pose = np.asarray(pose, dtype=float)

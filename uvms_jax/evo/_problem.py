@@ -18,7 +18,7 @@ from flax import struct
 from jax import Array
 
 from uvms_jax import indices, kin
-from uvms_jax.kin import Chain, with_dtype
+from uvms_jax.kin import Chain, docking_arm, with_dtype
 
 Pose = Array  # (..., 4) [x, y, z, ψ] of the arm base in G [m, rad]
 Fitness = Array  # (...)
@@ -127,8 +127,6 @@ def make_docking_problem(
       ValueError: on non-positive sizes, a task area that does not fit the face, or an
         unknown yaw mode.
     """
-    from uvms_jax.kin import docking_arm
-
     if yaw_mode not in YAW_MODES:
         raise ValueError(f"yaw_mode must be one of {YAW_MODES}, got {yaw_mode!r}")
     block = np.asarray(block_size, dtype=np.float64)

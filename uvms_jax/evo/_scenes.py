@@ -10,7 +10,7 @@ from uvms_jax import frames
 from uvms_jax import robot as robots
 from uvms_jax.evo._arm import ArmDockingProblem, make_arm_docking_problem
 from uvms_jax.evo._settings import ArmSceneSettings, BoxSettings, PanelSettings
-from uvms_jax.evo._world import SphereWorld
+from uvms_jax.evo._geometry import SphereWorld
 
 
 def boxes(items: tuple[BoxSettings, ...]) -> tuple[np.ndarray, np.ndarray]:

@@ -1,8 +1,8 @@
 """Settings of the docking run: plain frozen dataclasses mirroring ``configs/docking.yaml``.
 
 Build them from a plain mapping with :func:`uvms_jax.settings.from_mapping`; the defaults are
-the paper's values of the configs (docking paper §III, Table 2), its scene read from
-:mod:`uvms_jax.papers` (where the paper's numbers are written once).
+the paper's values of the configs (docking paper §III, Table 2; its scene §IV), written here as
+literals (tests/papers compares them with the tables of :mod:`uvms_jax.papers`).
 """
 
 from __future__ import annotations
@@ -12,7 +12,6 @@ import math
 from collections.abc import Mapping
 from typing import Any
 
-from uvms_jax.papers import D11_ARM_LENGTHS, D11_BLOCK_SIZE, D11_ILL_PLACED_POSE, D11_P_BP, D11_P_INIT, D11_TASK_SIZE
 from uvms_jax.settings import check_fields, from_mapping, setting
 
 FIELDS = ("x", "y", "z", "psi")  # the variables of a docking pose, in chromosome order
@@ -23,19 +22,19 @@ DTYPES = ("float32", "float64")  # DockingSettings.dtype
 class SceneSettings:
     """The docking scene (``configs/docking/scene/*.yaml``); see :func:`make_docking_problem`."""
 
-    block_size: tuple[float, float, float] = D11_BLOCK_SIZE
+    block_size: tuple[float, float, float] = (2.0, 2.0, 2.0)
     task_center: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    task_size: float = D11_TASK_SIZE
+    task_size: float = 0.4
     control_points_per_side: int = 2
-    p_init: tuple[float, float, float] = D11_P_INIT
+    p_init: tuple[float, float, float] = (-2.0, -2.0, 2.0)
     psi_init: float = math.pi / 4
-    p_bp: tuple[float, float, float] = D11_P_BP
+    p_bp: tuple[float, float, float] = (-0.3, 0.0, -0.2)
     d: float = 0.3
     a: float = 100.0
     b: float = 0.5
     yaw_mode: str = "heading"
     tool_yaw: float = 0.0
-    arm_lengths: tuple[float, float, float] = D11_ARM_LENGTHS
+    arm_lengths: tuple[float, float, float] = (0.1, 0.4, 0.4)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -222,8 +221,6 @@ class DockingSettings:
       n_runs: independent GA runs, ≥ 1.
       dtype: ``"float32"`` or ``"float64"`` (:data:`DTYPES`; the latter needs ``jax_enable_x64``).
       time_single_runs: also time each GA run alone (else each run gets the batch time).
-      ill_placed_pose: ``[x, y, z, ψ]`` [m, rad] of the paper's ill-placed pose (Fig. 10);
-        used with the paper's scene only.
       accept_ratio: a GA best ≥ ``accept_ratio`` × grid optimum counts as found; in (0, 1].
       scene: the paper's scene (:class:`SceneSettings`) or an arm under a vehicle
         (:class:`ArmSceneSettings`).
@@ -233,7 +230,6 @@ class DockingSettings:
     n_runs: int = setting(7, ge=1)
     dtype: str = setting("float32", choices=DTYPES)
     time_single_runs: bool = True
-    ill_placed_pose: tuple[float, float, float, float] = D11_ILL_PLACED_POSE
     accept_ratio: float = setting(0.99, gt=0, le=1)
     # SceneSettings | ArmSceneSettings; a mapping is converted in __post_init__, by its keys.
     scene: Any = SceneSettings()

@@ -11,9 +11,9 @@ spheres, pairs and masks are the same in all its threads; the obstacles stay whe
 holds them (the vehicle's in the arm's base frame B, the scene's in W) and each sphere is
 moved into W by its configuration's base pose instead, so they are the same in every thread
 of every program. Both are read as scalars; only the frames differ from thread to thread. The
-tests' arithmetic is the XLA path's (the helpers of :mod:`uvms_jax.evo._world`); a scene
+tests' arithmetic is the XLA path's (the helpers of :mod:`uvms_jax.evo._geometry`); a scene
 obstacle is met in W instead of B, which changes distances by float32 round-off (≪
-:data:`uvms_jax.evo._world.SLACK`).
+:data:`uvms_jax.evo.SLACK`).
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ import jax
 import jax.numpy as jnp
 from jax import Array
 
-from uvms_jax.evo._world import SLACK, SphereWorld, _box_gap2, _dot, _plane, _segment_distance
+from uvms_jax.evo._geometry import SLACK, SphereWorld, box_gap2, dot, plane, segment_distance
 
 #: Configurations per program instance, and warps per instance: one configuration per thread.
 BLOCK = 128
@@ -118,17 +118,17 @@ def _build(sizes: tuple[int, ...], n_faces: tuple[int, ...], n_base_boxes: int, 
                 c = [o(3 * b + j) for j in range(3)]
                 R = [[o(3 * B + 9 * b + 3 * j + a) for a in range(3)] for j in range(3)]
                 half = [o(12 * B + 3 * b + j) for j in range(3)]
-                gap2 = _box_gap2(x if b < n_base_boxes else x_world, c, R, half)
+                gap2 = box_gap2(x if b < n_base_boxes else x_world, c, R, half)
                 hit |= (gap2 <= reach * reach) & (t(at["box_on"] + i * B + b) > 0.5)
             for p in range(Q):
                 at_p = x if p < n_base_faces else x_world
-                dist = functools.reduce(jnp.maximum, (_plane(at_p, [o(face_at[p] + 4 * f + j) for j in range(4)])
+                dist = functools.reduce(jnp.maximum, (plane(at_p, [o(face_at[p] + 4 * f + j) for j in range(4)])
                                                       for f in range(n_faces[p])))
                 hit |= (dist <= reach) & (t(at["face_on"] + i * Q + p) > 0.5)
             for m in range(M):
                 gap = [x_world[j] - o(ball_at + 4 * m + j) for j in range(3)]
                 both = reach + o(ball_at + 4 * m + 3)
-                hit |= (_dot(gap, gap) <= both * both) & (t(at["ball_on"] + i * M + m) > 0.5)
+                hit |= (dot(gap, gap) <= both * both) & (t(at["ball_on"] + i * M + m) > 0.5)
             return hit
 
         hit = jax.lax.fori_loop(0, N, sphere_hits, jnp.zeros((BLOCK,), bool))
@@ -143,7 +143,7 @@ def _build(sizes: tuple[int, ...], n_faces: tuple[int, ...], n_base_boxes: int, 
             for j in range(A2):
                 d = [x[e] - x_second[j][e] for e in range(3)]
                 both = reach + r_second[j]
-                hit |= (_dot(d, d) <= both * both) & (t(at["pair_on"] + a * A2 + j) > 0.5)
+                hit |= (dot(d, d) <= both * both) & (t(at["pair_on"] + a * A2 + j) > 0.5)
             return hit
 
         hit = jax.lax.fori_loop(0, A, pair_hits, hit)
@@ -152,7 +152,7 @@ def _build(sizes: tuple[int, ...], n_faces: tuple[int, ...], n_base_boxes: int, 
             ends = [[apply(frame(index(at["cap_row"] + 2 * c + g)),
                            [t(at["cap_ends"] + 12 * c + 6 * g + 3 * e + j) for j in range(3)]) for e in range(2)]
                     for g in range(2)]
-            dist = _segment_distance(ends[0][0], ends[0][1], ends[1][0], ends[1][1])
+            dist = segment_distance(ends[0][0], ends[0][1], ends[1][0], ends[1][1])
             return hit | ((dist <= t(at["cap_reach"] + c)) & (t(at["cap_on"] + c) > 0.5))
 
         hit = jax.lax.fori_loop(0, C, capsule_hits, hit)

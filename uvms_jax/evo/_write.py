@@ -47,8 +47,7 @@ def docking_summary(run: DockingRun) -> dict:
             "all_bases_in_near_quarter": all(c["base_in_near_quarter"] for c in checks),
             "all_docking_points_in_near_quarter": all(c["docking_point_in_near_quarter"] for c in checks),
             "all_face_task_area": run.all_face_task_area,
-            "zero_w_fraction": {"best": run.wmax_best.map.zero_fraction,
-                                "ill_placed": run.wmax_ill_placed.map.zero_fraction},
+            "zero_w_fraction": {"best": run.wmax_best.map.zero_fraction},
         }
     return summary
 
@@ -72,7 +71,7 @@ def certificate(run: DockingRun) -> dict:
 
 
 def _write_wmax(run: DockingRun, out: Path) -> None:
-    maps = {"best": run.wmax_best, "ill_placed": run.wmax_ill_placed}
+    maps = {"best": run.wmax_best}
     vmax = max(float(m.map.w_max.max()) for m in maps.values())
     for name, m in maps.items():
         label = ", ".join(f"{float(v):.3f}" for v in m.pose)
@@ -103,8 +102,8 @@ def write_docking(run: DockingRun, out: Path) -> dict:
 
     Files: runs.csv (one row per GA run: x, y, z, psi, fitness, Ma, generations, seconds),
     grid_optimum.json (grid optimum and its zoom refinement), cmaes.json (when CMA-ES ran),
-    wmax.json (zero-w fraction, M_a and mean w_max of the best and the ill-placed pose),
-    wmax_best.png, wmax_ill_placed.png (eq. 16 maps) for the paper's scene, or
+    wmax.json (zero-w fraction, M_a and mean w_max of the best pose), wmax_best.png (its eq. 16
+    map) for the paper's scene, or
     best_pose.json (IK solution and w per target, the distinct candidate poses) and
     docked_top_view.png for an arm scene,
     convergence.png, summary.json.

@@ -28,6 +28,7 @@ import numpy as np
 
 from uvms_jax import frames
 from uvms_jax.robot import BASE, Robot, base_body, mjcf_assets, mjcf_body
+from uvms_jax.text import numbers
 
 from ._hydro import buoyancy_xfrc
 from ._settings import VehicleSettings
@@ -59,10 +60,6 @@ def thruster_name(k: int) -> str:
 def servo_name(joint: str) -> str:
     """Actuator name of the position servo on arm joint ``joint``."""
     return f"servo_{joint}"
-
-
-def _fmt(values) -> str:
-    return " ".join(f"{float(v):.12g}" for v in np.ravel(values))
 
 
 def _hull_inertia(vehicle: VehicleSettings) -> np.ndarray:
@@ -98,8 +95,8 @@ def hover_mjcf(robot: Robot | None, vehicle: VehicleSettings = VehicleSettings()
     gravity = (0.0, 0.0, -vehicle.gravity)
     lines = [f'<mujoco model="hover_{robot.name if robot is not None else "hull"}">',
              '  <compiler angle="radian"/>',
-             f'  <option timestep="{physics_dt!r}" integrator="implicitfast" gravity="{_fmt(gravity)}" '
-             f'density="{vehicle.water_density!r}" viscosity="{vehicle.viscosity!r}" wind="{_fmt(current)}"/>',
+             f'  <option timestep="{physics_dt!r}" integrator="implicitfast" gravity="{numbers(gravity)}" '
+             f'density="{vehicle.water_density!r}" viscosity="{vehicle.viscosity!r}" wind="{numbers(current)}"/>',
              '  <default>',
              f'    <geom contype="0" conaffinity="0" density="{_GEOM_DENSITY!r}"/>',
              f'    <joint armature="{_ARMATURE!r}" damping="{_DAMPING!r}"/>',
@@ -108,14 +105,14 @@ def hover_mjcf(robot: Robot | None, vehicle: VehicleSettings = VehicleSettings()
     if assets:
         lines += ["  <asset>", *[f"    {a}" for a in assets], "  </asset>"]
     lines += ['  <worldbody>',
-              f'    <body name="{VEHICLE_BODY}" pos="{_fmt(xyz)}" quat="{_fmt(quat)}">',
+              f'    <body name="{VEHICLE_BODY}" pos="{numbers(xyz)}" quat="{numbers(quat)}">',
               # the free joint gets none of the arm joints' armature and damping
               f'      <joint name="{VEHICLE_BODY}" type="free" armature="0" damping="0"/>',
-              f'      <inertial pos="0 0 0" mass="{vehicle.mass!r}" diaginertia="{_fmt(_hull_inertia(vehicle))}"/>',
-              f'      <geom name="{HULL_GEOM}" type="box" size="{_fmt(half)}" rgba="0.9 0.8 0.2 0.4"/>',
-              f'      <site name="cob" pos="{_fmt(vehicle.cob)}" size="0.02"/>']
+              f'      <inertial pos="0 0 0" mass="{vehicle.mass!r}" diaginertia="{numbers(_hull_inertia(vehicle))}"/>',
+              f'      <geom name="{HULL_GEOM}" type="box" size="{numbers(half)}" rgba="0.9 0.8 0.2 0.4"/>',
+              f'      <site name="cob" pos="{numbers(vehicle.cob)}" size="0.02"/>']
     for k, t in enumerate(vehicle.thrusters):
-        lines.append(f'      <site name="{thruster_name(k)}" pos="{_fmt(t.pos)}" size="0.03"/>')
+        lines.append(f'      <site name="{thruster_name(k)}" pos="{numbers(t.pos)}" size="0.03"/>')
     if robot is not None:
         mount_quat = frames.matrix_quat(frames.rpy_matrix(vehicle.mount_rpy))
         body = mjcf_body(robot, pos=vehicle.mount_xyz, quat=mount_quat, inertial=True)
@@ -124,7 +121,7 @@ def hover_mjcf(robot: Robot | None, vehicle: VehicleSettings = VehicleSettings()
     for k, t in enumerate(vehicle.thrusters):
         d = np.asarray(t.direction, dtype=float)
         d = d / np.linalg.norm(d)
-        lines.append(f'    <motor name="{thruster_name(k)}" site="{thruster_name(k)}" gear="{_fmt(d)} 0 0 0" '
+        lines.append(f'    <motor name="{thruster_name(k)}" site="{thruster_name(k)}" gear="{numbers(d)} 0 0 0" '
                      f'ctrllimited="true" ctrlrange="{-t.max_thrust!r} {t.max_thrust!r}"/>')
     if robot is not None and servos:
         for j, lo, hi in zip(robot.joint_names, robot.lower, robot.upper):

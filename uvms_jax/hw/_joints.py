@@ -114,7 +114,7 @@ def joint_specs(robot) -> tuple[JointSpec, ...]:
       ValueError: an arm with a prismatic arm joint (the runner drives revolute joints and
         at most one gripper).
     """
-    from uvms_jax.kin._chain import REVOLUTE  # the chain's kinds; kin is imported with the robot
+    from uvms_jax.kin import REVOLUTE  # the chain's kinds; imported here, as the robot is, to keep hw free of JAX
 
     linear = [n for n, k in zip(robot.joint_names, robot.chain.kinds) if k != REVOLUTE]
     if linear:

@@ -13,10 +13,14 @@ Conventions (written once, used everywhere):
 - Every public function accepts any leading batch shape, works under ``jit``/``vmap`` and
   computes in the dtype of its input (float32 by default, float64 when x64 is enabled).
 
-Robots: the papers' models (``docking_arm``, ``uvms12``, ``bravo7``), any arm from a file
-(``from_urdf``, ``from_mjcf``) and any arm on a vehicle (``uvms``); see docs/robots.md.
+Robots: the papers' models (``docking_arm``, ``uvms12``, ``bravo7``) and any arm on a vehicle
+(``uvms``); any arm from a file is read by :mod:`uvms_jax.robot` (``robot.chain_from_urdf``,
+``robot.chain_from_mjcf``, ``robot.load_robot``), built from this package's ``make_chain``;
+see docs/robots.md.
 """
 
+from uvms_jax.kin._chain import PRISMATIC
+from uvms_jax.kin._chain import REVOLUTE
 from uvms_jax.kin._chain import Chain
 from uvms_jax.kin._chain import UrdfJoint
 from uvms_jax.kin._chain import chain_from_urdf_joints
@@ -47,9 +51,6 @@ from uvms_jax.kin._ik import numeric_ik
 from uvms_jax.kin._ik import reaches
 from uvms_jax.kin._ik import reaches_scalars
 from uvms_jax.kin._ik import wrap_into_limits
-from uvms_jax.kin._import import CONTINUOUS_LIMITS
-from uvms_jax.kin._import import from_mjcf
-from uvms_jax.kin._import import from_urdf
 from uvms_jax.kin._lie import axis_rotation
 from uvms_jax.kin._lie import matmul
 from uvms_jax.kin._lie import matvec

@@ -10,10 +10,7 @@ from uvms_jax import bravo7 as _b7
 from uvms_jax import frames
 from uvms_jax.kin._chain import REVOLUTE, Chain, UrdfJoint
 from uvms_jax.kin._models import BRAVO7_JAWS, BRAVO7_JOINTS, BRAVO7_TOOL_XYZ
-
-
-def _fmt(values) -> str:
-    return " ".join(f"{float(v):.10g}" for v in values)
+from uvms_jax.text import numbers
 
 
 def _urdf_text(name: str, joints: Sequence[UrdfJoint], tool_xyz, tool_rpy, extra: str = "") -> str:
@@ -24,13 +21,13 @@ def _urdf_text(name: str, joints: Sequence[UrdfJoint], tool_xyz, tool_rpy, extra
         parts.append(
             f'  <joint name="{j.name}" type="{j.kind}">\n'
             f'    <parent link="{parent}"/>\n    <child link="{child}"/>\n'
-            f'    <origin xyz="{_fmt(j.xyz)}" rpy="{_fmt(j.rpy)}"/>\n    <axis xyz="{_fmt(j.axis)}"/>\n'
+            f'    <origin xyz="{numbers(j.xyz)}" rpy="{numbers(j.rpy)}"/>\n    <axis xyz="{numbers(j.axis)}"/>\n'
             f'    <limit lower="{j.lower:.10g}" upper="{j.upper:.10g}" velocity="{j.velocity:.10g}" effort="{j.effort:.10g}"/>\n'
             "  </joint>"
         )
     parts.append(
         f'  <joint name="tool_joint" type="fixed">\n    <parent link="{links[-1]}"/>\n    <child link="tool"/>\n'
-        f'    <origin xyz="{_fmt(tool_xyz)}" rpy="{_fmt(tool_rpy)}"/>\n  </joint>'
+        f'    <origin xyz="{numbers(tool_xyz)}" rpy="{numbers(tool_rpy)}"/>\n  </joint>'
     )
     parts.append(extra)
     parts.append("</robot>\n")
@@ -72,7 +69,7 @@ def bravo7_urdf() -> str:
     jaws = (
         '  <link name="jaws"/>\n'
         f'  <joint name="{BRAVO7_JAWS.name}" type="prismatic">\n    <parent link="tool"/>\n    <child link="jaws"/>\n'
-        f'    <origin xyz="{_fmt(BRAVO7_JAWS.xyz)}" rpy="0 0 0"/>\n    <axis xyz="{_fmt(BRAVO7_JAWS.axis)}"/>\n'
+        f'    <origin xyz="{numbers(BRAVO7_JAWS.xyz)}" rpy="0 0 0"/>\n    <axis xyz="{numbers(BRAVO7_JAWS.axis)}"/>\n'
         f'    <limit lower="{BRAVO7_JAWS.lower}" upper="{BRAVO7_JAWS.upper}" '
         f'velocity="{BRAVO7_JAWS.velocity:.10g}" effort="{BRAVO7_JAWS.effort:.10g}"/>\n'
         "  </joint>"

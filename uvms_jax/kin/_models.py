@@ -22,7 +22,6 @@ from uvms_jax.kin._chain import (
 )
 from uvms_jax.kin._fk import kinematics
 from uvms_jax.kin._vehicle import uvms
-from uvms_jax.papers import D11_ARM_LENGTHS
 
 # Docking arm (docking paper, docs/theory.md §1.1).
 DOCKING_ARM_LIMITS = (
@@ -31,14 +30,13 @@ DOCKING_ARM_LIMITS = (
 )
 
 
-def docking_arm(
-    l0: float = D11_ARM_LENGTHS[0], l1: float = D11_ARM_LENGTHS[1], l2: float = D11_ARM_LENGTHS[2]
-) -> Chain:
+def docking_arm(l0: float = 0.1, l1: float = 0.4, l2: float = 0.4) -> Chain:
     """6R elbow arm with spherical wrist (Murray's elbow manipulator), stretched along +x of B.
 
     Axes ``z, y, y, z, y, x`` through ``(0,0,0)``, ``(0,0,l0)``, ``(l1,0,l0)`` and the wrist
     centre ``(l1+l2, 0, l0)``; the tool frame sits at the wrist centre, aligned with B at q = 0.
-    Lengths in metres; the defaults are the paper's (:data:`uvms_jax.papers.D11_ARM_LENGTHS`).
+    Lengths in metres; the defaults are the paper's ([D11] §IV, tested against
+    :data:`uvms_jax.papers.D11_ARM_LENGTHS`).
     """
     x, y, z = np.eye(3)
     shoulder, elbow, wrist = (0.0, 0.0, l0), (l1, 0.0, l0), (l1 + l2, 0.0, l0)

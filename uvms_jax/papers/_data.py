@@ -1,9 +1,9 @@
-"""What the three papers print, transcribed once: code, configs and tests read it from here.
+"""What the three papers print, transcribed once: the analysis and the tests read it from here.
 
 [D11] Sotiropoulos, Aspragathos & Andritsos 2011 (docking), [D16] Sotiropoulos & Aspragathos
 2016 (surrogates of dexterity indices), [T22] the pick-and-place thesis of 2022; section and
-equation numbers refer to docs/theory.md. Plain NumPy and tuples: this module sits in the
-bottom layer, so ``kin`` and ``evo`` take their paper defaults from it.
+equation numbers refer to docs/theory.md. Plain NumPy and tuples. The stages keep their own
+defaults as literals; tests/papers checks those equal to the tables here.
 """
 
 from __future__ import annotations

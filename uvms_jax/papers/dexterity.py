@@ -11,11 +11,12 @@ from pathlib import Path
 import jax
 import numpy as np
 
-from uvms_jax import kin
+from uvms_jax import kin, surrogate
 from uvms_jax.papers._data import D16_NETWORKS, D16_TABLE3
 from uvms_jax.papers._preset import Preset, save_figure
-from uvms_jax.pipeline import md_table
 from uvms_jax.plotting import pyplot
+from uvms_jax.settings import from_mapping
+from uvms_jax.text import cell, md_table
 
 log = logging.getLogger(__name__)
 #: Jacobian form (``index_form.jacobian``) → its label in the report.
@@ -29,16 +30,8 @@ def _label(name: str) -> str:
     return f"{kind.upper()}-{'w' if index == 'w' else 'KCI'}"
 
 
-def _fmt(v) -> str:
-    """A Table 3 cell: "—" for a parameter that does not apply."""
-    return "—" if v is None else (f"{v:g}" if isinstance(v, float) else str(v))
-
-
 def surrogate_runs(p: Preset) -> dict:
     """``run_surrogates`` for both Jacobian forms with the preset's sizes: form → SurrogateRun."""
-    from uvms_jax import surrogate
-    from uvms_jax.settings import from_mapping
-
     runs = {}
     for form in FORMS:
         t0 = time.perf_counter()
@@ -107,7 +100,7 @@ def _design_table(s) -> str:
             "rbfn_kci": (rbfn.error_goal, None, rbfn.target_mse.kci, rbfn.max_centres.kci, None, rbfn.spread_max,
                          n_test)}
     return md_table(["network", "E", "E_mse", "E_th", "L_iter (units)", "L_epochs", "L_s", "T", "training samples"],
-                    [[f"{n} (paper / ours)", *(f"{_fmt(a)} / {_fmt(b)}" for a, b in zip(D16_TABLE3[n], ours[n])),
+                    [[f"{n} (paper / ours)", *(f"{cell(a, 6)} / {cell(b, 6)}" for a, b in zip(D16_TABLE3[n], ours[n])),
                       f"— / {s.data.n_train[n.split('_')[1]]}"] for n in D16_TABLE3])
 
 

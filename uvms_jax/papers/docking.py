@@ -22,8 +22,8 @@ from uvms_jax import evo, indices, kin, progress
 from uvms_jax.papers._data import D11_ARM_LENGTHS, D11_BLOCK_SIZE, D11_ILL_PLACED_POSE, D11_P_BP, D11_P_INIT
 from uvms_jax.papers._data import D11_TABLE3, D11_TABLE4, D11_TASK_SIZE
 from uvms_jax.papers._preset import Preset, join_and, save_figure
-from uvms_jax.pipeline import md_table
 from uvms_jax.plotting import pyplot
+from uvms_jax.text import md_table
 
 log = logging.getLogger(__name__)
 DEG = math.pi / 180.0

@@ -16,11 +16,13 @@ from pathlib import Path
 import jax
 import numpy as np
 
-from uvms_jax import progress
+from uvms_jax import hw, kin, progress, sched
+from uvms_jax import plan as P
 from uvms_jax.papers._data import T22_PLANNER_TABLES, T22_SCENARIO_TABLES, T22_TABLES
 from uvms_jax.papers._preset import Preset, join_and, save_figure
-from uvms_jax.pipeline import md_table
 from uvms_jax.plotting import pyplot
+from uvms_jax.settings import from_mapping
+from uvms_jax.text import md_table
 
 #: Thesis algorithm name → our solver name.
 SOLVER_OF = {"Dijkstra": "greedy", "GRASP": "grasp", "A*": "astar"}
@@ -33,8 +35,6 @@ def weights(configs: Path, name: str):
     """The weight scenario ``configs/sched/weights/<name>.yaml``: ``sched.WeightSettings``."""
     import yaml
 
-    from uvms_jax import sched
-
     return sched.WeightSettings(**yaml.safe_load((configs / "sched" / "weights" / f"{name}.yaml").read_text()))
 
 
@@ -43,9 +43,6 @@ def plan_thesis_cage(configs: Path, budget_s: float):
     Tables 5.2–5.4 under ``configs/plan/default.yaml``, ``budget_s`` [s] per edge:
     ``uvms_jax.plan.TaskGraphPlan``."""
     import yaml
-
-    from uvms_jax import plan as P
-    from uvms_jax.settings import from_mapping
 
     mapping = yaml.safe_load((configs / "plan" / "default.yaml").read_text())
     mapping.update(planners=list(T22_PLANNER_TABLES), budget_s=float(budget_s), render=False)
@@ -75,8 +72,6 @@ def thesis_instances(edges: Path | None, budget_s: float,
     repository's configs/ folder) here with ``budget_s`` [s] per edge. Returns the instances,
     per planner left out why, and the ``uvms_jax.plan.TaskGraphPlan`` planned here (None when
     read from ``edges``)."""
-    from uvms_jax import sched
-
     if edges is None:
         tp = plan_thesis_cage(configs, budget_s)
         return {pl: Instance(pl, tp.metrics[pl], f"the thesis cage planned here with {pl}, {budget_s:g} s per edge",
@@ -98,9 +93,6 @@ def executed_tool_paths(task_plan, run, img: Path) -> tuple[str, dict]:
     measured joint states → PNG. Returns the figure and ``{"status", "gates", "max_mm",
     "p95_mm"}``: the run's end, its gates, and the largest and 95th-percentile distance of an
     executed tool position from the planned path [mm]."""
-    from uvms_jax import hw, kin
-    from uvms_jax import plan as P
-
     scene = task_plan.scene
     path = run.solved["exact"].path if "exact" in run.solved else run.best.path
     the_plan = P.plan_for_schedule(task_plan, "RRTConnect", path)
@@ -138,8 +130,6 @@ def executed_tool_paths(task_plan, run, img: Path) -> tuple[str, dict]:
 def _run(inst: Instance, w, local_search: str = "deliveries", solvers=("greedy", "grasp", "astar", "exact"),
          repeats=5):
     """``sched.run_schedule`` of ``inst`` under weights ``w`` (GRASP with ``local_search``)."""
-    from uvms_jax import sched
-
     s = sched.SchedSettings(weights=w, solvers=tuple(solvers), grasp=sched.GraspSettings(local_search=local_search),
                             timing_repeats=repeats, iterations_sweep=())
     return sched.run_schedule(jax.random.key(0), s, inst.raw, note=inst.note)
@@ -149,8 +139,6 @@ def thesis_path_sums(table: str, normalised) -> dict[str, tuple[np.ndarray, floa
     """Each thesis path of ``table`` on our instance (``(5, n, n)`` normalised metrics):
     algorithm → ``(5,)`` normalised metric sums and its cost Σ K·N (NaN where a move of the
     path has no metrics)."""
-    from uvms_jax import sched
-
     out = {}
     for alg, path, K, *_ in T22_TABLES[table]:
         sums = sched.path_metric_sums(normalised, [int(v) for v in path.split("-")])
@@ -264,8 +252,6 @@ def plot_final_costs(per_planner: dict, img: Path, xlabel: str) -> str:
 
 def instance_table(instances: dict[str, Instance]) -> str:
     """Per planner: moves planned, straight ones, and the range of each raw metric (Markdown)."""
-    from uvms_jax import sched
-
     def span(x, fmt="{:.3g}"):
         return f"{fmt.format(np.min(x))}–{fmt.format(np.max(x))}" if x.size else "—"
 
@@ -287,8 +273,6 @@ def instance_table(instances: dict[str, Instance]) -> str:
 def why_fields(instances: dict[str, Instance], runs: dict) -> dict:
     """The numbers behind "why Tables 5.2–5.4 differ from ours" (the ``why_*`` fields of the
     template): the RRTConnect instance (else the first) against the thesis's tables."""
-    from uvms_jax import sched
-
     if not runs:
         raise ValueError("no planner's scheduling instance was computed: nothing to compare with Tables 5.2-5.4")
     run = runs.get("RRTConnect") or next(iter(runs.values()))
@@ -376,8 +360,6 @@ def thesis_fields(p: Preset, img: Path, edges: Path | None, configs: Path) -> di
     (experiments/papers_templates/thesis.md). Our instances are the thesis cage of ``configs``
     (the repository's configs/ folder, which also holds the weight scenarios) planned here with
     the three planners (``p.plan_budget_s`` per edge), or ``edges`` (an edges.csv) when given."""
-    from uvms_jax import sched
-
     t0 = time.perf_counter()
     instances, missing, task_plan = thesis_instances(edges, p.plan_budget_s, configs)
     t_plan = time.perf_counter() - t0

@@ -14,7 +14,6 @@ from uvms_jax.pipeline._precheck import Checked
 from uvms_jax.pipeline._precheck import baseline_scenario
 from uvms_jax.pipeline._precheck import check_stages
 from uvms_jax.pipeline._report import StageReport
-from uvms_jax.pipeline._report import md_table
 from uvms_jax.pipeline._run import RETRY, RUN_FILES, run_pipeline
 from uvms_jax.pipeline._settings import STAGES
 from uvms_jax.pipeline._settings import HoverStageSettings
@@ -22,4 +21,4 @@ from uvms_jax.pipeline._settings import HwStageSettings
 from uvms_jax.pipeline._settings import PipelineSettings
 from uvms_jax.pipeline._stages import docked_scene
 
-__all__ = ["RETRY", "RUN_FILES", "STAGES", "Checked", "HoverStageSettings", "HwStageSettings", "PipelineSettings", "StageReport", "baseline_scenario", "check_stages", "docked_scene", "md_table", "run_pipeline"]
+__all__ = ["RETRY", "RUN_FILES", "STAGES", "Checked", "HoverStageSettings", "HwStageSettings", "PipelineSettings", "StageReport", "baseline_scenario", "check_stages", "docked_scene", "run_pipeline"]

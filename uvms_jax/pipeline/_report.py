@@ -14,8 +14,9 @@ from typing import Any
 import jax
 
 from uvms_jax.files import write_atomic
+from uvms_jax.text import md_table
 
-__all__ = ["StageReport", "md_table", "write_summary"]
+__all__ = ["StageReport", "write_summary"]
 
 
 @dataclasses.dataclass
@@ -39,21 +40,6 @@ class StageReport:
     notes: list[str] = dataclasses.field(default_factory=list)
     seconds: float = math.nan
     cpu_seconds: float = math.nan
-
-
-def _cell(v: Any) -> str:
-    if v is None or (isinstance(v, float) and math.isnan(v)):
-        return "—"
-    if isinstance(v, float):
-        return f"{v:.4g}"
-    return str(v)
-
-
-def md_table(header: Sequence[str], rows: Sequence[Sequence[Any]]) -> str:
-    """A markdown table; floats with 4 significant digits, None/NaN as an em dash."""
-    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-    lines += ["| " + " | ".join(_cell(v) for v in r) + " |" for r in rows]
-    return "\n".join(lines)
 
 
 def write_summary(out: Path, reports: Sequence[StageReport], total_s: float, config_yaml: str, chain: str = "") -> Path:

@@ -17,7 +17,8 @@ from uvms_jax import evo, hover, hw, planfile, progress, sched, surrogate
 from uvms_jax import robot as robots
 from uvms_jax import plan as planning
 from uvms_jax.pipeline._precheck import baseline_scenario, vehicle_hull
-from uvms_jax.pipeline._report import StageReport, md_table
+from uvms_jax.pipeline._report import StageReport
+from uvms_jax.text import md_table
 from uvms_jax.pipeline._settings import PipelineSettings
 
 log = logging.getLogger(__name__)

@@ -38,6 +38,7 @@ import numpy as np
 from uvms_jax import frames
 from uvms_jax import robot as robots
 from uvms_jax.plan._spec import SceneSpec, box_vertices
+from uvms_jax.text import numbers
 
 __all__ = ["Context", "Scene", "build_scene"]
 
@@ -57,10 +58,6 @@ HELD_BITS = (16, 16)
 # planner's safety margin (PlanSettings.margin, 0.005 m), so that no pair reads as a collision in
 # every pose.
 SELF_COLLISION_MARGIN = 0.01  # [m]
-def _fmt(v) -> str:
-    return " ".join(f"{float(x):.10g}" for x in np.ravel(v))
-
-
 @dataclasses.dataclass(frozen=True)
 class Context:
     """What the collision checker considers at a moment of the task.
@@ -263,7 +260,7 @@ class Scene:
         assets: list[str] = []
 
         def mesh(name: str, verts: np.ndarray) -> str:
-            assets.append(f'<mesh name="{name}" vertex="{_fmt(verts)}"/>')
+            assets.append(f'<mesh name="{name}" vertex="{numbers(verts)}"/>')
             return name
 
         world: list[str] = []
@@ -271,8 +268,8 @@ class Scene:
         def box(label: str, T: np.ndarray, size, rgba: str, bits=SCENE_BITS) -> None:
             mname = mesh(f"m_{label}", box_vertices(size))
             world.append(
-                f'<geom name="{label}" type="mesh" mesh="{mname}" pos="{_fmt(T[:3, 3])}" '
-                f'quat="{_fmt(frames.matrix_quat(T[:3, :3]))}" rgba="{rgba}" contype="{bits[0]}" conaffinity="{bits[1]}"/>'
+                f'<geom name="{label}" type="mesh" mesh="{mname}" pos="{numbers(T[:3, 3])}" '
+                f'quat="{numbers(frames.matrix_quat(T[:3, :3]))}" rgba="{rgba}" contype="{bits[0]}" conaffinity="{bits[1]}"/>'
             )
 
         if s.cage_size is not None:
@@ -286,7 +283,7 @@ class Scene:
         under = s.tables[0]
         top = under.T_world_top
         world.append(
-            f'<geom name="{under.name}" type="plane" pos="{_fmt(top[:3, 3])}" quat="{_fmt(frames.matrix_quat(top[:3, :3]))}" '
+            f'<geom name="{under.name}" type="plane" pos="{numbers(top[:3, 3])}" quat="{numbers(frames.matrix_quat(top[:3, :3]))}" '
             f'size="{under.size[0] / 2} {under.size[1] / 2} 0.05" rgba="0.6 0.55 0.5 1" '
             f'contype="{SCENE_BITS[0]}" conaffinity="{SCENE_BITS[1]}"/>'
         )
@@ -310,7 +307,7 @@ class Scene:
         bits = f'contype="{SCENE_BITS[0]}" conaffinity="{SCENE_BITS[1]}" rgba="0.55 0.6 0.7 0.8"'
         for o in s.obstacles:
             T = o.T_world
-            pose = f'pos="{_fmt(T[:3, 3])}" quat="{_fmt(frames.matrix_quat(T[:3, :3]))}"'
+            pose = f'pos="{numbers(T[:3, 3])}" quat="{numbers(frames.matrix_quat(T[:3, :3]))}"'
             if o.shape == "sphere":
                 world.append(f'<geom name="{o.name}" type="sphere" size="{o.dims[0]!r}" {pose} {bits}/>')
             elif o.shape == "capsule":  # primitive: arm capsule vs capsule is exact in MuJoCo
@@ -318,7 +315,7 @@ class Scene:
             elif o.shape == "mesh" and not o.vertices:  # MuJoCo reads the file and collides with its convex hull
                 mname = f"m_obstacle_{o.name}"
                 assets.append(f'<mesh name="{mname}" file={quoteattr(str(Path(o.file).resolve()))} '
-                              f'scale="{_fmt([o.scale] * 3)}"/>')
+                              f'scale="{numbers([o.scale] * 3)}"/>')
                 world.append(f'<geom name="{o.name}" type="mesh" mesh="{mname}" {pose} {bits}/>')
             else:  # boxes and cylinders as convex meshes (see the module docstring), meshes of vertices
                 mname = mesh(f"m_obstacle_{o.name}", o.hull_vertices())
@@ -330,8 +327,8 @@ class Scene:
             T = self.T_world_object(o.node)
             mname = mesh(f"m_{o.name}", o.vertices())
             world.append(
-                f'<geom name="n{o.node}:{o.name}" type="mesh" mesh="{mname}" pos="{_fmt(T[:3, 3])}" '
-                f'quat="{_fmt(frames.matrix_quat(T[:3, :3]))}" rgba="1 0.55 0.1 1" contype="{SCENE_BITS[0]}" conaffinity="{SCENE_BITS[1]}"/>'
+                f'<geom name="n{o.node}:{o.name}" type="mesh" mesh="{mname}" pos="{numbers(T[:3, 3])}" '
+                f'quat="{numbers(frames.matrix_quat(T[:3, :3]))}" rgba="1 0.55 0.1 1" contype="{SCENE_BITS[0]}" conaffinity="{SCENE_BITS[1]}"/>'
             )
 
         robot = self.robot
@@ -363,8 +360,8 @@ class Scene:
             T = T_link_tool @ self.T_tool_obj_for(o.node)
             mname = f"m_{o.name}"
             ET.SubElement(last, "geom", {
-                "name": f"held_{o.name}", "type": "mesh", "mesh": mname, "pos": _fmt(T[:3, 3]),
-                "quat": _fmt(frames.matrix_quat(T[:3, :3])), "rgba": "1 0.55 0.1 0.8", "contype": str(HELD_BITS[0]),
+                "name": f"held_{o.name}", "type": "mesh", "mesh": mname, "pos": numbers(T[:3, 3]),
+                "quat": numbers(frames.matrix_quat(T[:3, :3])), "rgba": "1 0.55 0.1 0.8", "contype": str(HELD_BITS[0]),
                 "conaffinity": str(HELD_BITS[1]),
             })
         excludes = "".join(f'<exclude body1="{a}" body2="{b}"/>' for a, b in self.self_collision["always"]

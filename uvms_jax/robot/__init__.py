@@ -1,6 +1,8 @@
 """The robot model: one arm as data that flows through every stage.
 
-``load_robot`` reads a URDF or MJCF description (the format told by its content) into a
+``chain_from_urdf`` and ``chain_from_mjcf`` read the kinematic chain alone (a
+:class:`uvms_jax.kin.Chain`) from a description; ``load_robot`` reads a URDF or MJCF
+description (the format told by its content) into a
 :class:`Robot`: the kinematic chain with its limits, the bodies' mass properties, the
 collision shapes of the description (:class:`Shape`; capsules along the links where it has
 none or they cannot be read), the gripper and its fingers (:class:`Finger`, where the description
@@ -35,6 +37,9 @@ from uvms_jax.robot._model import Gripper
 from uvms_jax.robot._model import Hardware
 from uvms_jax.robot._model import Robot
 from uvms_jax.robot._model import Shape
+from uvms_jax.robot._parse import CONTINUOUS_LIMITS
+from uvms_jax.robot._parse import chain_from_mjcf
+from uvms_jax.robot._parse import chain_from_urdf
 from uvms_jax.robot._spheres import RobotSpheres
 from uvms_jax.robot._spheres import collision_spheres
 from uvms_jax.robot._spheres import inscribed_spheres

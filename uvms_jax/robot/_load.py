@@ -23,9 +23,17 @@ import numpy as np
 import yaml
 
 from uvms_jax.frames import pose
-from uvms_jax.kin import _import
 from uvms_jax.robot._geometry import description_shapes, fixed_to
 from uvms_jax.robot._model import BASE, BodyInertial, Finger, Gripper, Hardware, Robot
+from uvms_jax.robot._parse import (
+    build_chain,
+    description_bytes,
+    mjcf_path_joints,
+    read_urdf,
+    strict_root,
+    urdf_joint,
+    urdf_path_joints,
+)
 from uvms_jax.settings import check_keys
 
 __all__ = ["DESCRIPTIONS", "load_arm", "load_robot", "robot_from_config", "shipped_arms"]
@@ -38,7 +46,7 @@ DESCRIPTIONS = Path(__file__).parent / "descriptions"
 
 def _format(data: bytes, source: str) -> str:
     """``"urdf"`` or ``"mjcf"`` from the root element, parsed strictly; a clear error otherwise."""
-    root = _import.strict_root(data, f"robot description {source}")
+    root = strict_root(data, f"robot description {source}")
     if root.tag in ("robot", "mujoco"):
         return "urdf" if root.tag == "robot" else "mjcf"
     raise ValueError(f"robot description {source} has root <{root.tag}>: expected <robot> (URDF) or <mujoco> (MJCF)")
@@ -62,7 +70,7 @@ def _fold(T_base_part: np.ndarray, mass: float, I_part: np.ndarray, T_base_body:
 
 
 def _urdf_robot(urdf, folder: Path | None, base: str | None, tip: str | None, gripper: str | None):
-    joints, T_base_tool, base_link = _import.urdf_path_joints(urdf, base, tip)
+    joints, T_base_tool, base_link = urdf_path_joints(urdf, base, tip)
     robot = urdf.robot
     joint_of = {j.child: j for j in robot.joints}
     # Every link's frame at q = 0 below the base (a breadth-first walk of the tree).
@@ -89,7 +97,7 @@ def _urdf_robot(urdf, folder: Path | None, base: str | None, tip: str | None, gr
         found = [j for j in robot.joints if j.name == gripper]
         if not found:
             raise ValueError(f"gripper joint {gripper!r} not in the URDF (joints: {sorted(j.name for j in robot.joints)})")
-        g = _import._urdf_joint(found[0], np.eye(4), found[0].child)
+        g = urdf_joint(found[0], np.eye(4), found[0].child)
         if g.kind != "prismatic":
             raise ValueError(f"gripper joint {gripper!r} must be prismatic (its opening in metres), it is {g.kind}")
         grip = (g.lower, g.upper, g.speed, g.effort)
@@ -100,7 +108,7 @@ def _mjcf_robot(source, base: str | None, tip: str | None, gripper: str | None):
     text = source.read_text() if isinstance(source, Path) else source
     sites = {s.get("name") for s in ET.fromstring(text).iter("site")}
     tip_site, tip_body = (tip, None) if tip in sites else (None, tip)
-    joints, T_base_tool, name = _import.mjcf_path_joints(source, base, tip_body, tip_site)
+    joints, T_base_tool, name = mjcf_path_joints(source, base, tip_body, tip_site)
     spec = mujoco.MjSpec.from_file(str(source)) if isinstance(source, Path) else mujoco.MjSpec.from_string(source)
     model = spec.compile()
     data = mujoco.MjData(model)
@@ -176,19 +184,19 @@ def load_robot(
 
     Raises:
       ValueError: a missing file, text that is not URDF or MJCF, unknown names, and every
-        error of :func:`uvms_jax.kin.from_urdf` / :func:`uvms_jax.kin.from_mjcf`.
+        error of :func:`chain_from_urdf` / :func:`chain_from_mjcf`.
     """
-    data, source = _import._description_bytes(description, "robot description")
+    data, source = description_bytes(description, "robot description")
     path = None if source == "<text>" else Path(source)
     fmt = _format(data, source)
     in_file = gripper if isinstance(gripper, str) else None
     if fmt == "urdf":
-        urdf = _import.read_urdf(path if path is not None else data.decode())
+        urdf = read_urdf(path if path is not None else data.decode())
         parts = _urdf_robot(urdf, None if path is None else path.parent, base, tip, in_file)
     else:
         parts = _mjcf_robot(path if path is not None else data.decode(), base, tip, in_file)
     joints, T_base_tool, base_link, file_name, raw_inertials, bodies, body_frames, frames, grip, parsed = parts
-    chain = _import._build(joints, T_base_tool, file_name if name is None else name)
+    chain = build_chain(joints, T_base_tool, file_name if name is None else name)
     buoyancy = dict(buoyancy or {})
     unknown = sorted(set(buoyancy) - set(frames))
     if unknown:

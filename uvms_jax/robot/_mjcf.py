@@ -27,9 +27,10 @@ import mujoco
 import numpy as np
 
 from uvms_jax import frames
-from uvms_jax.kin._chain import REVOLUTE
+from uvms_jax.kin import REVOLUTE
 from uvms_jax.robot._geometry import Shape
 from uvms_jax.robot._model import BASE, Robot
+from uvms_jax.text import numbers
 
 __all__ = ["TOOL_SITE", "base_body", "card_jaws", "geom_name", "link_capsules", "mjcf_assets", "mjcf_body", "robot_mjcf",
            "self_collision_pairs"]
@@ -40,10 +41,6 @@ _DISTMAX = 1.0  # [m] mj_geomDistance reports distances up to this (and this bey
 _CYLINDER_SIDES = 32  # a cylinder shape is the prism of this many sides around it
 # A moving body without shapes still needs mass in MuJoCo (a collision model needs none).
 _NO_MASS = '<inertial pos="0 0 0" mass="1e-06" diaginertia="1e-10 1e-10 1e-10"/>'
-
-
-def _fmt(values) -> str:
-    return " ".join(f"{float(v):.10g}" for v in np.ravel(values))
 
 
 def base_body(robot: Robot) -> str:
@@ -128,17 +125,17 @@ def mjcf_assets(robot: Robot, attached: tuple[Shape, ...] = ()) -> list[str]:
     assets = []
     for s, name in _all_shapes(robot) + _attached_named(robot, attached):
         if s.kind == "mesh" and s.file:
-            assets.append(f'<mesh name="m_{name}" file={quoteattr(s.file)} scale="{_fmt(s.scale)}"/>')
+            assets.append(f'<mesh name="m_{name}" file={quoteattr(s.file)} scale="{numbers(s.scale)}"/>')
         elif s.kind == "mesh":
-            assets.append(f'<mesh name="m_{name}" vertex="{_fmt(s.vertices)}"/>')
+            assets.append(f'<mesh name="m_{name}" vertex="{numbers(s.vertices)}"/>')
         elif s.kind in ("box", "cylinder"):
-            assets.append(f'<mesh name="m_{name}" vertex="{_fmt(_hull_vertices(s))}"/>')
+            assets.append(f'<mesh name="m_{name}" vertex="{numbers(_hull_vertices(s))}"/>')
     return assets
 
 
 def _shape_geom(shape: Shape, name: str, T_move: np.ndarray | None = None) -> str:
     T = shape.T if T_move is None else T_move @ shape.T
-    pose = f'pos="{_fmt(T[:3, 3])}" quat="{_fmt(frames.matrix_quat(T[:3, :3]))}"'
+    pose = f'pos="{numbers(T[:3, 3])}" quat="{numbers(frames.matrix_quat(T[:3, :3]))}"'
     if shape.kind == "sphere":
         return f'<geom name="{name}" type="sphere" size="{shape.size[0]!r}" {pose}/>'
     if shape.kind == "capsule":
@@ -166,7 +163,7 @@ def _finger_lines(robot: Robot, body: int, opening: float, finger_joints: bool) 
             continue
         lo, hi = sorted((f.value(g.lower), f.value(g.upper)))
         lines += [f'<body name="{f.link}">', "  " + _NO_MASS,
-                  f'  <joint name="{f.joint}" type="slide" axis="{_fmt(f.axis)}" range="{lo!r} {hi!r}" limited="true"/>',
+                  f'  <joint name="{f.joint}" type="slide" axis="{numbers(f.axis)}" range="{lo!r} {hi!r}" limited="true"/>',
                   *["  " + _shape_geom(s, n) for s, n in zip(f.shapes, names)], "</body>"]
     return lines
 
@@ -174,7 +171,7 @@ def _finger_lines(robot: Robot, body: int, opening: float, finger_joints: bool) 
 def _link_geom(name: str, end: np.ndarray, radius: float) -> str:
     if np.linalg.norm(end) < _COINCIDENT:
         return f'<geom name="{name}" type="sphere" size="{radius!r}"/>'
-    return f'<geom name="{name}" type="capsule" fromto="0 0 0 {_fmt(end)}" size="{radius!r}"/>'
+    return f'<geom name="{name}" type="capsule" fromto="0 0 0 {numbers(end)}" size="{radius!r}"/>'
 
 
 def _inertial(robot: Robot, body: int) -> str:
@@ -189,8 +186,8 @@ def _inertial(robot: Robot, body: int) -> str:
         xx, yy, zz, xy, xz, yz = b.inertia
         d = np.asarray(b.com) - com
         I += np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]]) + b.mass * (d @ d * np.eye(3) - np.outer(d, d))
-    return (f'<inertial pos="{_fmt(com)}" mass="{mass!r}" '
-            f'fullinertia="{_fmt([I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2]])}"/>')
+    return (f'<inertial pos="{numbers(com)}" mass="{mass!r}" '
+            f'fullinertia="{numbers([I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2]])}"/>')
 
 
 def mjcf_body(robot: Robot, pos=(0.0, 0.0, 0.0), quat=(1.0, 0.0, 0.0, 0.0), jaws_open: float | None = None,
@@ -227,7 +224,7 @@ def mjcf_body(robot: Robot, pos=(0.0, 0.0, 0.0), quat=(1.0, 0.0, 0.0, 0.0), jaws
     tool = np.asarray(chain.T_base_tool0, dtype=np.float64)
     n = robot.n_joints
     ends = dict(link_capsules(robot))
-    lines = [f'<body name="{base_body(robot)}" pos="{_fmt(pos)}" quat="{_fmt(quat)}">']
+    lines = [f'<body name="{base_body(robot)}" pos="{numbers(pos)}" quat="{numbers(quat)}">']
     if inertial and _inertial(robot, BASE):
         lines.append("  " + _inertial(robot, BASE))
     lines += ["  " + g for g in _body_geoms(robot, BASE, ends[BASE])]
@@ -239,27 +236,27 @@ def mjcf_body(robot: Robot, pos=(0.0, 0.0, 0.0), quat=(1.0, 0.0, 0.0, 0.0), jaws
         local = np.linalg.inv(previous) @ T_joint[i]
         R = T_joint[i, :3, :3]
         axis = R.T @ (twists[i, 3:] if chain.kinds[i] == REVOLUTE else twists[i, :3])
-        lines.append(f'{pad}<body name="{robot.link_names[i]}" pos="{_fmt(local[:3, 3])}" '
-                     f'quat="{_fmt(frames.matrix_quat(local[:3, :3]))}">')
+        lines.append(f'{pad}<body name="{robot.link_names[i]}" pos="{numbers(local[:3, 3])}" '
+                     f'quat="{numbers(frames.matrix_quat(local[:3, :3]))}">')
         geoms = _body_geoms(robot, i, ends[i])
         if inertial and _inertial(robot, i):
             lines.append(f"{pad}  " + _inertial(robot, i))
         elif not geoms:
             lines.append(f"{pad}  " + _NO_MASS)
         kind = "hinge" if chain.kinds[i] == REVOLUTE else "slide"
-        lines.append(f'{pad}  <joint name="{robot.joint_names[i]}" type="{kind}" axis="{_fmt(axis)}" '
+        lines.append(f'{pad}  <joint name="{robot.joint_names[i]}" type="{kind}" axis="{numbers(axis)}" '
                      f'range="{float(chain.lower[i])!r} {float(chain.upper[i])!r}" limited="true"/>')
         lines += [f"{pad}  " + g for g in geoms + _finger_lines(robot, i, opening, finger_joints)]
         lines += [f"{pad}  " + _shape_geom(s, name) for s, name in named if s.body == i]
         previous = T_joint[i]
     pad = "  " * (n + 1)
     T_link_tool = np.linalg.inv(T_joint[-1]) @ tool
-    tool_quat = _fmt(frames.matrix_quat(T_link_tool[:3, :3]))
-    lines.append(f'{pad}<site name="{TOOL_SITE}" pos="{_fmt(T_link_tool[:3, 3])}" quat="{tool_quat}" size="0.01"/>')
+    tool_quat = numbers(frames.matrix_quat(T_link_tool[:3, :3]))
+    lines.append(f'{pad}<site name="{TOOL_SITE}" pos="{numbers(T_link_tool[:3, 3])}" quat="{tool_quat}" size="0.01"/>')
     for s in card_jaws(robot, opening):
         T = s.T
-        lines.append(f'{pad}<geom name="geom_{s.link}" type="box" pos="{_fmt(T[:3, 3])}" '
-                     f'quat="{_fmt(frames.matrix_quat(T[:3, :3]))}" size="{_fmt(np.array(s.size) / 2)}"/>')
+        lines.append(f'{pad}<geom name="geom_{s.link}" type="box" pos="{numbers(T[:3, 3])}" '
+                     f'quat="{numbers(frames.matrix_quat(T[:3, :3]))}" size="{numbers(np.array(s.size) / 2)}"/>')
     for d in range(n, -1, -1):
         lines.append("  " * d + "</body>")
     return "\n".join(lines)

@@ -22,7 +22,6 @@ import jax.numpy as jnp
 from jax import Array
 
 from uvms_jax import kin
-from uvms_jax.papers import D16_NETWORKS
 from uvms_jax.surrogate._dataset import Dataset, analytic_index, analytic_index_fn, make_dataset
 from uvms_jax.surrogate._design import Design, design_ffbn, design_rbfn
 from uvms_jax.surrogate._settings import SurrogateSettings, split_network_name
@@ -54,9 +53,9 @@ class SurrogateRun:
         included), y_min, y_max [index units], inputs (joint indices).
       networks: per network name: kind, index, hidden_units, spread, max_rel_test_error,
         met_goal, design_seconds, networks_tried, train_mse, operation_count, design_steps,
-        paper (Tables 4/5), xla_flops_per_sample, timing (per batch size as a string:
+        xla_flops_per_sample, timing (per batch size as a string:
         network_s, analytic_s, speedup, network_per_s, analytic_per_s, chunk) [s].
-      analytic: per index: xla_flops_per_sample, paper, timing (per batch size: seconds,
+      analytic: per index: xla_flops_per_sample, timing (per batch size: seconds,
         min_seconds, compile_seconds, per_second).
       acceptance: acceptance figures (bools, seconds, speed-ups).
       device: platform, device kind, CPU count, Python and JAX versions.
@@ -139,7 +138,7 @@ def _network_info(name: str, d: Design) -> dict:
         "max_rel_test_error": d.steps[-1].test_error if d.met else min(s.test_error for s in d.steps),
         "met_goal": d.met, "design_seconds": d.seconds, "networks_tried": len(d.steps),
         "train_mse": float(d.history[-1]), "operation_count": net.operation_count,
-        "design_steps": [s._asdict() for s in d.steps], "paper": D16_NETWORKS[name],
+        "design_steps": [s._asdict() for s in d.steps],
     }
 
 
@@ -147,7 +146,7 @@ def _time_analytic(chain: kin.Chain, index: str, q_test: Array, settings: Surrog
     """The report's analytic entry of ``index``: XLA flops per sample and timing per batch size."""
     t_set, fn = settings.timing, analytic_index_fn(chain, index, settings.index_form)
     info = {"xla_flops_per_sample": _xla_count(chain, index, settings.index_form, tile_batch(q_test, 1000)),
-            "paper": D16_NETWORKS[f"analytic_{index}"], "timing": {}}
+            "timing": {}}
     for n in t_set.batches:
         t = info["timing"][str(n)] = time_index_fn(fn, tile_batch(q_test, n), repeats=t_set.repeats,
                                                    chunk=chunk_for(n, t_set.chunk))

@@ -4,7 +4,8 @@ Both importers reduce the file to the same facts, all at ``q = 0`` and in the ch
 frame: per moving joint on the path from the base to the tip, its kind, unit axis, a point of
 the axis, the frame of the link it moves, limits and speed; then the tool pose. Fixed joints
 (URDF) and joint-less bodies (MJCF) are folded into this geometry; joints on branches off the
-path (fingers, other arms) are ignored.
+path (fingers, other arms) are ignored. :func:`uvms_jax.robot.load_robot` reads the rest of a
+description (masses, shapes, the gripper) beside the chain.
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ import mujoco
 import numpy as np
 
 from uvms_jax import frames
-from uvms_jax.kin._chain import PRISMATIC, REVOLUTE, Chain, make_chain, prismatic_twist, revolute_twist
+from uvms_jax.kin import PRISMATIC, REVOLUTE, Chain, make_chain, prismatic_twist, revolute_twist
 
 # A continuous joint (URDF) or an unlimited hinge (MJCF) turns forever; the chain gets the limits
 # [−π, π], which reach every angle once, so samplers and IK see each pose exactly once.
@@ -62,7 +63,7 @@ def _unit(axis, joint: str) -> np.ndarray:
     return axis / norm
 
 
-def _build(joints: list[_Joint], T_base_tool0: np.ndarray, name: str) -> Chain:
+def build_chain(joints: list[_Joint], T_base_tool0: np.ndarray, name: str) -> Chain:
     if not joints:
         raise ValueError(f"no moving joint between the base and the tip of {name!r}")
     twists = [
@@ -147,7 +148,7 @@ def _path(parent_of: dict, base: str, tip: str, what: str) -> list[str]:
     return path[::-1]
 
 
-def from_urdf(source, base_link: str | None = None, tip_link: str | None = None, name: str | None = None) -> Chain:
+def chain_from_urdf(source, base_link: str | None = None, tip_link: str | None = None, name: str | None = None) -> Chain:
     """The serial chain from ``base_link`` to ``tip_link`` of a URDF.
 
     Revolute, continuous and prismatic joints become chain joints (in path order); fixed
@@ -172,13 +173,13 @@ def from_urdf(source, base_link: str | None = None, tip_link: str | None = None,
     """
     urdf = read_urdf(source)
     joints, T_base_tool, _ = urdf_path_joints(urdf, base_link, tip_link)
-    return _build(joints, T_base_tool, urdf.robot.name if name is None else name)
+    return build_chain(joints, T_base_tool, urdf.robot.name if name is None else name)
 
 
 _FORMATS = {"robot": "URDF", "mujoco": "MJCF"}
 
 
-def _description_bytes(source, what: str) -> tuple[bytes, str]:
+def description_bytes(source, what: str) -> tuple[bytes, str]:
     """``(bytes, label)`` of a description given as a path or as its text."""
     if isinstance(source, bytes):
         return source, "<text>"
@@ -280,7 +281,7 @@ def read_urdf(source):
 
     from lxml import etree
 
-    data, label = _description_bytes(source, "URDF")
+    data, label = description_bytes(source, "URDF")
     root = strict_root(data, label, "robot")
     _check_urdf_tree(root, label)
     # yourdfpy builds its model from this strictly parsed tree: its own loader (URDF.load)
@@ -293,7 +294,7 @@ def read_urdf(source):
 
 def urdf_path_joints(urdf, base_link: str | None, tip_link: str | None) -> tuple[list[_Joint], np.ndarray, str]:
     """The moving joints from ``base_link`` to ``tip_link`` of a parsed URDF (see
-    :func:`from_urdf`), the tip's pose in the base frame at ``q = 0`` ``(4, 4)``, and the base
+    :func:`chain_from_urdf`), the tip's pose in the base frame at ``q = 0`` ``(4, 4)``, and the base
     link's name."""
     robot = urdf.robot
     links = {link.name for link in robot.links}
@@ -314,11 +315,11 @@ def urdf_path_joints(urdf, base_link: str | None, tip_link: str | None) -> tuple
         T = T @ (np.eye(4) if j.origin is None else np.asarray(j.origin, dtype=np.float64))
         if j.type == "fixed":
             continue
-        joints.append(_urdf_joint(j, T, link))
+        joints.append(urdf_joint(j, T, link))
     return joints, T, base
 
 
-def _urdf_joint(j, T: np.ndarray, link: str) -> _Joint:
+def urdf_joint(j, T: np.ndarray, link: str) -> _Joint:
     """A moving URDF joint whose child ``link`` has the pose ``T (4, 4)`` at ``q = 0``."""
     if j.type == "continuous":
         lower, upper = CONTINUOUS_LIMITS
@@ -344,7 +345,7 @@ def _urdf_joint(j, T: np.ndarray, link: str) -> _Joint:
     )
 
 
-def from_mjcf(
+def chain_from_mjcf(
     source,
     base_body: str | None = None,
     tip_body: str | None = None,
@@ -375,17 +376,17 @@ def from_mjcf(
         joints, an unlimited slide, or a joint coupled to another by an equality constraint.
     """
     joints, T_base_tool, model_name = mjcf_path_joints(source, base_body, tip_body, tip_site)
-    return _build(joints, T_base_tool, model_name if name is None else name)
+    return build_chain(joints, T_base_tool, model_name if name is None else name)
 
 
 def mjcf_path_joints(source, base_body: str | None, tip_body: str | None,
                      tip_site: str | None) -> tuple[list[_Joint], np.ndarray, str]:
     """The moving joints from the base body to the tip of an MJCF model (see
-    :func:`from_mjcf`), the tip's pose in the base frame at ``q = 0`` ``(4, 4)``, and the
+    :func:`chain_from_mjcf`), the tip's pose in the base frame at ``q = 0`` ``(4, 4)``, and the
     model's name."""
     if tip_body is not None and tip_site is not None:
         raise ValueError("give tip_body or tip_site, not both")
-    data, label = _description_bytes(source, "MJCF")
+    data, label = description_bytes(source, "MJCF")
     strict_root(data, label, "mujoco")  # MuJoCo would read a URDF too, as another model
     spec = mujoco.MjSpec.from_string(data.decode()) if label == "<text>" else mujoco.MjSpec.from_file(label)
     model = spec.compile()

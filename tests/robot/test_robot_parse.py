@@ -69,12 +69,12 @@ def _check_against_pytorch_kinematics(chain, urdf: bytes, tip: str, base: str = 
 @pytest.mark.parametrize("arm", list(ARMS))
 def test_real_arms_match_pytorch_kinematics(arm):
     path, base, tip = ARMS[arm]
-    chain = kin.from_urdf(ROBOTS / path, base_link=base, tip_link=tip)
+    chain = robot.chain_from_urdf(ROBOTS / path, base_link=base, tip_link=tip)
     _check_against_pytorch_kinematics(chain, (ROBOTS / path).read_bytes(), tip or "link_eef", base or "")
 
 
 def test_the_arms_cover_4_to_7_joints_fixed_prismatic_and_continuous():
-    chains = {arm: kin.from_urdf(ROBOTS / p, base_link=b, tip_link=t) for arm, (p, b, t) in ARMS.items()}
+    chains = {arm: robot.chain_from_urdf(ROBOTS / p, base_link=b, tip_link=t) for arm, (p, b, t) in ARMS.items()}
     assert {c.n_joints for c in chains.values()} == {5, 6, 7}  # 4 DOF: the Alpha 5 below
     assert chains["tiago"].kinds[0] == "prismatic"
     # Kinova's continuous joints 1, 4 and 6 get [−π, π]; the others keep their URDF limits.
@@ -84,7 +84,7 @@ def test_the_arms_cover_4_to_7_joints_fixed_prismatic_and_continuous():
 
 
 def test_alpha5_matches_pytorch_kinematics_and_the_hand_composed_tool():
-    chain = kin.from_urdf(ALPHA5_URDF, tip_link="ee_base_link")
+    chain = robot.chain_from_urdf(ALPHA5_URDF, tip_link="ee_base_link")
     assert chain.n_joints == 4 and chain.joint_names == ("axis_e", "axis_d", "axis_c", "axis_b")
     _check_against_pytorch_kinematics(chain, ALPHA5_URDF.encode(), "ee_base_link")
     # At q = 0 the origins add up (the yaw of 3.14159 after C turns B's x offset, almost
@@ -93,13 +93,13 @@ def test_alpha5_matches_pytorch_kinematics_and_the_hand_composed_tool():
     expected = [-0.02 - 0.04 + 0.02 * np.cos(yaw), 0.02 * np.sin(yaw), 0.014 + 0.033 - 0.1453 + 0.033 + 0.09975]
     np.testing.assert_allclose(np.asarray(chain.T_base_tool0)[:3, 3], expected, atol=1e-12)
     # The default tip is the only leaf: the jaws' push rod, reached through the prismatic A.
-    full = kin.from_urdf(ALPHA5_URDF)
+    full = robot.chain_from_urdf(ALPHA5_URDF)
     assert full.n_joints == 5 and full.kinds[-1] == "prismatic"
 
 
 def test_bravo7_urdf_imports_as_kin_bravo7():
     ref = kin.bravo7()
-    chain = kin.from_urdf(kin.bravo7_urdf(), tip_link="tool")
+    chain = robot.chain_from_urdf(kin.bravo7_urdf(), tip_link="tool")
     assert (chain.kinds, chain.joint_names, chain.name) == (ref.kinds, ref.joint_names, ref.name)
     for field in ("twists", "T_base_tool0", "T_base_joint0", "lower", "upper", "velocity_limits"):
         np.testing.assert_allclose(np.asarray(getattr(chain, field)), np.asarray(getattr(ref, field)), atol=ATOL_64)
@@ -108,8 +108,8 @@ def test_bravo7_urdf_imports_as_kin_bravo7():
 @pytest.mark.parametrize("arm", ["panda", "kinova", "tiago"])
 def test_to_urdf_round_trips(arm):
     path, base, tip = ARMS[arm]
-    chain = kin.from_urdf(ROBOTS / path, base_link=base, tip_link=tip)
-    again = kin.from_urdf(kin.to_urdf(chain))
+    chain = robot.chain_from_urdf(ROBOTS / path, base_link=base, tip_link=tip)
+    again = robot.chain_from_urdf(kin.to_urdf(chain))
     assert (again.kinds, again.joint_names, again.name) == (chain.kinds, chain.joint_names, chain.name)
     for field in ("twists", "T_base_tool0", "T_base_joint0", "lower", "upper", "velocity_limits"):
         np.testing.assert_allclose(np.asarray(getattr(again, field)), np.asarray(getattr(chain, field)), atol=ATOL_TEXT)
@@ -117,8 +117,8 @@ def test_to_urdf_round_trips(arm):
 
 def test_path_argument_and_text_agree():
     path, base, tip = ARMS["z1"]
-    a = kin.from_urdf(ROBOTS / path, tip_link=tip)
-    b = kin.from_urdf((ROBOTS / path).read_text(), tip_link=tip)
+    a = robot.chain_from_urdf(ROBOTS / path, tip_link=tip)
+    b = robot.chain_from_urdf((ROBOTS / path).read_text(), tip_link=tip)
     np.testing.assert_array_equal(np.asarray(a.twists), np.asarray(b.twists))
 
 
@@ -145,12 +145,12 @@ def _urdf(joint_xml: str) -> str:
 )
 def test_urdf_errors_are_clear(source, kwargs, match):
     with pytest.raises(ValueError, match=match):
-        kin.from_urdf(source, **kwargs)
+        robot.chain_from_urdf(source, **kwargs)
 
 
 def test_non_unit_axes_are_normalised():
     text = _urdf('type="prismatic"><axis xyz="0 0 2"/><limit lower="-1" upper="1"/>')
-    chain = kin.from_urdf(text)
+    chain = robot.chain_from_urdf(text)
     np.testing.assert_allclose(np.asarray(chain.twists), [[0, 0, 1, 0, 0, 0]])
 
 
@@ -183,7 +183,7 @@ MJCF = """
 
 
 def test_mjcf_matches_mujoco_kinematics_and_jacobian():
-    chain = kin.from_mjcf(MJCF, base_body="mount", tip_site="tcp")
+    chain = robot.chain_from_mjcf(MJCF, base_body="mount", tip_site="tcp")
     assert chain.joint_names == ("a", "b", "c", "d") and chain.kinds[2] == "prismatic" and chain.name == "test_arm"
     np.testing.assert_allclose(np.asarray(chain.upper), [2.0, 1.5, 0.2, np.pi])
     model = mujoco.MjModel.from_xml_string(MJCF)
@@ -205,7 +205,7 @@ def test_mjcf_matches_mujoco_kinematics_and_jacobian():
 
 def test_bravo7_mjcf_imports_as_kin_bravo7():
     ref = kin.bravo7()
-    chain = kin.from_mjcf(robot.robot_mjcf(robot.load_arm("bravo7")), tip_site="tool")
+    chain = robot.chain_from_mjcf(robot.robot_mjcf(robot.load_arm("bravo7")), tip_site="tool")
     assert chain.joint_names == ref.joint_names
     q = random_q(ref, 200, seed=4)
     for a, b in zip(pose_and_jacobian(chain, q), pose_and_jacobian(ref, q)):
@@ -237,4 +237,4 @@ def _mjcf(body: str, extra: str = "") -> str:
 )
 def test_mjcf_errors_are_clear(source, kwargs, match):
     with pytest.raises(ValueError, match=match):
-        kin.from_mjcf(source, **kwargs)
+        robot.chain_from_mjcf(source, **kwargs)
