@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["HEADLIGHT_AMBIENT", "HEADLIGHT_DIFFUSE", "VideoInfo", "frame_rows", "write_video"]
+__all__ = ["HEADLIGHT_AMBIENT", "HEADLIGHT_DIFFUSE", "VideoInfo", "frame_rows", "render_frame", "write_video"]
 
 log = logging.getLogger(__name__)
 
@@ -63,8 +63,72 @@ def frame_rows(t: np.ndarray, fps: float) -> np.ndarray:
     return np.searchsorted(t, t_frame + 1e-9, side="right") - 1
 
 
+def _renderer(model, size: tuple[int, int]):
+    """``(model copy, its data, mujoco.Renderer)`` for offscreen frames of ``size = (width,
+    height)`` [pixels]: the headlight brightened (``HEADLIGHT_*``), shadows and reflections off
+    (half the cost of software rendering). ``model`` is not changed.
+
+    Raises:
+      ValueError: ``size`` odd or beyond the model's offscreen buffer.
+      RuntimeError: no offscreen GL context.
+    """
+    import copy
+
+    import mujoco
+
+    width, height = (int(v) for v in size)
+    max_w, max_h = int(model.vis.global_.offwidth), int(model.vis.global_.offheight)
+    if width % 2 or height % 2 or not (0 < width <= max_w and 0 < height <= max_h):
+        raise ValueError(f"size must be even (width, height) within ({max_w}, {max_h}), got {size}")
+    model = copy.deepcopy(model)
+    model.vis.headlight.ambient[:] = HEADLIGHT_AMBIENT
+    model.vis.headlight.diffuse[:] = HEADLIGHT_DIFFUSE
+    try:
+        renderer = mujoco.Renderer(model, height, width)
+    except Exception as e:  # no EGL/OSMesa/GLFW context on this machine
+        raise RuntimeError(f"offscreen rendering unavailable ({e}); set MUJOCO_GL=egl or osmesa") from e
+    for flag in (mujoco.mjtRndFlag.mjRND_SHADOW, mujoco.mjtRndFlag.mjRND_REFLECTION):
+        renderer.scene.flags[flag] = False
+    return model, mujoco.MjData(model), renderer
+
+
+def _draw(model, data, renderer, qpos: np.ndarray, camera, row: int, decorate) -> np.ndarray:
+    """One frame ``(height, width, 3)`` uint8 of ``model`` at ``qpos``; ``decorate(row, renderer)``
+    renders it instead of ``renderer.render()`` (it may add to ``renderer.scene`` first)."""
+    import mujoco
+
+    data.qpos[:] = qpos
+    mujoco.mj_kinematics(model, data)
+    renderer.update_scene(data, camera)
+    return renderer.render() if decorate is None else decorate(row, renderer)
+
+
+def render_frame(model, qpos, camera, *, size: tuple[int, int] = (480, 360), decorate=None, row: int = 0) -> np.ndarray:
+    """One frame of ``model`` at ``qpos (model.nq,)`` as :func:`write_video` draws it.
+
+    Args:
+      model, camera, size, decorate: as :func:`write_video`.
+      qpos: ``(model.nq,)`` positions (finite).
+      row: the row index handed to ``decorate``.
+
+    Returns:
+      ``(height, width, 3)`` uint8 RGB.
+
+    Raises:
+      ValueError, RuntimeError: as :func:`write_video`.
+    """
+    qpos = np.asarray(qpos, dtype=float)
+    if qpos.shape != (model.nq,) or not np.all(np.isfinite(qpos)):
+        raise ValueError(f"qpos must be ({model.nq},) finite, got {qpos.shape}")
+    model, data, renderer = _renderer(model, size)
+    try:
+        return _draw(model, data, renderer, qpos, camera, row, decorate)
+    finally:
+        renderer.close()
+
+
 def write_video(model, t, qpos, path: Path | str, camera, *, fps: float = 8.0, size: tuple[int, int] = (480, 360),
-                progress: bool = True) -> VideoInfo:
+                progress: bool = True, decorate=None) -> VideoInfo:
     """Render ``model`` through the states ``qpos`` at times ``t`` to an MP4 at ``path``.
 
     Shadows and reflections are off, which halves the cost of software (Mesa) rendering on a
@@ -80,16 +144,17 @@ def write_video(model, t, qpos, path: Path | str, camera, *, fps: float = 8.0, s
       size: ``(width, height)`` [pixels], both even (yuv420p) and at most the model's offscreen
         buffer.
       progress: show progress (:func:`uvms_jax.progress.bar`).
+      decorate: None, or ``decorate(row, renderer) -> (height, width, 3) uint8``: called for each
+        frame once the scene holds ``model`` at ``qpos[row]``, it renders the frame in place of
+        ``renderer.render()`` (adding geoms to ``renderer.scene`` first, drawing on the image
+        after).
 
     Raises:
       ValueError: on bad shapes, NaN, decreasing times, or a bad ``fps``/``size``.
       RuntimeError: no offscreen GL context (set ``MUJOCO_GL=egl`` or ``osmesa`` before MuJoCo
         is first imported).
     """
-    import copy
-
     import imageio
-    import mujoco
 
     from uvms_jax import progress as progress_lines
 
@@ -102,23 +167,10 @@ def write_video(model, t, qpos, path: Path | str, camera, *, fps: float = 8.0, s
         raise ValueError("t must be non-decreasing")
     if not (np.isfinite(fps) and fps > 0):
         raise ValueError(f"fps must be a positive number, got {fps}")
-    width, height = (int(v) for v in size)
-    max_w, max_h = int(model.vis.global_.offwidth), int(model.vis.global_.offheight)
-    if width % 2 or height % 2 or not (0 < width <= max_w and 0 < height <= max_h):
-        raise ValueError(f"size must be even (width, height) within ({max_w}, {max_h}), got {size}")
+    model, data, renderer = _renderer(model, size)
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     rows = frame_rows(t, fps)
-    model = copy.deepcopy(model)
-    model.vis.headlight.ambient[:] = HEADLIGHT_AMBIENT
-    model.vis.headlight.diffuse[:] = HEADLIGHT_DIFFUSE
-    data = mujoco.MjData(model)
-    try:
-        renderer = mujoco.Renderer(model, height, width)
-    except Exception as e:  # no EGL/OSMesa/GLFW context on this machine
-        raise RuntimeError(f"offscreen rendering unavailable ({e}); set MUJOCO_GL=egl or osmesa") from e
-    for flag in (mujoco.mjtRndFlag.mjRND_SHADOW, mujoco.mjtRndFlag.mjRND_REFLECTION):
-        renderer.scene.flags[flag] = False
     start = time.perf_counter()
     try:
         with warnings.catch_warnings():
@@ -130,13 +182,10 @@ def write_video(model, t, qpos, path: Path | str, camera, *, fps: float = 8.0, s
             with imageio.get_writer(path, format="FFMPEG", mode="I", fps=fps, codec="libx264",
                                     pixelformat="yuv420p", macro_block_size=2, ffmpeg_log_level="error") as writer:
                 for i in (progress_lines.bar(rows, desc="video", unit="frame") if progress else rows):
-                    data.qpos[:] = qpos[i]
-                    mujoco.mj_kinematics(model, data)
-                    renderer.update_scene(data, camera)
-                    writer.append_data(renderer.render())
+                    writer.append_data(_draw(model, data, renderer, qpos[i], camera, int(i), decorate))
     finally:
         renderer.close()
     info = VideoInfo(path, len(rows), float(fps), time.perf_counter() - start)
     log.info("video %s: %d frames (%.0f s at %g fps, %dx%d) in %.1f s", path.name, info.frames,
-             info.duration_s, fps, width, height, info.seconds)
+             info.duration_s, fps, *size, info.seconds)
     return info

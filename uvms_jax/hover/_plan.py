@@ -94,11 +94,12 @@ class HoverRun:
         gate's waypoint [rad].
       tool_error: ``(k,)`` the tool's distance from where the docked arm holds it on the plan
         (the arm's forward kinematics at the docked base), per logged row [m].
+      tool_target: ``(k, 3)`` that docked position, per logged row [m, world].
       drift: ``(k,)`` the vehicle's distance from the docked pose [m].
       tool_tolerance_m, joint_tolerance_rad: a gate is reached within both.
       current: ``(3,)`` the water's velocity at the start [m/s].
       coordinated: the arm corrected for the vehicle's motion (gates judged by the tool alone).
-      world: the executed run's vehicle and its model (e.g. for :meth:`HoverWorld.write_video`).
+      world: the run's vehicle and its model (e.g. for :func:`write_hover_video`).
       planned_gates: the plan's gates (an executed run: the executor's count, gripper steps
         included).
       executed: the BPL executor's run that drove the arm (:func:`execute_plan_hovering`: its
@@ -116,6 +117,7 @@ class HoverRun:
     tool_tolerance_m: float
     joint_tolerance_rad: float
     current: np.ndarray
+    tool_target: np.ndarray
     coordinated: bool = False
     executed: HwRun | None = None
     planned_gates: int = 0
@@ -196,14 +198,16 @@ def run_plan_hovering(robot: Robot, plan: Plan, pose, vehicle: VehicleSettings =
     p_docked = docked_tool(robot, vehicle, pose, q_plan)
     arm = _coordinated(sim, robot, vehicle, pose, q_plan, p_docked, period) if coordinate else (lambda t: q_plan[round(t / period)])
     log = sim.run(times[-1], arm_trajectory=arm)
-    tool_error = np.linalg.norm(log.tool - p_docked[: len(log.time)], axis=-1)
+    tool_target = p_docked[: len(log.time)]
+    tool_error = np.linalg.norm(log.tool - tool_target, axis=-1)
     rows = np.searchsorted(log.time, gate_times - 1e-9).clip(max=len(log.time) - 1)
     joint_error = np.abs(log.q[rows] - np.array([targets(t) for t in gate_times])).max(axis=-1) \
         if len(rows) else np.zeros(0)
     return HoverRun(log=log, gate_times=gate_times, gate_tool_error=tool_error[rows], gate_joint_error=joint_error,
                     tool_error=tool_error, drift=np.linalg.norm(log.position - pose[:3], axis=-1),
                     tool_tolerance_m=float(tool_tolerance_m), joint_tolerance_rad=float(joint_tolerance_rad),
-                    current=sim.current_velocity(0.0), coordinated=coordinate)
+                    current=sim.current_velocity(0.0), tool_target=tool_target, coordinated=coordinate,
+                    world=sim.world)
 
 
 def execute_plan_hovering(robot: Robot, plan: Plan, pose, vehicle: VehicleSettings = VehicleSettings(),
@@ -221,7 +225,7 @@ def execute_plan_hovering(robot: Robot, plan: Plan, pose, vehicle: VehicleSettin
     vehicle's motion, seen at the tool. The executor does not see it (its gates are on the
     encoders); ``gates_tool_within_tolerance`` of the summary counts the gates where the tool
     was within ``tool_tolerance_m`` [m] as well. The run's ``world`` draws it
-    (:meth:`HoverWorld.write_video`).
+    (:func:`write_hover_video`).
 
     Raises:
       PlanError: the plan was made for another arm, or the dry run refused it.
@@ -231,7 +235,8 @@ def execute_plan_hovering(robot: Robot, plan: Plan, pose, vehicle: VehicleSettin
     world = HoverWorld(trimmed(vehicle, robot, q0), controller, current, xyz=pose[:3], rpy=(0.0, 0.0, pose[3]))
     run = run_plan(plan, robot, config=config, sim=sim, world=world)
     log = world.log()
-    tool_error = np.linalg.norm(log.tool - docked_tool(robot, vehicle, pose, log.q), axis=-1)
+    tool_target = docked_tool(robot, vehicle, pose, log.q)
+    tool_error = np.linalg.norm(log.tool - tool_target, axis=-1)
     # A gate passed at the last tick the executor logged for its waypoint (log times count
     # from the run's start on the simulator's clock).
     last_tick = {(row[1], row[2]): row[0] for row in run.log.rows}
@@ -243,7 +248,7 @@ def execute_plan_hovering(robot: Robot, plan: Plan, pose, vehicle: VehicleSettin
                     gate_joint_error=np.array([g.error_rad for g in run.result.gates]), tool_error=tool_error,
                     drift=np.linalg.norm(log.position - pose[:3], axis=-1), tool_tolerance_m=float(tool_tolerance_m),
                     joint_tolerance_rad=config.gate_threshold_rad, current=world.current_velocity(0.0),
-                    executed=run, planned_gates=int(planned), world=world)
+                    tool_target=tool_target, executed=run, planned_gates=int(planned), world=world)
 
 
 def follow_tool_path(robot: Robot, vehicle: VehicleSettings, q_docked, docked_pose, pose, *, key=None,

@@ -29,12 +29,9 @@ from ._settings import ControllerSettings, CurrentSettings, VehicleSettings
 
 __all__ = ["HoverLog", "HoverSim", "HoverWorld", "arm_motion"]
 
-# The video's camera: fixed, looking at a point below the starting pose (the arm hangs under
-# the hull) from 2.5 m, from the world's +x+y side, a little above; and the name of the hull's
-# outline at the starting pose that the video shows the drift against.
-_START_OUTLINE = "start_outline"
-_VIDEO_LOOKAT = (0.0, 0.0, -0.3)  # [m] from the starting position
-_VIDEO_DISTANCE, _VIDEO_AZIMUTH, _VIDEO_ELEVATION = 2.5, 135.0, -15.0  # [m, deg, deg]
+# The hull's outline at the starting pose, fixed in the world: what a video shows the drift
+# against.
+START_OUTLINE = "start_outline"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -143,7 +140,7 @@ class HoverWorld:
                                                     servos=servos))
         # The hull's outline at the starting pose, fixed in the world: what a video measures the
         # drift against. Drawn only (no mass, no contact, in no body: no force).
-        spec.worldbody.add_geom(name=_START_OUTLINE, type=mujoco.mjtGeom.mjGEOM_BOX, contype=0, conaffinity=0,
+        spec.worldbody.add_geom(name=START_OUTLINE, type=mujoco.mjtGeom.mjGEOM_BOX, contype=0, conaffinity=0,
                                 size=np.asarray(self.vehicle.size, dtype=float) / 2.0, pos=self.xyz,
                                 quat=frames.matrix_quat(frames.rpy_matrix(self.rpy)), rgba=(1.0, 1.0, 1.0, 0.15))
         return spec
@@ -244,19 +241,14 @@ class HoverWorld:
         """What was recorded since :meth:`prepare` (the rows up to the last control period)."""
         return HoverLog(**{k: np.array(v, dtype=float) for k, v in self._rows.items()})
 
-    def write_video(self, path, *, fps: float = 8.0, size: tuple[int, int] = (480, 360)):
-        """The recorded motion, vehicle and arm, as an MP4 at ``path`` seen from a camera fixed
-        near the starting pose (:func:`uvms_jax.video.write_video`; other joints, e.g. the
-        jaws, at their reference positions). Returns the :class:`uvms_jax.video.VideoInfo`."""
-        from uvms_jax.video import write_video
-
-        log, m = self.log(), self.model
+    def replay_qpos(self, log: HoverLog) -> np.ndarray:
+        """``(k, model.nq)`` the model's positions at the rows of ``log`` (this world's record):
+        the vehicle's pose and the arm's angles; other joints, e.g. the jaws, at their
+        reference positions. What a video of the run replays."""
+        m = self.model
         qpos = np.tile(m.qpos0, (len(log.time), 1))
         qpos[:, :3], qpos[:, 3:7], qpos[:, self._qadr] = log.position, log.quat, log.q
-        cam = mujoco.MjvCamera()
-        cam.lookat[:] = np.asarray(self.xyz) + _VIDEO_LOOKAT
-        cam.distance, cam.azimuth, cam.elevation = _VIDEO_DISTANCE, _VIDEO_AZIMUTH, _VIDEO_ELEVATION
-        return write_video(m, log.time, qpos, path, cam, fps=fps, size=size)
+        return qpos
 
 
 class HoverSim:

@@ -51,6 +51,8 @@ class HoverStageSettings:
         since the executor streams the plan unchanged.
       dwell_s, gripper_s, joint_tolerance_rad: that replay's dwell at each gate and gripper
         step [s], and its gate on the joints [rad].
+      frame_png: also write the video's frame at the gate of the largest tool error here (with
+        ``hw.plot``; relative: to the working directory), e.g. ``docs/img/hover_frame.png``.
     """
 
     current: tuple[float, float, float] = (0.0, 0.0, 0.0)
@@ -61,6 +63,7 @@ class HoverStageSettings:
     tool_tolerance_m: float = setting(0.01, gt=0)
     joint_tolerance_rad: float = setting(0.01, gt=0)
     coordinate: bool = True
+    frame_png: str | None = None
 
 
 @dataclasses.dataclass(frozen=True)

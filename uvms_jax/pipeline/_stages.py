@@ -327,15 +327,21 @@ def execute(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
                        res, notes)
 
 
+def _film_scene(s: PipelineSettings, flow: Flow) -> planning.Scene | None:
+    """The scene the videos of the hw and hover stages are drawn in: the planning stage's, else
+    the scenario's (the example plan was planned in the thesis cage of
+    ``configs/scenario/thesis_cage.yaml``), else None."""
+    if flow.task_plan is not None:
+        return flow.task_plan.scene
+    return planning.build_scene(flow.robot, s.scenario) if s.scenario else None
+
+
 def _run_video(s: PipelineSettings, flow: Flow, run_log: hw.RunLog, out: Path, res: dict) -> str:
     """``out/run.mp4``: the measured run in the planning stage's scene, else the scenario's
     (the example plan was planned in the thesis cage of ``configs/scenario/thesis_cage.yaml``);
     returns the summary note."""
-    if flow.task_plan is not None:
-        scene = flow.task_plan.scene
-    elif s.scenario:
-        scene = planning.build_scene(flow.robot, s.scenario)
-    else:
+    scene = _film_scene(s, flow)
+    if scene is None:
         return "No video of the run: no scene (run the plan stage or give a scenario)."
     t, q = run_log.measured(scene.robot.joint_names)
     if len(t) == 0:
@@ -399,15 +405,7 @@ def hovering(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
         res["coordination_removes"] = {k: 1.0 - coord[k] / plain[k] for k in ("max_tool_error_m", "max_gate_tool_error_m")}
     _plot_hover(runs, out / "hover.png")
     if s.hw.plot:
-        filmed = runs[main]
-        try:
-            video = filmed.world.write_video(out / "hover.mp4", fps=VIDEO_FPS, size=VIDEO_SIZE)
-            link = f"{out.name}/{video.path.name}"
-            video_note = (f"Video of the {main} run: [{link}]({link}) — the vehicle and the arm as simulated, "
-                          f"{video.fps:g} fps, {video.frames} frames, rendered in {video.seconds:.1f} s.")
-        except RuntimeError as e:  # no offscreen GL context on this machine
-            log.warning("no video of the hovering run: %s", e)
-            video_note = f"No video of the hovering run: {e}."
+        video_note = _hover_video(s, flow, runs[main], main, out, res)
     notes = [f"The scheduled plan on the vehicle floating at the docked pose (MuJoCo, `uvms_jax.hover`, docs/hover.md): "
              f"{len(vehicle.thrusters)} thrusters of ±{max(t.max_thrust for t in vehicle.thrusters):g} N, station "
              "keeping on x, y, z, ψ, the hull ballasted neutral and level for the arm at the plan's start. The BPL "
@@ -423,6 +421,36 @@ def hovering(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
              "`hover/hover.png`: drift and tool error over time."] + ([video_note] if s.hw.plot else [])
     return StageReport("hover", "Hovering instead of docked: the same motion on thrusters (docs/hover.md)", [table],
                        res, notes)
+
+
+def _hover_video(s: PipelineSettings, flow: Flow, run: hover.HoverRun, label: str, out: Path, res: dict) -> str:
+    """``out/hover.mp4`` in the hw video's scene, camera and frames, and ``out/hover_frame.png``
+    (also at ``hover.frame_png``): the frame at the gate of the largest tool error. Returns the
+    summary note."""
+    scene = _film_scene(s, flow)
+    if scene is None:
+        return "No video of the hovering run: no scene (run the plan stage or give a scenario)."
+    try:
+        video = hover.write_hover_video(run, scene, out / "hover.mp4", fps=VIDEO_FPS, size=VIDEO_SIZE)
+        worst = run.gate_times[np.argmax(run.gate_tool_error)] if len(run.gate_times) else run.log.time[-1]
+        still = hover.hover_frame(run, scene, float(min(worst, run.log.time[-1])), size=VIDEO_SIZE)
+    except RuntimeError as e:  # no offscreen GL context on this machine
+        log.warning("no video of the hovering run: %s", e)
+        return f"No video of the hovering run: {e}."
+    from PIL import Image
+
+    paths = [out / "hover_frame.png"] + ([Path(s.hover.frame_png)] if s.hover.frame_png else [])
+    for path in paths:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        Image.fromarray(still).save(path, optimize=True)
+    res["video_frames"], res["video_render_s"] = video.frames, video.seconds
+    link = f"{out.name}/{video.path.name}"
+    return (f"Video of the {label} run: [{link}]({link}) — the vehicle and the arm as simulated in the hw video's "
+            "scene, camera and frames (compare side by side), with the docked hull's outline (white), the tool's "
+            "target path (green: where the docked arm holds it) and its path so far (red), the current (blue "
+            f"arrow) and the time and the tool error at the last gate; {video.fps:g} fps, {video.frames} frames, "
+            f"rendered in {video.seconds:.1f} s. `{out.name}/hover_frame.png`: the frame at the gate of the largest "
+            "tool error.")
 
 
 def _plot_hover(runs: dict, path: Path) -> None:
