@@ -133,6 +133,34 @@ def test_moveit_scene_and_request(panda):
     assert req.start.shape == req.goal.shape == (7,) and req.opening == pytest.approx(0.065)
 
 
+def test_srdf_disabled_pairs_join_the_allowed_matrix(panda, tmp_path):
+    srdf = ROBOTS / "panda_description/srdf/panda.srdf"
+    allowed = P.load_srdf(srdf)
+    # The oracle: the file's elements read by a regular expression, not by an XML parser.
+    import re
+    expected = {frozenset(m) for m in re.findall(r'<disable_collisions link1="([^"]+)" link2="([^"]+)"', srdf.read_text())}
+    assert allowed == expected and frozenset(("panda_hand", "panda_link5")) in allowed
+    world = P.World(allowed=allowed)
+    side = P.VectorChecker(panda, P.World(), OPENING).side
+    groups = {links: k for k, links in enumerate(side.group_links)}
+    link5 = groups[frozenset({"panda_link5"})]
+    hand = next(k for links, k in groups.items() if "panda_hand" in links)
+    assert [link5, hand] in side.pairs(P.World()).tolist() and [link5, hand] not in side.pairs(world).tolist()
+    Q = np.random.default_rng(1).uniform(panda.lower, panda.upper, (400, panda.n_joints))
+    without, with_srdf = (P.VectorChecker(panda, w, OPENING).exact for w in (P.World(), world))
+    hit_without = np.array([bool(without.contacts(q[None])) for q in Q])
+    hit_with = np.array([bool(with_srdf.contacts(q[None])) for q in Q])
+    assert not np.any(hit_with & ~hit_without) and np.sum(hit_with) < np.sum(hit_without)
+    entity = tmp_path / "bad.srdf"
+    entity.write_text('<!DOCTYPE r [<!ENTITY x SYSTEM "file:///etc/passwd">]><robot>&x;</robot>')
+    assert P.load_srdf(entity) == frozenset()  # the entity is not resolved
+    for text, match in (("<robot><disable_collisions link1='a'/></robot>", "link1 and link2"),
+                        ("<urdf/>", "root element is <robot>"), ("<robot>", "not a readable SRDF")):
+        entity.write_text(text)
+        with pytest.raises(ValueError, match=match):
+            P.load_srdf(entity)
+
+
 def test_moveit_files_with_errors_are_refused_in_one_line(panda, tmp_path):
     bad = tmp_path / "scene.yaml"
     bad.write_text("world:\n  collision_objects:\n    - id: c\n      primitives: [{type: cone, dimensions: [1, 2]}]\n"

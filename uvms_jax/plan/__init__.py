@@ -35,7 +35,7 @@ as the thesis's test cage (thesis ch. 4–5).
   without a gripper takes its gripper steps);
 * query path: :func:`plan_query` → :class:`QueryResult` (a robot in a :class:`World`, compiled
   :class:`VectorChecker` with MuJoCo's :class:`ExactChecker`; MoveIt scenes and requests:
-  :func:`load_moveit_scene`, :func:`load_moveit_request`); a scene in a context as a world:
+  :func:`load_moveit_scene`, :func:`load_moveit_request`, an SRDF's disabled pairs :func:`load_srdf`); a scene in a context as a world:
   :func:`scene_world`, :func:`held_shapes`, :func:`scene_checker`, an edge on it:
   :func:`plan_scene_query` (``PlanSettings.checker = "query"``); many problems in one jitted
   call on a GPU: :func:`plan_batch` (:class:`BatchSettings`, :class:`BatchPlan`).
@@ -110,6 +110,7 @@ from uvms_jax.plan._write import write_task_graph
 from uvms_jax.plan._moveit import MotionRequest
 from uvms_jax.plan._moveit import load_moveit_request
 from uvms_jax.plan._moveit import load_moveit_scene
+from uvms_jax.plan._moveit import load_srdf
 from uvms_jax.plan._vector import ExactChecker
 from uvms_jax.plan._query import QueryResult
 from uvms_jax.plan._query import plan_query

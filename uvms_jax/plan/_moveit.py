@@ -1,6 +1,8 @@
 """Worlds and queries from MoveIt's messages as YAML: a ``PlanningScene`` (collision objects of
 primitives, the allowed collision matrix) and a ``MotionPlanRequest`` (start state, joint goal),
-as the MotionBenchMaker problem sets and ``moveit_msgs`` dumps hold them.
+as the MotionBenchMaker problem sets and ``moveit_msgs`` dumps hold them; and the self-collision
+pairs an SRDF disables (MoveIt folds them into the scene's allowed collision matrix, and so does
+:func:`load_srdf`'s caller: ``World(obstacles, allowed=world.allowed | load_srdf(path))``).
 
 MoveIt writes quaternions as ``x, y, z, w``; cylinders as ``[height, radius]``, cones likewise;
 boxes as full edges. Poses are in the planning frame, which is taken as the robot's base frame.
@@ -15,13 +17,14 @@ from typing import Any
 
 import numpy as np
 import yaml
+from lxml import etree
 
 from uvms_jax import frames
 from uvms_jax.plan._spec import Obstacle
 from uvms_jax.plan._worlds import World
 from uvms_jax.robot import Robot
 
-__all__ = ["MotionRequest", "load_moveit_request", "load_moveit_scene"]
+__all__ = ["MotionRequest", "load_moveit_request", "load_moveit_scene", "load_srdf"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -135,3 +138,24 @@ def load_moveit_request(path, robot: Robot) -> MotionRequest:
     opening = None if g is None or g.joint not in given else float(given[g.joint])
     return MotionRequest(vector(given, "start_state.joint_state"), vector(goal, "goal_constraints[0]"), opening,
                          source)
+
+
+def load_srdf(path) -> frozenset[frozenset[str]]:
+    """The link pairs an SRDF file's ``<disable_collisions link1= link2=>`` elements exempt from
+    self-collision checks (whatever their ``reason``), as a :class:`World`'s ``allowed`` takes
+    them. External entities are never resolved; a file that is not well-formed XML, or has no
+    ``<robot>`` root, is refused with a ValueError naming it."""
+    source = str(path)
+    try:
+        root = etree.parse(source, parser=etree.XMLParser(recover=False, resolve_entities=False, no_network=True)).getroot()
+    except (OSError, etree.XMLSyntaxError) as err:
+        raise ValueError(f"{source}: not a readable SRDF file ({err})") from None
+    if root.tag != "robot":
+        raise ValueError(f"{source}: an SRDF's root element is <robot>, got <{root.tag}>")
+    pairs = set()
+    for k, e in enumerate(root.iter("disable_collisions")):
+        a, b = e.get("link1"), e.get("link2")
+        if not a or not b:
+            raise ValueError(f"{source}: disable_collisions #{k} needs link1 and link2")
+        pairs.add(frozenset((a, b)))
+    return frozenset(pairs)
