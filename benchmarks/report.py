@@ -8,8 +8,12 @@ copied as ``demo_cpu.json``; the command that wrote a file is named next to its 
 figure in a block always has a file and a command behind it, and
 ``tests/test_benchmarks_report.py`` fails when a block no longer matches its files.
 
+Every other number in the prose of these documents carries a source marker
+(``benchmarks/sources.py``; docs/design.md, "Numbers and their sources").
+
 Usage: python benchmarks/report.py            # rewrite the blocks
        python benchmarks/report.py --check    # exit 1 naming the blocks that are out of date
+                                              # and the prose numbers without a source
 """
 
 from __future__ import annotations
@@ -991,14 +995,21 @@ def stale_blocks(text: str) -> list[str]:
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--check", action="store_true", help="only report blocks that are out of date")
+    parser.add_argument("--check", action="store_true",
+                        help="only report blocks that are out of date and prose numbers without a source")
     args = parser.parse_args()
     stale = {doc.name: stale_blocks(doc.read_text()) for doc in DOCUMENTS}
     if args.check:
+        sys.path.insert(0, str(ROOT / "benchmarks"))
+        import sources
+
         stale = {name: blocks for name, blocks in stale.items() if blocks}
         if stale:
             print(f"blocks out of date with benchmarks/results: {stale}", file=sys.stderr)
-        return 1 if stale else 0
+        unsourced = sources.check()
+        for name, problems in unsourced.items():
+            print("\n".join(f"{name}:{p}" for p in problems), file=sys.stderr)
+        return 1 if stale or unsourced else 0
     for doc in DOCUMENTS:
         doc.write_text(render(doc.read_text()))
     return 0
