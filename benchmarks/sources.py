@@ -58,7 +58,8 @@ _SKIP = [_GENERATED, _FENCE, re.compile(r"<!--.*?-->", re.S), re.compile(r"\$\$.
          re.compile(r"(?:\b(?:Tables?|Figs?\.?|Figures?|[Ee]qs?\.?|Sections?|Appendix|Algorithms?|Chapter|ch\.|"
                     r"steps?|issues?|PR|stage|Deliver)|§|#)\s*[A-Z]?\d+(?:\.\d+)*[a-z]?"
                     r"(?:\s*(?:[–,-]|and|to|or)\s*[A-Z]?\d+(?:\.\d+)*[a-z]?)*")]
-_NUMBER = re.compile(r"(?<![\w.-])[−-]?\d+(?:[  ,]\d{3})*(?:\.\d+)?(?:e[−-]?\d+)?(?![\w])(?!\.\d)(?!-(?:DOF|core|bit)\b)")
+_NUMBER = re.compile(r"(?<![\w.-])[−-]?\d+(?:[  ,]\d{3})*(?:\.\d+)?(?:e[−-]?\d+)?"
+                     r"(?![\w])(?!\.\d)(?!-(?:DOF|core|bit)\b)")
 _LIST_ITEM = re.compile(r"^\s*(?:[-*+]|\d+\.)\s")
 
 

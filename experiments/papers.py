@@ -98,7 +98,8 @@ def scenario_times() -> str:
 
     names = [row[0] for row in T22_TABLES["5.6"]]
     rows = ["| table | " + " | ".join(names) + " |", "|---|" + "---|" * len(names)]
-    rows += [f"| {t} | " + " | ".join(f"{row[-1]:g}" for row in T22_TABLES[t]) + " |" for t in ("5.6", "5.7", "5.8", "5.9")]
+    rows += [f"| {t} | " + " | ".join(f"{row[-1]:g}" for row in T22_TABLES[t]) + " |"
+             for t in ("5.6", "5.7", "5.8", "5.9")]
     return "\n".join(rows)
 
 

@@ -257,11 +257,15 @@ def _listed(cell: str) -> set[str]:
             kind = {"T": "Table", "F": "Fig.", "e": "eq."}[m.group(1)[0]]
         first, last = m.group(2), m.group(3) or m.group(2)
         if "." not in first or first.startswith("A."):
-            head, a, b = (first[:2], int(first[2:]), int(last[2:])) if first.startswith("A.") else ("", int(first), int(last))
+            if first.startswith("A."):
+                head, a, b = first[:2], int(first[2:]), int(last[2:])
+            else:
+                head, a, b = "", int(first), int(last)
             out |= {f"{kind} {head}{i}" for i in range(a, b + 1)}
         else:
             (ca, ia), (cb, ib) = (map(int, first.split(".")), map(int, last.split(".")))
-            out |= {f"{kind} {c}.{i}" for c in range(ca, cb + 1) for i in range(ia if c == ca else 1, (ib if c == cb else 30) + 1)}
+            out |= {f"{kind} {c}.{i}" for c in range(ca, cb + 1)
+                    for i in range(ia if c == ca else 1, (ib if c == cb else 30) + 1)}
     return out
 
 
