@@ -49,7 +49,7 @@ log = logging.getLogger("papers")
 ROOT = Path(__file__).resolve().parents[1]
 TEMPLATES = Path(__file__).resolve().parent / "papers_templates"
 SECTIONS = ("docking", "surrogate", "thesis")
-#: The FFBN-KCI size search at the paper's data size that the [D16] section quotes
+#: The FFBN-KCI size search at our training-set size that the [D16] section quotes
 #: (`benchmarks/surrogate_sizes.py`; too slow for a CPU run of this script).
 SIZE_SEARCH = ROOT / "benchmarks" / "results" / "surrogate_ffbn_kci_sizes_gpu.json"
 
