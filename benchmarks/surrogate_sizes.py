@@ -1,11 +1,11 @@
-"""How many hidden neurons FFBN-KCI needs at the dexterity paper's data size: the design loop's
+"""How many hidden neurons FFBN-KCI needs at our paper-sized run's data size: the design loop's
 test error per size, on the paper's Jacobian form (spatial, eq. 6) by default.
 
 Prints one JSON object (``--out`` also rewrites it as a file after every size, so a run stopped
 early keeps the sizes it finished). The datasets and the initialisations are the ones
-``experiments/surrogate.py`` (paper sizes: 6000 training and 1000 test
-samples) draws from the same seed: the KCI dataset from the run key's second split, FFBN-KCI's
-key folded in at its place in the settings' network list. The loop is the paper's (Fig. 6a,
+``experiments/surrogate.py`` (paper sizes: 6000 training samples, ours, as the paper gives
+none, and the paper's 1000 test samples) draws from the same seed: the KCI dataset from the
+run key's second split, FFBN-KCI's key folded in at its place in the settings' network list. The loop is the paper's (Fig. 6a,
 ``surrogate.design_ffbn``): sizes 1, 2, … up to L_iter, stopping at the first network whose
 maximum relative test error (eq. 21) is below E = 2 %. Where it stops before the paper's 25
 units, or ``--max-hidden`` is below 25, the paper's size is trained on its own as well (a fresh
@@ -39,7 +39,8 @@ def main() -> None:
     ap.add_argument("--jacobian", choices=("spatial", "geometric"), default="spatial",
                     help="Jacobian form of KCI (spatial: the dexterity paper's eq. 6)")
     ap.add_argument("--max-hidden", type=int, default=None, help="L_iter (default: the settings', 100)")
-    ap.add_argument("--n-train", type=int, default=None, help="training samples (default: the paper's, 6000)")
+    ap.add_argument("--n-train", type=int, default=None,
+                    help="training samples (default: configs/surrogate.yaml's, 6000; the paper gives none)")
     ap.add_argument("--out", type=Path, default=None, help="also write the record here after every size")
     ap.add_argument("--resume", type=Path, default=None,
                     help="a record of an earlier run (same settings) to continue after its largest size")

@@ -49,7 +49,7 @@ log = logging.getLogger("papers")
 ROOT = Path(__file__).resolve().parents[1]
 TEMPLATES = Path(__file__).resolve().parent / "papers_templates"
 SECTIONS = ("docking", "surrogate", "thesis")
-#: The FFBN-KCI size search at the paper's data size that the [D16] section quotes
+#: The FFBN-KCI size search at our training-set size that the [D16] section quotes
 #: (`benchmarks/surrogate_sizes.py`; too slow for a CPU run of this script).
 SIZE_SEARCH = ROOT / "benchmarks" / "results" / "surrogate_ffbn_kci_sizes_gpu.json"
 
@@ -88,7 +88,19 @@ def document(record: dict) -> str:
     body = [render(TEMPLATE_OF[name], **fields) for name, fields in record["sections"].items()]
     runs = sorted({(f["command"], f["device"]) for f in record["sections"].values()})
     footer = "\n---\nGenerated section by section: " + "; ".join(f"`{c}` on {d}" for c, d in runs) + ".\n"
-    return render("intro") + render("howto") + "\n".join(body) + "\n" + render("execution") + footer
+    return (render("intro") + render("howto") + "\n".join(body) + "\n" + render("execution") + "\n"
+            + render("items", t22_times=scenario_times()) + footer)
+
+
+def scenario_times() -> str:
+    """The execution-time column of [T22] Tables 5.6–5.9, as the thesis prints it, one row per table."""
+    from uvms_jax.papers import T22_TABLES
+
+    names = [row[0] for row in T22_TABLES["5.6"]]
+    rows = ["| table | " + " | ".join(names) + " |", "|---|" + "---|" * len(names)]
+    rows += [f"| {t} | " + " | ".join(f"{row[-1]:g}" for row in T22_TABLES[t]) + " |"
+             for t in ("5.6", "5.7", "5.8", "5.9")]
+    return "\n".join(rows)
 
 
 def device_name() -> str:

@@ -6,6 +6,7 @@ from __future__ import annotations
 import inspect
 import json
 import math
+import re
 import string
 import subprocess
 import sys
@@ -126,8 +127,9 @@ def test_templates_and_entry_point():
     """The fixed parts have no placeholders, the sections' are plain names; --help runs."""
     fields = {t.stem: {f[1].split(".")[0] for f in string.Formatter().parse(t.read_text(encoding="utf-8")) if f[1]}
               for t in TEMPLATES.glob("*.md")}
-    assert set(fields) == {"intro", "howto", "docking", "dexterity", "thesis", "execution"}
+    assert set(fields) == {"intro", "howto", "docking", "dexterity", "thesis", "execution", "items"}
     assert fields["intro"] == fields["howto"] == fields["execution"] == set()
+    assert fields["items"] == {"t22_times"}
     assert {"table3", "table4", "bound", "fig"} <= fields["docking"] and "weight_tables" in fields["thesis"]
     out = subprocess.run([sys.executable, str(ROOT / "experiments" / "papers.py"), "--help"], capture_output=True,
                          text=True, check=True, cwd=ROOT)
@@ -230,3 +232,49 @@ def test_only_recomputes_the_sections_named(tmp_path, monkeypatch):
     assert written["docking"]["command"] == "python experiments/papers.py --preset tiny --only docking"
     assert written["docking"]["seconds"] == 1.0 and written["docking"]["device"]
     assert "Computed by `python experiments/papers.py --preset tiny --only docking`" in (tmp_path / "reproduction.md").read_text()
+
+
+#: Every table and figure of the three papers, counted from their texts (the thesis's chapters
+#: 1–3 are background and its appendix A holds Tables A.1–A.5), and the thesis's eqs 5.1–5.12.
+PAPER_ITEMS = {
+    "D11": {f"Table {i}" for i in range(1, 5)} | {f"Fig. {i}" for i in range(1, 16)},
+    "D16": {f"Table {i}" for i in range(1, 6)} | {f"Fig. {i}" for i in range(1, 16)},
+    "T22": ({f"Table {t}" for t in ("2.1", "4.1", "4.2", "4.3")} | {f"Table 5.{i}" for i in range(1, 10)}
+            | {f"Table A.{i}" for i in range(1, 6)} | {f"Fig. 1.{i}" for i in range(1, 4)}
+            | {f"Fig. 2.{i}" for i in range(1, 7)} | {f"Fig. 3.{i}" for i in range(1, 19)}
+            | {f"Fig. 4.{i}" for i in range(1, 15)} | {f"Fig. 5.{i}" for i in range(1, 15)}
+            | {f"eq. 5.{i}" for i in range(1, 13)}),
+}
+
+
+def _listed(cell: str) -> set[str]:
+    """The items one cell of reproduction.md's §6 names: "Figs 5–8", "Figs 8, 10, 12, 14",
+    "Tables 5.6–5.9, A.1–A.5", "Figs 1.1–3.18, Table 2.1", "eqs 5.1–5.12"."""
+    out, kind = set(), None
+    for part in re.split(r",\s*", cell):
+        m = re.match(r"(?:(Tables?|Figs?\.?|eqs?\.?)\s*)?([A-Z]?[\d.]+)(?:–([A-Z]?[\d.]+))?$", part.strip())
+        if m.group(1):
+            kind = {"T": "Table", "F": "Fig.", "e": "eq."}[m.group(1)[0]]
+        first, last = m.group(2), m.group(3) or m.group(2)
+        if "." not in first or first.startswith("A."):
+            if first.startswith("A."):
+                head, a, b = first[:2], int(first[2:]), int(last[2:])
+            else:
+                head, a, b = "", int(first), int(last)
+            out |= {f"{kind} {head}{i}" for i in range(a, b + 1)}
+        else:
+            (ca, ia), (cb, ib) = (map(int, first.split(".")), map(int, last.split(".")))
+            out |= {f"{kind} {c}.{i}" for c in range(ca, cb + 1)
+                    for i in range(ia if c == ca else 1, (ib if c == cb else 30) + 1)}
+    return out
+
+
+def test_every_paper_item_is_listed():
+    doc = (ROOT / "docs" / "reproduction.md").read_text(encoding="utf-8")
+    items = doc[doc.index("## 6. Every table, figure and equation"):]
+    for paper, expected in PAPER_ITEMS.items():
+        table = items[items.index(f"**[{paper}]"):].split("\n\n")[1]
+        listed = set().union(*(_listed(row.split("|")[1]) for row in table.splitlines()[2:]))
+        if paper == "T22":  # ranges over chapters: keep the items the thesis has
+            listed &= expected
+        assert listed == expected, (paper, sorted(expected - listed), sorted(listed - expected))
