@@ -48,6 +48,7 @@ from uvms_jax.papers import PRESETS
 log = logging.getLogger("papers")
 ROOT = Path(__file__).resolve().parents[1]
 TEMPLATES = Path(__file__).resolve().parent / "papers_templates"
+RESULTS = ROOT / "benchmarks" / "results"
 SECTIONS = ("docking", "surrogate", "thesis")
 #: The FFBN-KCI size search at our training-set size that the [D16] section quotes
 #: (`benchmarks/surrogate_sizes.py`; too slow for a CPU run of this script).
@@ -85,7 +86,8 @@ def size_search_fields() -> dict:
 def document(record: dict) -> str:
     """reproduction.md from the record of its runs: ``{"sections": {name: fields}}``, each
     section's fields holding the ``command``, ``preset`` and ``device`` of the run that computed it."""
-    body = [render(TEMPLATE_OF[name], **fields) for name, fields in record["sections"].items()]
+    extra = {"surrogate": {"window_sweep": window_sweep()}}
+    body = [render(TEMPLATE_OF[name], **fields, **extra.get(name, {})) for name, fields in record["sections"].items()]
     runs = sorted({(f["command"], f["device"]) for f in record["sections"].values()})
     footer = "\n---\nGenerated section by section: " + "; ".join(f"`{c}` on {d}" for c, d in runs) + ".\n"
     return (render("intro") + render("howto") + "\n".join(body) + "\n" + render("execution") + "\n"
@@ -101,6 +103,35 @@ def scenario_times() -> str:
     rows += [f"| {t} | " + " | ".join(f"{row[-1]:g}" for row in T22_TABLES[t]) + " |"
              for t in ("5.6", "5.7", "5.8", "5.9")]
     return "\n".join(rows)
+
+
+def window_sweep() -> str:
+    """The [D16] sampling-window sweep (``benchmarks/surrogate_window.py``) as a paragraph and a
+    table: per setting, each network's units and largest relative test error (``*``: the 2 %
+    goal met), from the newest result file; empty text where there is none."""
+    files = sorted(RESULTS.glob("surrogate_window_*.json"))
+    if not files:
+        return ""
+    d = json.loads(files[-1].read_text(encoding="utf-8"))
+    nets = ("ffbn_w", "ffbn_kci", "rbfn_w", "rbfn_kci")
+    paper = " / ".join(str(d["paper"][n]["units"]) for n in nets)
+
+    def cell(net):
+        return "—" if net is None else f"{net['units']} ({100 * net['max_rel_test_error']:.1f} %{'*' if net['met_goal'] else ''})"
+
+    rows = ["| sampling (ours unless named) | FFBN-w | FFBN-KCI | RBFN-w | RBFN-KCI |", "|---|---|---|---|---|"]
+    rows += [f"| {s['name']} | " + " | ".join(cell(s["networks"].get(n)) for n in nets) + " |" for s in d["settings"]]
+    command = d["command"].split(" --out ")[0]
+    match, done = d["summary"]["all_networks_match"], d["summary"]["settings_done"]
+    single = sorted({f"{n} ({s['name']})" for s in d["settings"] for n, net in s["networks"].items() if net["matches_paper"]})
+    verdict = (f"{len(match) or 'None'} of the {done} settings reproduce{'s' if not match else ''} the paper's four sizes "
+               f"({paper} units at 2 %) together{': ' + ', '.join(match) if match else ''}; single networks that match: "
+               f"{', '.join(single) or 'none'}. The nearest in unit counts is \"{d['summary']['nearest']['name']}\"")
+    return (f"**The sampling window, swept.** `{command}` on {d['device']} (`{files[-1].relative_to(ROOT).as_posix()}`; "
+            f"unit caps FFBN {d['ffbn_max']}, RBFN {d['rbfn_max']}; a network matches the paper's when it meets the "
+            f"2 % goal within {100 * d['match_tolerance']:.0f} % of its unit count). {verdict}. Units (largest "
+            "relative test error; * goal met):\n\n"
+            + "\n".join(rows) + "\n")
 
 
 def device_name() -> str:
