@@ -13,6 +13,7 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import logging
+import os
 import xml.etree.ElementTree as ET
 from collections.abc import Mapping
 from pathlib import Path
@@ -270,6 +271,7 @@ def robot_from_config(cfg: Mapping[str, Any], where: str = "arm") -> Robot:
         not finite, out of range), named by its key path under ``where`` (a card's key after
         the card's file); ValueError: every error of :func:`load_robot`.
     """
+    cfg = {k: os.fspath(v) if isinstance(v, os.PathLike) else v for k, v in cfg.items()}  # a card's, a file's path
     given = check_arm(cfg, where).given()
     folder = Path.cwd()
     if "card" in given:
