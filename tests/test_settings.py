@@ -6,7 +6,7 @@ import dataclasses
 import pytest
 
 from uvms_jax import evo, pipeline, sched, surrogate
-from uvms_jax.settings import SettingsError, check_keys, from_mapping, setting
+from uvms_jax.settings import SettingsError, check_keys, from_mapping, read_yaml, setting
 
 
 @dataclasses.dataclass(frozen=True)
@@ -22,6 +22,7 @@ class Outer:
     names: tuple[str, ...] = setting(("a",), choices=("a", "b"))
     matrix: str = setting("builtin", choices=("builtin",), file=True)
     path: str | None = setting(None, file=True)
+    either: str | Inner | None = None
 
 
 @pytest.mark.parametrize(("mapping", "message"), [
@@ -32,6 +33,8 @@ class Outer:
     ({"names": ["a", "c"]}, "x.names[1]: expected one of ['a', 'b'], got 'c'"),
     ({"matrix": "nope.csv"}, "x.matrix: expected one of ['builtin'] or an existing file, got 'nope.csv'"),
     ({"path": "nope.csv"}, "x.path: no such file 'nope.csv' (relative to the working directory"),
+    ({"either": 3}, "x.either: expected a string or a mapping, got 3"),
+    ({"either": {"rate": 2}}, "x.either.rate: expected a value in [0, 1], got 2"),
     ({"inner": {"rate": -1, "chunk": -1}, "names": ["z"]},
      "x.inner.rate: expected a value in [0, 1], got -1.0; x.inner.chunk: expected a value > 0, got -1; "
      "x.names[0]: expected one of ['a', 'b'], got 'z'"),
@@ -48,6 +51,17 @@ def test_allowed_values_pass(tmp_path):
     s = from_mapping(Outer, {"inner": {"rate": 1, "counts": [1], "chunk": 3}, "names": ["b", "a"], "matrix": str(f),
                              "path": str(f)})
     assert s.inner == Inner(1.0, (1,), 3) and s.matrix == str(f)
+
+
+def test_yaml_files_are_read_in_one_line_naming_the_file(tmp_path):
+    (tmp_path / "ok.yaml").write_text("a: 1\n")
+    assert read_yaml(tmp_path / "ok.yaml") == {"a": 1}
+    (tmp_path / "latin1.yaml").write_bytes(b"a: \xe9\n")
+    for name, message in [("missing.yaml", "cannot read it (No such file or directory)"),
+                          ("latin1.yaml", "not UTF-8 text (invalid continuation byte at byte 3)")]:
+        with pytest.raises(SettingsError) as e:
+            read_yaml(tmp_path / name, "card")
+        assert str(e.value) == f"card {tmp_path / name}: {message}"
 
 
 def test_unknown_top_level_keys():

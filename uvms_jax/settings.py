@@ -39,8 +39,8 @@ from typing import Any, TypeVar
 
 import yaml
 
-__all__ = ["MAX_YAML_DEPTH", "MAX_YAML_NODES", "Check", "SettingsError", "bounded_yaml_loader", "check_fields", "check_keys",
-           "from_mapping", "load_yaml", "setting"]
+__all__ = ["MAX_YAML_BYTES", "MAX_YAML_DEPTH", "MAX_YAML_NODES", "Check", "SettingsError", "bounded_yaml_loader",
+           "check_fields", "check_keys", "from_mapping", "load_yaml", "read_yaml", "setting"]
 
 T = TypeVar("T")
 
@@ -49,6 +49,10 @@ T = TypeVar("T")
 # fill the memory of whatever expands it (a config library copying every alias).
 MAX_YAML_NODES = 100_000
 MAX_YAML_DEPTH = 64  # nested mappings and lists (a settings file has < 10; far below Python's recursion limit)
+# The largest YAML document read: a settings file or an arm card has a few kB, the largest plan
+# file (a JointTrajectory within MAX_YAML_NODES values) about 1 MB; PyYAML's safe loader reads
+# about 1 MB/s on a shared 2-core CPU, so no document takes more than a few seconds.
+MAX_YAML_BYTES = 4 << 20
 
 
 class SettingsError(ValueError):
@@ -189,6 +193,17 @@ def check_keys(mapping: Mapping[str, Any], known: Any, where: str = "") -> None:
                         f"known: {sorted(known)}")
 
 
+def _kind(tp: Any) -> str:
+    """A type in words, for a value that fits none of a union's alternatives."""
+    origin = typing.get_origin(tp)
+    if dataclasses.is_dataclass(tp) or origin in (dict, Mapping) or tp in (dict, Mapping):
+        return "a mapping"
+    if origin is tuple:
+        return "a list"
+    words = {bool: "true/false", int: "an integer", float: "a number", str: "a string"}
+    return words.get(tp, getattr(tp, "__name__", str(tp)))
+
+
 def _convert(tp: Any, value: Any, where: str) -> Any:
     origin = typing.get_origin(tp)
     args = typing.get_args(tp)
@@ -198,14 +213,17 @@ def _convert(tp: Any, value: Any, where: str) -> Any:
         if value is None and type(None) in args:
             return None
         errors = []
-        for a in args:
-            if a is type(None):
-                continue
+        alternatives = [a for a in args if a is not type(None)]
+        nested = [a for a in alternatives if dataclasses.is_dataclass(a)]
+        if isinstance(value, Mapping) and nested:  # a mapping for a dataclass: its own errors, by key
+            alternatives = nested
+        for a in alternatives:
             try:
                 return _convert(a, value, where)
             except SettingsError as e:
                 errors.append(str(e))
-        raise SettingsError(errors[0] if len(errors) == 1 else f"{where}: {value!r} fits none of {tp}")
+        raise SettingsError(errors[0] if len(errors) == 1 else
+                            f"{where}: expected {' or '.join(map(_kind, alternatives))}, got {value!r}")
     if dataclasses.is_dataclass(tp):
         if isinstance(value, tp):
             return value
@@ -310,6 +328,13 @@ def bounded_yaml_loader(base: type = yaml.SafeLoader) -> type:
     class BoundedLoader(base):
         depth = 0
 
+        def __init__(self, stream):
+            size = _stream_bytes(stream)
+            if size > MAX_YAML_BYTES:
+                raise yaml.YAMLError(f"{getattr(stream, 'name', '<text>')}: {size} bytes of YAML, more than the "
+                                     f"{MAX_YAML_BYTES} allowed")
+            super().__init__(stream)
+
         def compose_node(self, parent, index):
             self.depth += 1
             try:
@@ -341,13 +366,55 @@ def bounded_yaml_loader(base: type = yaml.SafeLoader) -> type:
     return BoundedLoader
 
 
+def _stream_bytes(stream: Any) -> int:
+    """The size of a YAML stream [bytes]: a string's, a file's (0 for another stream)."""
+    if isinstance(stream, str):
+        return len(stream.encode("utf-8", "surrogatepass"))
+    if isinstance(stream, bytes):
+        return len(stream)
+    try:
+        return os.fstat(stream.fileno()).st_size
+    except (AttributeError, OSError, ValueError):  # io.StringIO and the like: in memory already
+        return 0
+
+
 def load_yaml(text: str) -> Any:
-    """``text`` as YAML with the safe loader, bounded (:func:`bounded_yaml_loader`).
+    """``text`` as YAML with the safe loader, bounded (:func:`bounded_yaml_loader`; at most
+    :data:`MAX_YAML_BYTES`): the package's one way to read YAML.
 
     Raises:
-      yaml.YAMLError: malformed YAML, a repeated key, or an alias bomb (naming the line).
+      yaml.YAMLError: malformed YAML, a repeated key, an alias bomb, nesting too deep (naming
+        the line), or too long a text.
     """
     return yaml.load(text, Loader=_LOADER)  # noqa: S506  (a SafeLoader subclass)
+
+
+def read_yaml(path: str | os.PathLike, what: str = "") -> Any:
+    """The YAML file at ``path``, read with :func:`load_yaml` (``None`` for an empty file).
+
+    Raises:
+      SettingsError: (a ValueError) an unreadable file, a file larger than
+        :data:`MAX_YAML_BYTES`, or every refusal of :func:`load_yaml`; one line naming
+        ``what`` (e.g. ``"arm card"``), the file and the line.
+    """
+    name = f"{what} {os.fspath(path)}" if what else os.fspath(path)
+    try:
+        size = os.stat(path).st_size
+        if size > MAX_YAML_BYTES:
+            raise SettingsError(f"{name}: {size} bytes of YAML, more than the {MAX_YAML_BYTES} allowed")
+        with open(path, encoding="utf-8") as f:
+            text = f.read()
+        return load_yaml(text)
+    except OSError as e:
+        raise SettingsError(f"{name}: cannot read it ({e.strerror})") from None
+    except UnicodeDecodeError as e:
+        raise SettingsError(f"{name}: not UTF-8 text ({e.reason} at byte {e.start})") from None
+    except yaml.MarkedYAMLError as e:
+        mark = e.problem_mark or e.context_mark
+        line = f", line {mark.line + 1}" if mark is not None else ""
+        raise SettingsError(f"{name}{line}: {' '.join(str(e.problem or e.context).split())}") from None
+    except yaml.YAMLError as e:
+        raise SettingsError(f"{name}: {' '.join(str(e).split())}") from None
 
 
 _LOADER = bounded_yaml_loader()

@@ -15,12 +15,14 @@ USAGE_EXIT = 2  # a refused input: experiments/_cli.py, uvms-hw
 CASE_LIMIT_S = 10.0
 MEMORY_LIMIT_B = 1 << 30  # 1 GiB peak resident memory of the child (a JAX process starts near 0.4)
 
-# The child: runs `experiments/<script>` once per case as its own __main__ (runpy), each with
-# its stdout and stderr captured, and reports exit status, output, time, and finally its peak RSS.
+# The child: loads `experiments/<script>` once (its imports), then runs it once per case as its
+# own __main__ (runpy), each with its stdout and stderr captured, and reports exit status,
+# output, time, and finally its peak RSS.
 _DRIVER = r"""
 import contextlib, io, json, resource, runpy, sys, time
 script, cases = sys.argv[1], json.loads(sys.argv[2])
 sys.path.insert(0, str(__import__("pathlib").Path(script).parent))
+runpy.run_path(script, run_name="__imports__")  # the script's imports, outside every case's time
 out = []
 for args in cases:
     sys.argv = [script, *args]

@@ -10,7 +10,7 @@ import yaml
 from _battery import ROOT, one_line, run_cases
 
 from uvms_jax.plan import SceneSpec
-from uvms_jax.settings import SettingsError
+from uvms_jax.settings import MAX_YAML_BYTES, SettingsError
 
 THESIS = yaml.safe_load((ROOT / "configs" / "scenario" / "thesis_cage.yaml").read_text())
 
@@ -34,8 +34,10 @@ def _alias_bomb() -> str:
     return "\n".join(lines) + "\n"
 
 
+BIG = "defaults: [thesis_tables, _self_]\n# " + "x" * MAX_YAML_BYTES + "\n"  # a comment longer than any YAML read
 # (file name, its text) → a piece of the one line.
 FILES = {
+    "big": (BIG, f"big.yaml: {len(BIG)} bytes of YAML, more than the {MAX_YAML_BYTES} allowed"),
     "bomb": (_alias_bomb(), "bomb.yaml, line 1: with its aliases expanded, the document holds more than 100000"),
     "dup": ("defaults: [thesis_tables, _self_]\nname: dup\ngravity: 9.81\ngravity: 1.0\n",
             "dup.yaml, line 4: found duplicate key 'gravity'"),

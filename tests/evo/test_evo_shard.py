@@ -10,6 +10,11 @@ import numpy as np
 
 HERE = Path(__file__).resolve().parent
 SCENE_YAML = HERE.parents[1] / "configs" / "docking" / "scene" / "paper.yaml"
+# Each pose's fitness is the same computation on one device or four: measured bit-identical
+# (grid and GA optima, and the GA's poses) under XLA's default, AVX and SSE4.2 ISAs on an Intel
+# Xeon, while the optima differ by up to 8.4e-7 between those ISAs. The tolerance allows a
+# reassociated float32 sum, not a different search.
+FITNESS_RTOL = 1e-6
 
 
 def test_sharded_grid_and_ga_equal_single_device():
@@ -22,6 +27,6 @@ def test_sharded_grid_and_ga_equal_single_device():
     assert r["devices"] == 4 and r["mesh"] == 4
     assert r["grid_f"][0] > 0  # a feasible optimum exists on this grid
     np.testing.assert_allclose(r["grid_x"][1], r["grid_x"][0], rtol=0, atol=0)
-    np.testing.assert_allclose(r["grid_f"][1], r["grid_f"][0], rtol=1e-6)
-    np.testing.assert_allclose(r["ga_f"][1], r["ga_f"][0], rtol=1e-6)
+    np.testing.assert_allclose(r["grid_f"][1], r["grid_f"][0], rtol=FITNESS_RTOL)
+    np.testing.assert_allclose(r["ga_f"][1], r["ga_f"][0], rtol=FITNESS_RTOL)
     np.testing.assert_allclose(r["ga_x"][1], r["ga_x"][0], rtol=0, atol=0)

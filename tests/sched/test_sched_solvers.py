@@ -11,7 +11,16 @@ from uvms_jax import sched
 from _sched_bruteforce import brute_force_optimum
 
 COST_ATOL = 1e-9  # float64 sums of the same moves in another order
-GRASP_HIT_RATE = 0.95  # GRASP(1000) must find the brute-force optimum this often
+# A schedule's cost summed by score() and the GRASP kernels in float32 against a float64 sum:
+# ≤ 13 moves of costs in [0, 1] round to within 13·eps32 ≈ 1.5e-6 of the sum (a bound, not a
+# measurement); the score of a float64 solver's path against its own cost likewise, with margin.
+F32_COST_RTOL = 1e-5
+# GRASP(1000) must find the brute-force optimum this often over the 41 instances. Measured over
+# 8 sets of keys (offsets 0, 1000, …, 7000): 322 of 328 runs (98.2 %), 39 to 41 of 41 per set; the
+# keys used here (offset 0) give 39, the same under XLA's default, AVX and SSE4.2 ISAs. 0.90
+# allows 4 misses of 41: at a 98.2 % hit rate a set of keys has them with probability 0.09 %,
+# so the verdict does not hang on the draws (0.95, 2 misses, fails one set in 26).
+GRASP_HIT_RATE = 0.90
 
 
 def _instances():
@@ -83,7 +92,7 @@ def test_every_solver_returns_a_valid_schedule(solved):
         ok = [s for s in sols if s.feasible]
         scores = sched.score(p, sched.as_padded_paths([s.path for s in ok], p.max_path_len))
         assert (np.asarray(scores.reason) == sched.Reason.OK).all()
-        np.testing.assert_allclose(scores.cost, [s.cost for s in ok], rtol=1e-5)
+        np.testing.assert_allclose(scores.cost, [s.cost for s in ok], rtol=F32_COST_RTOL)
 
 
 def test_grasp_is_reproducible_and_uses_the_key():
@@ -98,7 +107,7 @@ def test_grasp_is_reproducible_and_uses_the_key():
     paths = np.where(np.asarray(a.paths) == p.n_nodes, -1, np.asarray(a.paths))
     s = sched.score(p, paths)
     assert (np.asarray(s.reason) == sched.Reason.OK).all()
-    np.testing.assert_allclose(s.cost, a.costs, rtol=1e-6)
+    np.testing.assert_allclose(s.cost, a.costs, rtol=F32_COST_RTOL)
 
 
 def test_grasp_one_element_rcl_is_greedy():
@@ -113,7 +122,7 @@ def test_grasp_one_element_rcl_is_greedy():
         assert sched._grasp.unpad(path, p.n_nodes) == greedy.path
         assert list(objs) == [v for v in greedy.path if v in p.objects]
         assert list(bases) == [v for v in greedy.path if v in p.bases]
-    np.testing.assert_allclose(built.cost, greedy.cost, rtol=1e-6)
+    np.testing.assert_allclose(built.cost, greedy.cost, rtol=F32_COST_RTOL)
 
 
 def test_greedy_reports_a_dead_end():

@@ -40,6 +40,7 @@ from pathlib import Path
 from uvms_jax import __version__, progress
 from uvms_jax.files import EXIT_INTERRUPTED, EXIT_TERMINATED, clear_running, sigterm_as_interrupt, write_atomic
 from uvms_jax.planfile import PlanError, load_plan, save_plan
+from uvms_jax.settings import SettingsError, read_yaml
 
 from ._check import check_plan
 from ._client import ReachArm
@@ -180,9 +181,11 @@ def build_parser() -> argparse.ArgumentParser:
 def _configs(args: argparse.Namespace) -> tuple[HwConfig, SimConfig]:
     hw, sim = HwConfig(), SimConfig()
     if args.config is not None:
-        import yaml
-
-        hw, sim = config_from_mapping(yaml.safe_load(args.config.read_text()) or {})
+        mapping = read_yaml(args.config, "--config")  # SettingsError naming the file and line
+        try:
+            hw, sim = config_from_mapping(mapping)
+        except ValueError as e:
+            raise SettingsError(f"--config {args.config}: {' '.join(str(e).split())}") from None
     over = {k: v for k, v in {
         "rate_hz": getattr(args, "rate", None), "gate_threshold_rad": getattr(args, "threshold", None),
         "gate_timeout_s": getattr(args, "gate_timeout", None),

@@ -21,7 +21,7 @@ from uvms_jax import plan as P
 from uvms_jax.papers._data import T22_PLANNER_TABLES, T22_SCENARIO_TABLES, T22_TABLES
 from uvms_jax.papers._preset import Preset, join_and, save_figure
 from uvms_jax.plotting import pyplot
-from uvms_jax.settings import from_mapping
+from uvms_jax.settings import from_mapping, read_yaml
 from uvms_jax.text import md_table
 
 #: Thesis algorithm name → our solver name.
@@ -33,21 +33,17 @@ METRIC_KEYS = ("planning_time", "joint_movement", "ee_distance", "security", "ma
 
 def weights(configs: Path, name: str):
     """The weight scenario ``configs/sched/weights/<name>.yaml``: ``sched.WeightSettings``."""
-    import yaml
-
-    return sched.WeightSettings(**yaml.safe_load((configs / "sched" / "weights" / f"{name}.yaml").read_text()))
+    return sched.WeightSettings(**read_yaml(configs / "sched" / "weights" / f"{name}.yaml"))
 
 
 def plan_thesis_cage(configs: Path, budget_s: float):
     """The thesis cage (``configs/scenario/thesis_cage.yaml``) planned with the three planners of
     Tables 5.2–5.4 under ``configs/plan/default.yaml``, ``budget_s`` [s] per edge:
     ``uvms_jax.plan.TaskGraphPlan``."""
-    import yaml
-
-    mapping = yaml.safe_load((configs / "plan" / "default.yaml").read_text())
+    mapping = read_yaml(configs / "plan" / "default.yaml")
     mapping.update(planners=list(T22_PLANNER_TABLES), budget_s=float(budget_s), render=False)
     settings = from_mapping(P.PlanSettings, mapping, "plan")
-    scenario = yaml.safe_load((configs / "scenario" / "thesis_cage.yaml").read_text())
+    scenario = read_yaml(configs / "scenario" / "thesis_cage.yaml")
     scene = P.build_scene(P.scenario_robot(scenario), scenario)
     return P.plan_task_graph(jax.random.PRNGKey(settings.seed), scene, settings)
 

@@ -16,13 +16,13 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 from lxml import etree
 
 from uvms_jax import frames
 from uvms_jax.plan._spec import Obstacle
 from uvms_jax.plan._worlds import World
 from uvms_jax.robot import Robot
+from uvms_jax.settings import read_yaml
 
 __all__ = ["MotionRequest", "load_moveit_request", "load_moveit_scene", "load_srdf"]
 
@@ -45,12 +45,7 @@ class MotionRequest:
 
 def _read(path) -> tuple[Mapping[str, Any], str]:
     path = Path(path)
-    try:
-        data = yaml.safe_load(path.read_text())
-    except OSError as err:
-        raise ValueError(f"cannot read {path}: {err.strerror}") from None
-    except yaml.YAMLError as err:
-        raise ValueError(f"{path} is not valid YAML: {str(err).splitlines()[0]}") from None
+    data = read_yaml(path)  # bounded; SettingsError (a ValueError) naming the file and line
     if not isinstance(data, Mapping):
         raise ValueError(f"{path} must hold a mapping (a MoveIt message), got {type(data).__name__}")
     return data, str(path)

@@ -344,9 +344,10 @@ def scenario_robot(scenario: Mapping[str, Any], where: str = "scenario") -> robo
     if not isinstance(arm, Mapping):
         raise SettingsError(f"{where}.arm: expected a mapping: the arm (card or description) and its mount")
     try:
-        robot = robots.robot_from_config({k: v for k, v in arm.items() if k not in MOUNT_KEYS})
+        robot = robots.robot_from_config({k: v for k, v in arm.items() if k not in MOUNT_KEYS}, f"{where}.arm")
     except ValueError as e:
-        raise SettingsError(f"{where}.arm: {' '.join(str(e).split())}") from None
+        message = " ".join(str(e).split())
+        raise SettingsError(message if message.startswith(f"{where}.arm") else f"{where}.arm: {message}") from None
     check_start_q(robot, scenario.get("start_q"), f"{where}.start_q")
     return robot
 

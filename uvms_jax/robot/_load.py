@@ -13,6 +13,7 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import logging
+import os
 import xml.etree.ElementTree as ET
 from collections.abc import Mapping
 from pathlib import Path
@@ -20,9 +21,9 @@ from typing import Any
 
 import mujoco
 import numpy as np
-import yaml
 
 from uvms_jax.frames import pose
+from uvms_jax.robot._card import ArmKeys, check_arm, read_card
 from uvms_jax.robot._geometry import description_shapes, fixed_to
 from uvms_jax.robot._model import BASE, BodyInertial, Finger, Gripper, Hardware, Robot
 from uvms_jax.robot._parse import (
@@ -34,7 +35,7 @@ from uvms_jax.robot._parse import (
     urdf_joint,
     urdf_path_joints,
 )
-from uvms_jax.settings import check_keys
+from uvms_jax.settings import SettingsError
 
 __all__ = ["DESCRIPTIONS", "load_arm", "load_robot", "robot_from_config", "shipped_arms"]
 
@@ -253,54 +254,47 @@ def load_robot(
     )
 
 
-
-_CONFIG_KEYS = {"card", "description", "tip", "base", "gripper", "gripper_velocity", "finger_size", "link_radius",
-                "buoyancy", "hardware", "name", "collision"}
-
-
 def shipped_arms() -> list[str]:
     """Names of the arm cards shipped with the package (``uvms_jax/robot/descriptions/*.yaml``)."""
     return sorted(p.stem for p in DESCRIPTIONS.glob("*.yaml"))
 
 
-def _card(card: str) -> tuple[dict, Path]:
-    """An arm card's mapping and its folder: a shipped name or a path to a YAML file."""
+def _card(card: str) -> tuple[ArmKeys, Path]:
+    """An arm card's checked settings and its folder: a shipped name or a path to a YAML file."""
     path = DESCRIPTIONS / f"{card}.yaml" if card in shipped_arms() else Path(card)
     if not path.is_file():
-        raise ValueError(f"arm card {card!r}: neither a shipped arm ({', '.join(shipped_arms())}) nor a YAML file")
-    try:
-        mapping = yaml.safe_load(path.read_text())
-    except yaml.YAMLError as err:
-        raise ValueError(f"arm card {path} is not valid YAML: {err}") from None
-    if not isinstance(mapping, dict):
-        raise ValueError(f"arm card {path} must be a mapping of arm settings, got {type(mapping).__name__}")
-    if "card" in mapping:
-        raise ValueError(f"arm card {path} must not name another card")
-    return mapping, path.parent
+        raise SettingsError(f"arm card {card!r}: neither a shipped arm ({', '.join(shipped_arms())}) nor a YAML file")
+    return read_card(path), path.parent
 
 
-def robot_from_config(cfg: Mapping[str, Any]) -> Robot:
+def robot_from_config(cfg: Mapping[str, Any], where: str = "arm") -> Robot:
     """A :class:`Robot` from an arm's settings: ``card`` (a shipped arm's name, e.g.
     ``bravo7``, or a YAML file of these settings) and/or ``description`` (a URDF or MJCF file;
     in a card, relative to the card) with the keyword arguments of :func:`load_robot` by
-    name; keys given beside a card override the card's. Unknown keys are refused."""
-    cfg = dict(cfg)
-    check_keys(cfg, _CONFIG_KEYS, "arm settings")
+    name; keys given beside a card override the card's.
+
+    Raises:
+      SettingsError: (a ValueError) a card that does not read, or a key of the settings or the
+        card that the schema refuses (:mod:`uvms_jax.robot._card`: unknown, of the wrong type,
+        not finite, out of range), named by its key path under ``where`` (a card's key after
+        the card's file); ValueError: every error of :func:`load_robot`.
+    """
+    cfg = {k: os.fspath(v) if isinstance(v, os.PathLike) else v for k, v in cfg.items()}  # a card's, a file's path
+    given = check_arm(cfg, where).given()
     folder = Path.cwd()
-    if cfg.get("card") is not None:
-        card, folder = _card(str(cfg.pop("card")))
-        check_keys(card, _CONFIG_KEYS - {"card"}, "arm card")
-        cfg = {**card, **{k: v for k, v in cfg.items() if v is not None}}
-    cfg.pop("card", None)
-    if not cfg.get("description"):
-        raise ValueError("arm settings need `card` (a shipped arm or a YAML card) or `description` (a URDF/MJCF file)")
-    if cfg.get("link_radius") is None:
-        raise ValueError(f"arm settings need link_radius [m] for {cfg['description']}: the radius of the capsules "
-                         "along its links (the collision model)")
-    kwargs = {k: v for k, v in cfg.items() if k != "description" and v is not None}
-    robot = load_robot(folder / str(cfg["description"]), **kwargs)
+    if "card" in given:
+        card, folder = _card(str(given.pop("card")))
+        given = {**card.given(), **given}
+    if not given.get("description"):
+        raise SettingsError(f"{where}: the settings need `card` (a shipped arm or a YAML card) or `description` (a "
+                            "URDF/MJCF file)")
+    if given.get("link_radius") is None:
+        raise SettingsError(f"{where}: the settings need link_radius [m] for {given['description']}: the radius of "
+                            "the capsules along its links (the collision model)")
+    description = given.pop("description")
+    robot = load_robot(folder / str(description), **given)
     if folder == DESCRIPTIONS:  # a shipped description: named the same on every machine
-        robot = dataclasses.replace(robot, source=f"uvms_jax/robot/descriptions/{cfg['description']}")
+        robot = dataclasses.replace(robot, source=f"uvms_jax/robot/descriptions/{description}")
     return robot
 
 
