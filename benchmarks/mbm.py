@@ -3,20 +3,27 @@ the 7 MBM families (700 problems), the query path (:func:`uvms_jax.plan.plan_que
 RRT-Connect on the fitted spheres, then MuJoCo's exact check of every returned path) beside the
 peer in the same process: OMPL's RRT-Connect with MuJoCo's exact state checks and OMPL's
 state-by-state motion checks (the project's MuJoCo planning path), on the same robot model,
-worlds and budget.
+worlds and budget; and, with ``--vamp``, VAMP (the vectorized planner of Thomason et al.,
+ICRA 2024: RRT-Connect and its simplification on its own sphere model of the Panda), fed the
+same worlds, starts and goals through its Python API.
 
 Per family and planner: problems valid in the model, solved, the median and p95 time per
 problem (planning + simplification, the budgeted part; MuJoCo's final check reported apart),
 and the returned paths re-checked exactly (MuJoCo, the real fingers, densified to 0.01 rad).
 Problems invalid in the model are counted by reason. The requests hold the fingers at 0.065 m,
-past the URDF's 0.04 m limit: every problem is planned with the fingers at 0.04 m. Prints one
-JSON object and writes it to ``--out``.
+past the URDF's 0.04 m limit: every problem is planned with the fingers at 0.04 m (VAMP keeps
+its own model's, at 0.065 m). VAMP's paths are re-checked the same way, and counted apart
+where they leave the URDF's joint limits (its model has wider ones). Prints one JSON object
+and writes it to ``--out``.
 
 The problems: MotionBenchMaker's Panda set (Chamzas et al., RA-L 2022), as distributed with the
 VAMP planner's resources (``problems/<family>_panda/{scene,request}NNNN.yaml``).
 
     .venv/bin/python benchmarks/mbm.py --problems PATH/problems [--budget 1.0] [--per-family 100]
-        [--peer] [--out benchmarks/results/mbm_cpu.json]
+        [--peer] [--vamp] [--out benchmarks/results/mbm_cpu.json]
+
+``--vamp`` needs the ``vamp-planner`` package, a peer for this benchmark only (not a
+dependency of the project): docs/planning.md, "VAMP as a peer", says how to build it.
 """
 
 from __future__ import annotations
@@ -30,6 +37,7 @@ from pathlib import Path
 
 import numpy as np
 
+from uvms_jax import frames
 from uvms_jax import plan as P
 from uvms_jax import robot as R
 from uvms_jax.plan._collision import densify
@@ -37,6 +45,9 @@ from uvms_jax.plan._collision import densify
 FAMILIES = ("table_pick", "table_under_pick", "box", "bookshelf_small", "bookshelf_tall", "bookshelf_thin", "cage")
 OPENING = 0.04  # [m] the URDF's largest finger opening (the requests' 0.065 m is past it)
 RECHECK = 0.01  # [rad] densification of the exact re-check of every returned path
+VAMP_LIMIT_TOL = 1e-6  # [rad] VAMP's states are float32: its endpoints may round past a limit by ~2e-7
+VAMP_MISSING = ("--vamp needs the vamp-planner package (a benchmark peer, not a project dependency): "
+                "build and install it as docs/planning.md, section 'VAMP as a peer', says")
 
 
 def panda() -> R.Robot:
@@ -72,6 +83,67 @@ def _ompl_mujoco(exact: P.ExactChecker, robot: R.Robot, start, goal, budget_s: f
     return solved, spent, path
 
 
+def _vamp_module():
+    """VAMP's Python package, imported only when asked for; SystemExit with how to get it."""
+    try:
+        import vamp
+    except ImportError:
+        raise SystemExit(VAMP_MISSING) from None
+    return vamp
+
+
+def vamp_environment(vamp, world: P.World, family: str):
+    """VAMP's ``Environment`` of ``world``: boxes as cuboids, spheres as spheres, and cylinders
+    (VAMP has no cylinder) as capsules of the same radius and axis segment, or in the ``box``
+    family as their bounding cuboid, as VAMP's own MotionBenchMaker set has them (the capsule's
+    caps would block the top-down grasp of that family's cylinder). Both enclose the cylinder."""
+    env = vamp.Environment()
+    for o in world.obstacles:
+        T = o.T_world
+        pos, rpy = T[:3, 3].tolist(), frames.matrix_rpy(T[:3, :3]).tolist()  # VAMP's Euler XYZ is URDF's rpy
+        if o.shape == "box":
+            env.add_cuboid(vamp.Cuboid(pos, rpy, [d / 2 for d in o.dims]))
+        elif o.shape == "sphere":
+            env.add_sphere(vamp.Sphere(pos, o.dims[0]))
+        elif o.shape == "cylinder" and family == "box":
+            env.add_cuboid(vamp.Cuboid(pos, rpy, [o.dims[0], o.dims[0], o.dims[1] / 2]))
+        elif o.shape == "cylinder":
+            env.add_capsule(vamp.Cylinder(pos, rpy, o.dims[0], o.dims[1]))
+        else:
+            raise ValueError(f"obstacle {o.name!r}: VAMP's peer takes boxes, spheres and cylinders, got {o.shape!r}")
+    return env
+
+
+class VampPeer:
+    """VAMP's RRT-Connect and simplification for its Panda, with its defaults (Halton samples,
+    reset per problem, so each problem's run is repeatable)."""
+
+    def __init__(self):
+        self.vamp = _vamp_module()
+        self.robot, self.planner, self.settings, self.simplify = \
+            self.vamp.configure_robot_and_planner_with_kwargs("panda", "rrtc")
+        self.sampler = self.robot.halton()
+
+    def valid(self, q: np.ndarray, env) -> bool:
+        """Whether VAMP's own model calls ``q (7,)`` [rad] free in ``env`` (bounds not checked)."""
+        return bool(self.robot.validate(q.tolist(), env))
+
+    def plan(self, env, start: np.ndarray, goal: np.ndarray) -> tuple[bool, float, float, np.ndarray]:
+        """(solved, seconds of the planning + simplification calls, seconds by VAMP's own clock,
+        ``(k, 7)`` path [rad]) from ``start`` to ``goal`` ``(7,)`` [rad]; the path is empty where
+        VAMP finds none. VAMP's clock starts after it allocates its trees (for ``max_samples``
+        states), which the calls' time includes."""
+        self.sampler.reset()
+        t0 = time.perf_counter()
+        result = self.planner(start.tolist(), goal.tolist(), env, self.settings, self.sampler)
+        if not result.solved:
+            return False, time.perf_counter() - t0, result.nanoseconds * 1e-9, np.zeros((0, 7))
+        simple = self.robot.simplify(result.path, env, self.simplify, self.sampler)
+        spent = time.perf_counter() - t0
+        own = (result.nanoseconds + simple.nanoseconds) * 1e-9
+        return True, spent, own, np.asarray(simple.path.numpy(), dtype=np.float64)
+
+
 def _summary(times: list[float], solved: int, valid: int, recheck_ok: int) -> dict:
     t = np.array(times) if times else np.array([np.nan])
     return {"valid": valid, "solved": solved, "success_rate": solved / valid if valid else None,
@@ -101,8 +173,46 @@ def state_rates(robot: R.Robot, problems: Path, batch: int = 4096) -> dict:
     return out
 
 
-def run(problems: Path, budget_s: float, per_family: int, peer: bool) -> dict:
+def _tally(rows: dict, name: str, done: bool, spent: float, free: bool, budget_s: float) -> None:
+    """Add one problem to planner ``name``'s (times, solved, re-checked free)."""
+    times, solved, ok = rows[name]
+    # A failure counts at the whole budget it was given (or what it spent, if more).
+    times.append(spent if done else max(budget_s, spent))
+    rows[name] = (times, solved + done, ok + free)
+
+
+def _vamp_problem(vamp: VampPeer, robot: R.Robot, exact: P.ExactChecker, env, start, goal, budget_s: float,
+                  rows: dict) -> dict:
+    """VAMP on one problem, tallied in ``rows``; its record's fields: times [ms], whether it
+    solved within the budget, stayed in the URDF's limits, and is free for MuJoCo, else the
+    deepest penetration [mm] and whether a finger is in every contact."""
+    done, spent, own, path = vamp.plan(env, start, goal)
+    done = done and spent <= budget_s
+    hits = exact.contacts(densify(path, RECHECK)) if done else []
+    inside = done and bool(np.all((path >= robot.lower - VAMP_LIMIT_TOL) & (path <= robot.upper + VAMP_LIMIT_TOL)))
+    _tally(rows, "vamp", done, spent, done and not hits, budget_s)
+    rec = {"vamp_ms": spent * 1e3, "vamp_own_ms": own * 1e3, "vamp_solved": done, "vamp_free": done and not hits,
+           "vamp_in_limits": inside, "vamp_model_valid": vamp.valid(start, env) and vamp.valid(goal, env)}
+    if hits:
+        rec.update(vamp_depth_mm=max(d for *_, d in hits) * 1e3,
+                   vamp_fingers_only=all("finger" in a or "finger" in b for _, a, b, _ in hits))
+    return rec
+
+
+def _vamp_family(records: list[dict], budget_s: float) -> dict:
+    """VAMP's extra counts over one family's records: paths in the URDF's limits, problems its
+    model calls invalid, paths whose every contact is a finger's, and its own clock [ms]."""
+    own = np.array([r["vamp_own_ms"] if r["vamp_solved"] else max(budget_s * 1e3, r["vamp_own_ms"])
+                    for r in records] or [np.nan])
+    return {"in_limits": sum(r["vamp_in_limits"] for r in records),
+            "model_invalid": sum(not r["vamp_model_valid"] for r in records),
+            "fingers_only_hits": sum(r.get("vamp_fingers_only", False) for r in records),
+            "own_median_ms": float(np.median(own)), "own_p95_ms": float(np.percentile(own, 95))}
+
+
+def run(problems: Path, budget_s: float, per_family: int, peer: bool, with_vamp: bool = False) -> dict:
     robot = panda()
+    vamp = VampPeer() if with_vamp else None
     P.seed_ompl(0)
     # Compile the kernels before any timing (Numba's cache makes later runs load them): a query
     # in an empty world runs every compiled function once.
@@ -110,11 +220,11 @@ def run(problems: Path, budget_s: float, per_family: int, peer: bool) -> dict:
     mid = (robot.lower + robot.upper) / 2
     P.plan_query(robot, P.World(), mid, mid + 0.1, opening=OPENING, budget_s=budget_s)
     compile_s = time.perf_counter() - t0
+    names = ["query"] + ["ompl_mujoco"] * peer + ["vamp"] * with_vamp
     families, invalid, records = {}, {}, []
     for family in FAMILIES:
         folder = problems / f"{family}_panda"
-        rows = {"query": ([], 0, 0), "ompl_mujoco": ([], 0, 0)}
-        valid = 0
+        rows, valid = {name: ([], 0, 0) for name in names}, 0
         for k in range(1, per_family + 1):
             world = P.load_moveit_scene(folder / f"scene{k:04d}.yaml")
             req = P.load_moveit_request(folder / f"request{k:04d}.yaml", robot)
@@ -140,21 +250,20 @@ def run(problems: Path, budget_s: float, per_family: int, peer: bool) -> dict:
             res = P.plan_query(robot, world, start, goal, opening=OPENING, budget_s=budget_s, checker=checker)
             rec = {"family": family, "problem": k, "query_ms": res.time_s * 1e3, "query_reason": res.reason,
                    "query_exact_ms": res.exact_s * 1e3, "iterations": res.iterations}
-            times, solved, ok = rows["query"]
-            # A failure counts at the whole budget it was given (or what it spent, if more).
-            times.append(res.time_s if res.success else max(budget_s, res.time_s))
-            rows["query"] = (times, solved + res.success, ok + (res.success and not exact.contacts(
-                densify(res.path, RECHECK))))
+            _tally(rows, "query", res.success, res.time_s, res.success and not exact.contacts(
+                densify(res.path, RECHECK)), budget_s)
             if peer:
                 done, spent, path = _ompl_mujoco(exact, robot, start, goal, budget_s)
-                free = done and not exact.contacts(densify(path, RECHECK))
-                times, solved, ok = rows["ompl_mujoco"]
-                times.append(spent if done else max(budget_s, spent))
-                rows["ompl_mujoco"] = (times, solved + done, ok + free)
+                _tally(rows, "ompl_mujoco", done, spent, done and not exact.contacts(densify(path, RECHECK)), budget_s)
                 rec.update(ompl_mujoco_ms=spent * 1e3, ompl_mujoco_solved=done)
+            if vamp is not None:
+                rec.update(_vamp_problem(vamp, robot, exact, vamp_environment(vamp.vamp, world, family), start, goal,
+                                         budget_s, rows))
             records.append(rec)
-        families[family] = {name: _summary(t, s, valid, ok) for name, (t, s, ok) in rows.items()
-                            if name == "query" or peer}
+        families[family] = {name: _summary(t, s, valid, ok) for name, (t, s, ok) in rows.items()}
+        if vamp is not None:
+            families[family]["vamp"].update(_vamp_family(
+                [r for r in records if r["family"] == family and "vamp_ms" in r], budget_s))
     spheres = R.collision_spheres(robot)
     return {"families": families, "invalid": invalid, "compile_s": compile_s, "records": records,
             "state_check": state_rates(robot, problems), "n_spheres": len(spheres), "sphere_excess_m": spheres.max_excess}
@@ -166,9 +275,12 @@ def main() -> None:
     ap.add_argument("--budget", type=float, default=1.0, help="time budget per problem [s]")
     ap.add_argument("--per-family", type=int, default=100)
     ap.add_argument("--peer", action="store_true", help="also run OMPL with MuJoCo's checks")
+    ap.add_argument("--vamp", action="store_true", help="also run VAMP (needs the vamp-planner package)")
     ap.add_argument("--out", type=Path, default=Path(__file__).parent / "results" / "mbm_cpu.json")
     args = ap.parse_args()
-    result = run(args.problems, args.budget, args.per_family, args.peer)
+    if args.vamp:
+        _vamp_module()  # before any work: a missing package is said at once
+    result = run(args.problems, args.budget, args.per_family, args.peer, args.vamp)
     all_query = [r for r in result["records"] if "query_ms" in r]
     result.update({
         "benchmark": "mbm", "device": f"{platform.machine()} CPU, Python {platform.python_version()}",
@@ -177,8 +289,16 @@ def main() -> None:
         "query_total": _summary([r["query_ms"] / 1e3 for r in all_query],
                                 sum(r["query_reason"] == "solved" for r in all_query), len(all_query),
                                 sum(f["query"]["rechecked_free"] for f in result["families"].values())),
-        "command": "python benchmarks/mbm.py --problems PROBLEMS" + (" --peer" if args.peer else ""),
+        "command": "python benchmarks/mbm.py --problems PROBLEMS" + (" --peer" if args.peer else "")
+                   + (" --vamp" if args.vamp else ""),
     })
+    if args.vamp:
+        mine = [r for r in result["records"] if "vamp_ms" in r]
+        rows = {"vamp": ([], 0, 0)}
+        for r in mine:
+            _tally(rows, "vamp", r["vamp_solved"], r["vamp_ms"] / 1e3, r["vamp_free"], args.budget)
+        times, solved, ok = rows["vamp"]
+        result["vamp_total"] = _summary(times, solved, len(mine), ok) | _vamp_family(mine, args.budget)
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(result, indent=1) + "\n")
     print(json.dumps({k: v for k, v in result.items() if k != "records"}, indent=1))

@@ -855,6 +855,7 @@ def mbm_benchmark() -> str:
     """The MotionBenchMaker Panda set on the CPU: the query path beside OMPL with MuJoCo."""
     d = _load("mbm_cpu.json")
     peer = "ompl_mujoco" in next(iter(d["families"].values()))
+    vamp = "vamp" in next(iter(d["families"].values()))
     rows = []
     for family, f in d["families"].items():
         q = f["query"]
@@ -863,11 +864,18 @@ def mbm_benchmark() -> str:
         if peer:
             o = f["ompl_mujoco"]
             row += [str(o["solved"]), str(o["rechecked_free"]), _ms(o["median_ms"]), _ms(o["p95_ms"]), _ms(o["max_ms"])]
+        if vamp:
+            v = f["vamp"]
+            row += [str(v["solved"]), str(v["rechecked_free"]), str(v["in_limits"]), _ms(v["median_ms"]),
+                    _ms(v["p95_ms"]), _ms(v["max_ms"]), f"{v['own_median_ms'] * 1e3:.0f}"]
         rows.append(row)
     t = d["query_total"]
     header = ["family", "valid", "solved", "median [ms]", "p95 [ms]", "max [ms]", "re-checked free"]
     if peer:
         header += ["OMPL+MuJoCo solved", "re-checked free", "median [ms]", "p95 [ms]", "max [ms]"]
+    if vamp:
+        header += ["VAMP solved", "re-checked free", "in the URDF's limits", "median [ms]", "p95 [ms]", "max [ms]",
+                   "its own clock, median [µs]"]
     invalid = ", ".join(f"{n} {reason}" for reason, n in sorted(d["invalid"].items()))
     checks = d["state_check"]
     spheres = sorted(c["spheres_us"] for c in checks.values())
@@ -884,11 +892,24 @@ def mbm_benchmark() -> str:
             f"median {_ms(t['median_ms'])} ms, p95 {_ms(t['p95_ms'])} ms, {t['rechecked_free']} of the {t['solved']} "
             f"returned paths free for MuJoCo. "
             f"Invalid in the model (MuJoCo on the description's geometry; limits in float64): {invalid}. "
-            f"Numba compile or cache load {d['compile_s']:.1f} s before any timing.\n\n"
+            f"Numba compile or cache load {d['compile_s']:.1f} s before any timing.\n\n" + _mbm_vamp(d) +
             f"Per state, one call over 4096 uniform random configurations (range over the seven families' first "
             f"worlds): the spheres alone {spheres[0]:.1f}–{spheres[-1]:.1f} µs ({maybe[-1]:.0%} or fewer "
             f"undecided), the verdicts with MuJoCo settling those {verdict[0]:.1f}–{verdict[-1]:.1f} µs, MuJoCo "
             f"alone {mujoco[0]:.1f}–{mujoco[-1]:.1f} µs.\n")
+
+
+def _mbm_vamp(d: dict) -> str:
+    """The VAMP peer's totals in the MotionBenchMaker run, if it ran (docs/planning.md, 'VAMP as a peer')."""
+    if "vamp_total" not in d:
+        return ""
+    v = d["vamp_total"]
+    return (f"VAMP (its own 59-sphere model, fingers at 0.065 m; docs/planning.md, \"VAMP as a peer\"): "
+            f"{v['solved']}/{v['valid']} solved, median {_ms(v['median_ms'])} ms per call from Python and "
+            f"{v['own_median_ms'] * 1e3:.0f} µs by its own clock, {v['rechecked_free']} of the {v['solved']} paths free "
+            f"for MuJoCo, a finger in every contact of {v['fingers_only_hits']} of the others, "
+            f"{v['in_limits']} inside the URDF's limits; its model calls {v['model_invalid']} of the problems "
+            f"invalid.\n\n")
 
 
 def mbm_summary() -> str:
@@ -902,6 +923,11 @@ def mbm_summary() -> str:
     if peer:
         line += (f"; OMPL's RRT-Connect with MuJoCo's checks solved {sum(p['solved'] for p in peer)} with family "
                  f"medians of {_ms(min(p['median_ms'] for p in peer))}–{_ms(max(p['median_ms'] for p in peer))} ms")
+    vamp = [f["vamp"] for f in d["families"].values() if "vamp" in f]
+    if vamp:
+        line += (f"; VAMP solved {sum(v['solved'] for v in vamp)} with family medians of "
+                 f"{_ms(min(v['median_ms'] for v in vamp))}–{_ms(max(v['median_ms'] for v in vamp))} ms, "
+                 f"{sum(v['rechecked_free'] for v in vamp)} of its paths free for MuJoCo")
     invalid = ", ".join(f"{n} {reason}" for reason, n in sorted(d["invalid"].items()))
     return (line + f". Invalid in the model: {invalid} (`benchmarks/results/mbm_cpu.json`, {d['device']}, "
             f"{d['budget_s']:g} s budget).\n")
