@@ -261,6 +261,22 @@ def _exact_near(g, other, exact, margin) -> bool:
     return False
 
 
+@numba.njit(cache=True, inline="always")
+def _undecided(q, g, others, exact, resolve, margin, posed):
+    """The verdict on group ``g`` and the geoms ``others`` (ids) where the spheres cannot tell:
+    MAYBE without the exact model (``resolve`` 0), else HIT where MuJoCo measures one of ``g``'s
+    geoms nearer than ``margin`` [m] to one of them, else FREE; with whether MuJoCo's model is
+    posed at ``q`` (once per state)."""
+    if not resolve:
+        return MAYBE, posed
+    if not posed:
+        _pose_exact(q, exact)
+    for k in range(others.shape[0]):
+        if _exact_near(g, others[k], exact, margin):
+            return HIT, True
+    return FREE, True
+
+
 @numba.njit(cache=True)
 def state_status(q, model, scratch) -> int:
     """The robot at ``q (n,)`` against the world and itself: :data:`FREE` (nothing nearer than
@@ -299,14 +315,10 @@ def state_status(q, model, scratch) -> int:
                 continue
             if _inner_hits_obstacle(g, o, model, R, t):
                 return HIT
-            if not resolve:
-                status = MAYBE
-                continue
-            if not posed:
-                _pose_exact(q, exact)
-                posed = True
-            if _exact_near(g, exact[6][m], exact, margin):
+            verdict, posed = _undecided(q, g, exact[6][m:m + 1], exact, resolve, margin, posed)
+            if verdict == HIT:
                 return HIT
+            status = max(status, verdict)
     for p in range(pairs.shape[0]):
         g1, g2 = pairs[p, 0], pairs[p, 1]
         reach = groups[g1, 6] + groups[g2, 6] + margin
@@ -316,16 +328,10 @@ def state_status(q, model, scratch) -> int:
             continue
         if _inner_groups_touch(g1, g2, model, R, t):
             return HIT
-        if not resolve:
-            status = MAYBE
-            continue
-        if not posed:
-            _pose_exact(q, exact)
-            posed = True
-        ranges, geoms = exact[4], exact[5]
-        for k in range(ranges[g2, 0], ranges[g2, 1]):
-            if _exact_near(g1, geoms[k], exact, margin):
-                return HIT
+        verdict, posed = _undecided(q, g1, exact[5][exact[4][g2, 0]:exact[4][g2, 1]], exact, resolve, margin, posed)
+        if verdict == HIT:
+            return HIT
+        status = max(status, verdict)
     return status
 
 
