@@ -18,7 +18,7 @@ import numpy as np
 
 from uvms_jax import evo, indices, kin
 from uvms_jax.papers._data import D11_BLOCK_SIZE, D11_P_BP, D11_TABLE3, D11_TABLE4, D11_TASK_SIZE
-from uvms_jax.papers._preset import Preset, save_figure
+from uvms_jax.papers._preset import Preset, join_and, save_figure
 from uvms_jax.papers.docking import CORNER_OF, READINGS, distance_d, grid_optimum, ik_branches
 from uvms_jax.plotting import pyplot
 from uvms_jax.text import md_table
@@ -145,7 +145,7 @@ def plot_final_pose(poses: dict, img: Path) -> str:
         ax.plot(*square.T, "-", color="C2", lw=1.5, label="task area K, L, M, N")
         pose = np.asarray(pose, np.float64)
         T = np.asarray(evo.base_transform(jnp.asarray(pose, jnp.float32)), np.float64)
-        p_d = T[:3, :3] @ np.asarray(D11_P_BP) + T[:3, 3]
+        p_d = _docking_point(pose)
         ax.scatter(*p_d, color="gold", s=70, ec="k", label="docking point p_d")
         ax.scatter(*pose[:3], color="red", s=60, ec="k", label="manipulator base")
         ax.scatter(pose[0], pose[1], 0.0, color="blue", s=50, ec="k", label="base projected on the top face")
@@ -158,6 +158,12 @@ def plot_final_pose(poses: dict, img: Path) -> str:
         ax.view_init(**VIEW)
         ax.legend(loc="upper left", fontsize=8)
     return save_figure(fig, img, "docking_final_pose.png")
+
+
+def _docking_point(pose) -> np.ndarray:
+    """[D11] eq. 5: the docking point ``p_d (3,)`` in G [m] of base pose ``(4,)``."""
+    pose = jnp.asarray(pose, jnp.float32)
+    return np.asarray(evo.docking_point(pose, jnp.asarray(D11_P_BP, jnp.float32)), np.float64)
 
 
 def reach_table(cases: dict) -> str:
@@ -182,9 +188,11 @@ def view_fields(p: Preset, img: Path) -> dict:
     t0 = time.perf_counter()
     _, ours = grid_optimum(p)
     cases = views(ours)
+    missed = [k for k, q in zip(POINTS, cases["paper run 1, our IK"][1]) if np.any(np.isnan(q))]
     return dict(
-        seconds=time.perf_counter() - t0, preset=p.name, ours_pose=[float(v) for v in ours],
-        ours_psi_deg=float(np.degrees(ours[3])), reach=reach_table(cases),
+        seconds=time.perf_counter() - t0, preset=p.name, ours_x=float(ours[0]), ours_y=float(ours[1]),
+        ours_z=float(ours[2]), ours_psi_deg=float(np.degrees(ours[3])), reach=reach_table(cases),
+        run1_missed=join_and(missed) or "none", ours_pd_z=float(_docking_point(ours)[2]),
         fig_arm=plot_arm_views(cases, img, side=False), fig_side=plot_arm_views(cases, img, side=True),
         fig_final=plot_final_pose({"paper run 1": D11_TABLE3[0, :4], "our optimum": ours}, img),
     )
