@@ -100,7 +100,6 @@ def plot_arm_views(cases: dict, img: Path, side: bool) -> str:
             ax = fig.add_subplot(len(cases), 4, i, **({} if side else {"projection": "3d"}))
             target = corners()[c]
             if side:
-                s = (np.array([[-1.0, -1.0], [1.0, 1.0]]) * D11_BLOCK_SIZE[0] / 2 - base) @ u
                 ax.axhspan(-0.3, 0.0, color="0.85", zorder=0)
                 ax.plot((target[:2] - base) @ u, 0.0, "*", color="C3", ms=12)
                 ax.set(xlim=(-0.15, 1.1), ylim=(-0.3, 0.9), xlabel="along base → task centre [m]", ylabel="z in G [m]")
