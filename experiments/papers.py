@@ -5,12 +5,15 @@
     python experiments/papers.py --out /tmp/repro   # write elsewhere (doc + img/papers/)
     python experiments/papers.py --only docking --preset paper   # one section again, the others kept
 
-Three sections, each computed by the package and written into its Markdown template
+Four sections, each computed by the package and written into its Markdown template
 (experiments/papers_templates/<section>.md, ``{placeholders}`` for the numbers):
 
 - docking paper [D11] (uvms_jax.papers.docking): Tables 3–4 under our frames, the bound on w of
   any 6 × 6 Jacobian of the arm, M_a under the readings of the paper we tried, headings against
   the bearing to the task centre, and the w_max maps of Figs 9–10;
+- its arm drawn (uvms_jax.papers.docking_views, ``docking_views``: a minute or two on a CPU):
+  the arm at K, L, M, N in 3-D and from the side (Figs 5–8, 12–15) and the final pose on the
+  block (Fig. 11), at the paper's run 1 and at our optimum;
 - dexterity paper [D16] (uvms_jax.papers.dexterity): Tables 3–5 for the paper's Jacobian form
   (spatial, eq. 6) and ours (geometric), FFBN/RBFN designed with the paper's loops, speed-ups
   against the project's fastest analytic path;
@@ -49,7 +52,7 @@ log = logging.getLogger("papers")
 ROOT = Path(__file__).resolve().parents[1]
 TEMPLATES = Path(__file__).resolve().parent / "papers_templates"
 RESULTS = ROOT / "benchmarks" / "results"
-SECTIONS = ("docking", "surrogate", "thesis")
+SECTIONS = ("docking", "docking_views", "surrogate", "thesis")
 #: The FFBN-KCI size search at our training-set size that the [D16] section quotes
 #: (`benchmarks/surrogate_sizes.py`; too slow for a CPU run of this script).
 SIZE_SEARCH = ROOT / "benchmarks" / "results" / "surrogate_ffbn_kci_sizes_gpu.json"
@@ -60,15 +63,17 @@ def render(name: str, **fields) -> str:
     return (TEMPLATES / f"{name}.md").read_text(encoding="utf-8").format(**fields)
 
 
-TEMPLATE_OF = {"docking": "docking", "surrogate": "dexterity", "thesis": "thesis"}
+TEMPLATE_OF = {"docking": "docking", "docking_views": "docking_views", "surrogate": "dexterity", "thesis": "thesis"}
 
 
 def fields_of(name: str, preset, img: Path, edges: Path | None) -> dict:
     """The computed fields of one section (``name`` of :data:`SECTIONS`)."""
-    from uvms_jax.papers import dexterity, docking, thesis
+    from uvms_jax.papers import dexterity, docking, docking_views, thesis
 
     if name == "docking":
         return docking.docking_fields(preset, img)
+    if name == "docking_views":
+        return docking_views.view_fields(preset, img)
     if name == "surrogate":
         return {**dexterity.dexterity_fields(preset, img), **size_search_fields()}
     return thesis.thesis_fields(preset, img, edges, ROOT / "configs")

@@ -71,6 +71,43 @@ def test_offset_chain_moves_the_tool_along_the_approach_axis():
     np.testing.assert_allclose(T_off[:3, :3], T[:3, :3], atol=1e-6)
 
 
+#: float32 FK of a metre-sized arm is exact to this [m].
+ARM_TOL = 1e-5
+#: kin.reaches accepts an IK solution whose tool lands this close to its target [m] (float32 IK).
+IK_TOL = 1e-4
+
+
+def test_arm_polyline_follows_the_stated_arm():
+    """At q = 0 the drawn points are the arm of [D11] §IV stretched along x of B, then turned by
+    ψ and moved to the pose; at any q the links keep their lengths."""
+    from uvms_jax.papers import docking_views
+
+    l0, l1, l2 = papers.D11_ARM_LENGTHS
+    pose = np.array([0.1, -0.2, 0.3, math.pi / 2])
+    pts = docking_views.arm_polyline(pose, np.zeros(6))
+    in_b = np.array([[0, 0, 0], [0, 0, l0], [l1, 0, l0], [l1 + l2, 0, l0], [l1 + l2 - docking_views.GRIPPER, 0, l0]])
+    np.testing.assert_allclose(pts, in_b[:, [1, 0, 2]] * [-1, 1, 1] + pose[:3], atol=ARM_TOL)  # R_z(90°): x → y
+    pts = docking_views.arm_polyline(pose, [0.3, -0.4, 1.1, 0.2, 0.7, -0.5])
+    np.testing.assert_allclose(np.linalg.norm(np.diff(pts, axis=0), axis=1)[:4],
+                               [l0, l1, l2, docking_views.GRIPPER], atol=ARM_TOL)
+
+
+def test_our_arms_put_the_wrist_on_each_reached_corner_pointing_down():
+    from uvms_jax.papers import docking_views
+
+    pose = papers.D11_TABLE3[0, :4]
+    q, w = docking_views.our_arms(pose)
+    reached = ~np.isnan(q).any(axis=1)
+    l0, l1, l2 = papers.D11_ARM_LENGTHS
+    shoulder = pose[:3] + [0, 0, l0]
+    np.testing.assert_array_equal(reached, np.linalg.norm(docking_views.corners() - shoulder, axis=1) < l1 + l2)
+    for c in np.flatnonzero(reached):
+        pts = docking_views.arm_polyline(pose, q[c])
+        np.testing.assert_allclose(pts[3], docking_views.corners()[c], atol=IK_TOL)
+        np.testing.assert_allclose(pts[3] - pts[4], [0, 0, -docking_views.GRIPPER], atol=IK_TOL)  # approach: −z of G
+    assert np.all(w[reached] > 0) and w[~reached] == 0
+
+
 def _thesis_raw_metrics():
     """Synthetic raw ``(5, 10, 10)`` metrics on the thesis graph (every allowed move)."""
     import jax
@@ -127,10 +164,11 @@ def test_templates_and_entry_point():
     """The fixed parts have no placeholders, the sections' are plain names; --help runs."""
     fields = {t.stem: {f[1].split(".")[0] for f in string.Formatter().parse(t.read_text(encoding="utf-8")) if f[1]}
               for t in TEMPLATES.glob("*.md")}
-    assert set(fields) == {"intro", "howto", "docking", "dexterity", "thesis", "execution", "items"}
+    assert set(fields) == {"intro", "howto", "docking", "docking_views", "dexterity", "thesis", "execution", "items"}
     assert fields["intro"] == fields["howto"] == fields["execution"] == set()
     assert fields["items"] == {"t22_times"}
     assert {"table3", "table4", "bound", "fig"} <= fields["docking"] and "weight_tables" in fields["thesis"]
+    assert {"fig_arm", "fig_side", "fig_final", "reach"} <= fields["docking_views"]
     out = subprocess.run([sys.executable, str(ROOT / "experiments" / "papers.py"), "--help"], capture_output=True,
                          text=True, check=True, cwd=ROOT)
     assert "--preset" in out.stdout and "tiny" in out.stdout
@@ -223,12 +261,12 @@ def test_only_recomputes_the_sections_named(tmp_path, monkeypatch):
     recomputed = {k: v for k, v in record["sections"]["docking"].items() if k not in ("command", "device")}
     monkeypatch.setattr(entry, "fields_of", lambda name, *a: dict(recomputed, seconds=1.0))
     monkeypatch.setattr(entry.jax.config, "update", lambda *a: None)  # keep this process's float32 default
-    with pytest.raises(SystemExit):  # nothing recorded yet: the other two sections would be lost
+    with pytest.raises(SystemExit):  # nothing recorded yet: the other sections would be lost
         entry.main(["--only", "docking", "--out", str(tmp_path)])
     (tmp_path / "reproduction.json").write_text(json.dumps(record), encoding="utf-8")
     assert entry.main(["--only", "docking", "--preset", "tiny", "--out", str(tmp_path)]) == 0
     written = json.loads((tmp_path / "reproduction.json").read_text(encoding="utf-8"))["sections"]
-    assert written["surrogate"] == record["sections"]["surrogate"] and written["thesis"] == record["sections"]["thesis"]
+    assert all(written[n] == record["sections"][n] for n in entry.SECTIONS if n != "docking")
     assert written["docking"]["command"] == "python experiments/papers.py --preset tiny --only docking"
     assert written["docking"]["seconds"] == 1.0 and written["docking"]["device"]
     assert "Computed by `python experiments/papers.py --preset tiny --only docking`" in (tmp_path / "reproduction.md").read_text()

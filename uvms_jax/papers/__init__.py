@@ -10,7 +10,8 @@ them with these tables):
 
 The analysis sits in submodules above every stage, imported by name (importing this package
 does not import the stages): :mod:`uvms_jax.papers.docking` (Tables 3–4, the
-bound on w, the readings, Figs 9–10 of [D11]), :mod:`uvms_jax.papers.dexterity` (Tables 3–5
+bound on w, the readings, Figs 9–10 of [D11]), :mod:`uvms_jax.papers.docking_views` (its
+Figs 5–8, 11 and 12–15: the arm at the corners and the final pose), :mod:`uvms_jax.papers.dexterity` (Tables 3–5
 and the design figures of [D16]) and :mod:`uvms_jax.papers.thesis` (Tables 5.2–5.9, A.1–A.5,
 Figs 5.8–5.12 of [T22]). Each ``*_fields`` function returns the placeholders of its section's
 Markdown template (experiments/papers_templates/), which experiments/papers.py fills.

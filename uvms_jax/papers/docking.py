@@ -75,6 +75,15 @@ def w_max_at(reading: Reading, poses, points) -> jax.Array:
     """``w_max`` ([D11] eq. 16) of ``reading`` at control points ``(k, 3)`` [m] in G from base
     poses ``(..., 4)``: ``(..., k)``; 0 where no IK branch is valid. The tool points down with
     its z axis along the pose's heading (our default)."""
+    _, valid, w = ik_branches(reading, poses, points)
+    return jnp.max(jnp.where(valid, w, 0.0), axis=-1)
+
+
+def ik_branches(reading: Reading, poses, points) -> tuple[jax.Array, jax.Array, jax.Array]:
+    """The arm's IK branches at control points ``(k, 3)`` [m] in G from base poses ``(..., 4)``
+    (tool as in :func:`w_max_at`): joint angles ``q (..., k, 8, 6)`` [rad] (0 on branches that
+    do not exist), ``valid (..., k, 8)`` (the branch exists and reaches its point) and
+    ``w (..., k, 8)`` of ``reading``'s Jacobian."""
     arm = kin.docking_arm(*reading.lengths)
     tool = offset_chain(arm, reading.tool_offset)
     poses = jnp.asarray(poses, jnp.float32)
@@ -86,8 +95,7 @@ def w_max_at(reading: Reading, poses, points) -> jax.Array:
     q = jnp.where(ik.valid[..., None], ik.q, 0.0)
     valid = ik.valid & kin.reaches(T[..., None, :, :], kin.fk(arm, q))
     J = kin.jacobian(tool, q)[..., : reading.rows, :]
-    w = indices.manipulability(J)
-    return jnp.max(jnp.where(valid, w, 0.0), axis=-1)
+    return q, valid, indices.manipulability(J)
 
 
 def area_m(reading: Reading, poses, chunk: int = 4096) -> np.ndarray:
@@ -109,6 +117,18 @@ def face_grid(p: Preset) -> np.ndarray:
     g = np.stack(np.meshgrid(xs, xs, zs, psis, indexing="ij"), -1).reshape(-1, 4)
     half = D11_TASK_SIZE / 2
     return g[~((np.abs(g[:, 0]) < half) & (np.abs(g[:, 1]) < half))]
+
+
+def grid_optimum(p: Preset) -> tuple[np.ndarray, np.ndarray]:
+    """Our optimum of eq. 15 over :func:`face_grid` (the GA of experiments/docking.py finds the
+    same apex): the grid ``(n, 4)`` and its best pose ``(4,)`` [m, rad]."""
+    t0 = time.perf_counter()
+    grid = face_grid(p)
+    m_grid = area_m(READINGS[0], grid)
+    ours = grid[np.argmax(fitness(m_grid, grid))]
+    log.info("docking: %d grid poses, best %s (M_a %.4f) in %.1f s", len(grid), ours, m_grid.max(),
+             time.perf_counter() - t0)
+    return grid, ours
 
 
 def distance_d(poses) -> np.ndarray:
@@ -242,12 +262,7 @@ def docking_fields(p: Preset, img: Path) -> dict:
     base = READINGS[0]
     arm = kin.docking_arm(*base.lengths)
     t0 = time.perf_counter()
-    # Our optimum of eq. 15 on the face grid (the GA of experiments/docking.py finds the same apex).
-    grid = face_grid(p)
-    m_grid = area_m(base, grid)
-    ours = grid[np.argmax(fitness(m_grid, grid))]
-    log.info("docking: %d grid poses, best %s (M_a %.4f) in %.1f s", len(grid), ours, m_grid.max(),
-             time.perf_counter() - t0)
+    grid, ours = grid_optimum(p)
 
     # Table 3: the paper's seven poses under our model, and the headings.
     corners = indices.control_points((0.0, 0.0, 0.0), D11_TASK_SIZE, 2)
