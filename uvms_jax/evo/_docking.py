@@ -22,17 +22,15 @@ from uvms_jax.evo._cmaes import run_cmaes
 from uvms_jax.evo._ga import BinaryGA, GAParams, ga_batch_compiled, run_ga
 from uvms_jax.evo._grid import distinct_best, grid_search, refine_grid_search, zoom_from
 from uvms_jax.evo._arm import ArmDockingProblem, ArmReport, arm_report, evaluate_arm
+from uvms_jax.evo._fitness import Problem
 from uvms_jax.evo._problem import DockingProblem, docking_point, evaluate, make_docking_problem
 from uvms_jax.evo._scenes import ArmTask, arm_docking_problem
-from uvms_jax.evo._settings import FIELDS, ArmSceneSettings, DockingSettings, GASettings, SceneSettings
+from uvms_jax.evo._settings import FIELDS, ArmSceneSettings, DockingSettings, GASettings, SceneSettings, term_weights
 from uvms_jax.evo._wmax import WmaxMap, wmax_map
 
 log = logging.getLogger(__name__)
 
 PERIODIC = (False, False, False, True)  # ψ wraps: the grid does not sample −π and π twice
-
-Problem = DockingProblem | ArmDockingProblem
-
 
 def docking_problem(scene: SceneSettings | ArmSceneSettings, dtype: str = "float32",
                     task: ArmTask | None = None, robot=None) -> Problem:
@@ -47,7 +45,8 @@ def docking_problem(scene: SceneSettings | ArmSceneSettings, dtype: str = "float
         return arm_docking_problem(scene, task, jnp.dtype(dtype), robot)
     if task is not None:
         raise ValueError("the paper's scene has its own task area: pass a task only with an arm scene")
-    return make_docking_problem(**dataclasses.asdict(scene), dtype=jnp.dtype(dtype))
+    plain = {f.name: getattr(scene, f.name) for f in dataclasses.fields(scene) if f.name != "terms"}
+    return make_docking_problem(**plain, terms=term_weights(scene.terms), dtype=jnp.dtype(dtype))
 
 
 def evaluate_any(problem: Problem, pose):
