@@ -31,6 +31,7 @@ os.environ.setdefault("MUJOCO_GL", "egl")  # headless offscreen rendering where 
 
 from uvms_jax import hw  # noqa: E402
 from uvms_jax import plan as P  # noqa: E402
+from uvms_jax.files import write_atomic  # noqa: E402
 from uvms_jax.settings import from_mapping  # noqa: E402
 
 log = logging.getLogger(__name__)
@@ -56,7 +57,7 @@ def main(cfg: DictConfig) -> dict:
         check = hw.check_plan(plan, robot)  # the hardware's dry run: limits, continuity, timing
         summary["plan_json"] = {"segments": check.n_segments, "estimated_s": check.estimated_s}
     summary["frames"] = P.render_frames(scene, task_plan.targets, out) if settings.render else 0
-    (out / "summary.json").write_text(json.dumps(summary, indent=1))
+    write_atomic(out / "summary.json", json.dumps(summary, indent=1))
     log.info("outputs in %s", out)
     return summary
 
