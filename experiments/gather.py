@@ -19,8 +19,9 @@ overrides shared by all jobs are listed above the table.
     python experiments/gather.py multirun/weights \\
         --columns 'solvers.*.cost' solvers.exact.path
 
-The result file defaults to the first of ``results.json`` (schedule, pipeline),
-``summary.json`` (docking, plan) and ``report.json`` (surrogate) found in the first job.
+The result file is ``results.json``, the summary every stage writes (docking, surrogate, plan,
+schedule, hardware run, pipeline); folders written before every stage used that name are read
+from their older names (``summary.json``, ``report.json``, ``result.json``).
 """
 
 from __future__ import annotations
@@ -39,7 +40,8 @@ import yaml
 from uvms_jax.files import write_atomic, write_csv
 from uvms_jax.settings import load_yaml
 
-DEFAULT_FILES = ("results.json", "summary.json", "report.json")
+# Every stage's summary, then its older names (docking and plan, surrogate, hardware run).
+DEFAULT_FILES = ("results.json", "summary.json", "report.json", "result.json")
 FIXED = ("job", "status")
 MAX_DEFAULT_COLUMNS = 12  # without --columns, the markdown keeps the first 12 varying columns
 

@@ -254,7 +254,7 @@ def test_bravo7_fast_preset_runs_end_to_end(tmp_path):
     summary = evo.write_docking(run, tmp_path)
     assert run.grid.fitness > 0 and run.refined_grid.fitness >= run.grid.fitness
     assert run.wmax_best is None and summary["ga_evaluations_per_s"] > 0
-    for name in ("best_pose.json", "docked_top_view.png", "convergence.png", "summary.json", "runs.csv"):
+    for name in ("best_pose.json", "docked_top_view.png", "convergence.png", "results.json", "runs.csv"):
         assert (tmp_path / name).exists()
 
 

@@ -22,7 +22,7 @@ def _optimum(g: GridOptimum) -> dict:
 
 
 def docking_summary(run: DockingRun) -> dict:
-    """Acceptance figures of a run (the contents of summary.json)."""
+    """Acceptance figures of a run (the contents of results.json)."""
     s = run.settings
     references = {"grid": run.grid.fitness, "refined_grid": run.refined_grid.fitness}
     f_ga = run.fitness
@@ -106,7 +106,7 @@ def write_docking(run: DockingRun, out: Path) -> dict:
     map) for the paper's scene, or
     best_pose.json (IK solution and w per target, the distinct candidate poses) and
     docked_top_view.png for an arm scene,
-    convergence.png, summary.json.
+    convergence.png, results.json.
     """
     out = Path(out)
     s = run.settings
@@ -139,5 +139,5 @@ def write_docking(run: DockingRun, out: Path) -> dict:
                      {"grid optimum": run.grid.fitness, "refined grid": run.refined_grid.fitness},
                      out / "convergence.png")
     summary = docking_summary(run)
-    write_atomic(out / "summary.json", json.dumps(summary, indent=2))
+    write_atomic(out / "results.json", json.dumps(summary, indent=2))
     return summary

@@ -1,4 +1,4 @@
-"""Files of a surrogate run: report.json, design and training figures, datasets and networks."""
+"""Files of a surrogate run: results.json, design and training figures, datasets and networks."""
 
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ def write_surrogates(run: SurrogateRun, out: Path) -> Path:
 
     Files::
 
-      report.json                  ``run.report``
+      results.json                  ``run.report``
       data/d1_{train,test}.npz/json    KCI datasets; data/d2_*: w datasets (with seed and chain)
       networks/<name>.npz/json     each network (with design seconds and whether it met the goal)
       ffbn_<index>_design.png      test error vs hidden neurons (Figs. 10/14)
@@ -38,5 +38,5 @@ def write_surrogates(run: SurrogateRun, out: Path) -> Path:
         plot, goal = plots[split_network_name(name)[0]]
         plot(name, d, goal, out / f"{name}_design.png")
     plot_training(run.designs, out / "training.png")
-    path = out / "report.json"
+    path = out / "results.json"
     return write_atomic(path, json.dumps(run.report, indent=2))
