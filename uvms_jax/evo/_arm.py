@@ -139,6 +139,37 @@ def make_arm_docking_problem(
     """
     dtype = dtype or jnp.zeros(()).dtype
     arr = lambda x: jnp.asarray(np.asarray(x, dtype=np.float64), dtype=dtype)
+    T_tool, group = _checked_targets(T_world_tool, group)
+    mount = np.asarray(T_vehicle_base, dtype=np.float64)
+    if mount.shape != (4, 4):
+        raise ValueError(f"T_vehicle_base must have shape (4, 4), got {mount.shape}")
+    low, high = np.asarray(low, dtype=np.float64), np.asarray(high, dtype=np.float64)
+    if low.shape != (4,) or high.shape != (4,) or np.any(low > high):
+        raise ValueError(f"pose box must be two (4,) corners with low <= high, got {low} and {high}")
+    if link_radius <= 0 or n_seeds < 1 or iterations < 1 or damping <= 0:
+        raise ValueError(f"need link_radius > 0, n_seeds >= 1, iterations >= 1, damping > 0, got "
+                         f"{link_radius}, {n_seeds}, {iterations}, {damping}")
+    boxes = [tuple(arr(x) for x in _checked_boxes(label, given))
+             for label, given in (("vehicle_boxes", vehicle_boxes), ("scene_boxes", scene_boxes))]
+    n_groups = int(group.max()) + 1
+    if world is None:
+        world = capsule_world(chain, link_radius, mount, vehicle_boxes, scene_boxes, n_groups, SPHERE_SPACING, dtype)
+    world = _checked_world(world, chain, n_groups, dtype)
+    lo, up = np.asarray(chain.lower, dtype=np.float64), np.asarray(chain.upper, dtype=np.float64)
+    u = np.asarray(jax.random.uniform(jax.random.key(seed), (n_seeds, chain.n_joints), dtype=jnp.float32))
+    return ArmDockingProblem(
+        chain=kin.with_dtype(chain, dtype), T_vehicle_base=arr(mount), T_world_tool=arr(T_tool),
+        group=jnp.asarray(group, dtype=jnp.int32), seeds=arr(lo + u * (up - lo)), pose_low=arr(low),
+        pose_high=arr(high), p_dock=arr(p_dock), p_i=arr(p_i),
+        objective=make_objective(paper_weights(a, b, terms), dtype), world=world,
+        T_vehicle_box=boxes[0][0], vehicle_half=boxes[0][1], T_world_box=boxes[1][0], scene_half=boxes[1][1],
+        damping=arr(damping), n_groups=n_groups, iterations=int(iterations),
+    )
+
+
+def _checked_targets(T_world_tool, group) -> tuple[np.ndarray, np.ndarray]:
+    """``T_world_tool (k, 4, 4)`` and ``group (k,)`` (default: each pose its own target) as
+    NumPy arrays, or a ValueError naming what is wrong."""
     T_tool = np.asarray(T_world_tool, dtype=np.float64)
     if T_tool.ndim != 3 or T_tool.shape[1:] != (4, 4) or T_tool.shape[0] < 1:
         raise ValueError(f"T_world_tool must have shape (k, 4, 4) with k >= 1, got {T_tool.shape}")
@@ -149,52 +180,26 @@ def make_arm_docking_problem(
     if group.shape != (k,) or not np.issubdtype(group.dtype, np.integer) or group.min() != 0 \
             or set(np.unique(group)) != set(range(int(group.max()) + 1)):
         raise ValueError(f"group must be ({k},) integers covering 0 … g − 1, got {group}")
-    mount = np.asarray(T_vehicle_base, dtype=np.float64)
-    if mount.shape != (4, 4):
-        raise ValueError(f"T_vehicle_base must have shape (4, 4), got {mount.shape}")
-    low, high = np.asarray(low, dtype=np.float64), np.asarray(high, dtype=np.float64)
-    if low.shape != (4,) or high.shape != (4,) or np.any(low > high):
-        raise ValueError(f"pose box must be two (4,) corners with low <= high, got {low} and {high}")
-    if link_radius <= 0 or n_seeds < 1 or iterations < 1 or damping <= 0:
-        raise ValueError(f"need link_radius > 0, n_seeds >= 1, iterations >= 1, damping > 0, got "
-                         f"{link_radius}, {n_seeds}, {iterations}, {damping}")
-    boxes = []
-    for label, (T_box, half) in (("vehicle_boxes", vehicle_boxes), ("scene_boxes", scene_boxes)):
-        T_box = np.asarray(T_box, dtype=np.float64).reshape(-1, 4, 4)
-        half = np.asarray(half, dtype=np.float64).reshape(-1, 3)
-        if T_box.shape[0] != half.shape[0] or np.any(half <= 0):
-            raise ValueError(f"{label}: need as many poses as positive half sizes, got {T_box.shape[0]} and {half}")
-        boxes.append((arr(T_box), arr(half)))
-    n_groups = int(group.max()) + 1
-    if world is None:
-        world = capsule_world(chain, link_radius, mount, vehicle_boxes, scene_boxes, n_groups, SPHERE_SPACING, dtype)
-    elif world.rows.radius.shape[0] != n_groups or int(jnp.max(world.rows.body, initial=0)) > chain.n_joints:
+    return T_tool, group
+
+
+def _checked_boxes(label: str, boxes) -> tuple[np.ndarray, np.ndarray]:
+    """``(T_box (m, 4, 4), half (m, 3))`` of ``boxes`` (a pose and positive half sizes each), or
+    a ValueError naming ``label``."""
+    T_box = np.asarray(boxes[0], dtype=np.float64).reshape(-1, 4, 4)
+    half = np.asarray(boxes[1], dtype=np.float64).reshape(-1, 3)
+    if T_box.shape[0] != half.shape[0] or np.any(half <= 0):
+        raise ValueError(f"{label}: need as many poses as positive half sizes, got {T_box.shape[0]} and {half}")
+    return T_box, half
+
+
+def _checked_world(world: SphereWorld, chain: Chain, n_groups: int, dtype) -> SphereWorld:
+    """``world`` in the problem's float dtype (indices and masks stay as they are), or a
+    ValueError when its rows are not the ``n_groups`` targets or name bodies beyond the arm."""
+    if world.rows.radius.shape[0] != n_groups or int(jnp.max(world.rows.body, initial=0)) > chain.n_joints:
         raise ValueError(f"world has {world.rows.radius.shape[0]} rows for {n_groups} targets, or bodies beyond the "
                          f"arm's {chain.n_joints}")
-    # The world in the problem's float dtype (indices and masks stay as they are).
-    world = jax.tree_util.tree_map(lambda x: x.astype(dtype) if jnp.issubdtype(x.dtype, jnp.floating) else x, world)
-    lo, up = np.asarray(chain.lower, dtype=np.float64), np.asarray(chain.upper, dtype=np.float64)
-    u = np.asarray(jax.random.uniform(jax.random.key(seed), (n_seeds, chain.n_joints), dtype=jnp.float32))
-    return ArmDockingProblem(
-        chain=kin.with_dtype(chain, dtype),
-        T_vehicle_base=arr(mount),
-        T_world_tool=arr(T_tool),
-        group=jnp.asarray(group, dtype=jnp.int32),
-        seeds=arr(lo + u * (up - lo)),
-        pose_low=arr(low),
-        pose_high=arr(high),
-        p_dock=arr(p_dock),
-        p_i=arr(p_i),
-        objective=make_objective(paper_weights(a, b, terms), dtype),
-        world=world,
-        T_vehicle_box=boxes[0][0],
-        vehicle_half=boxes[0][1],
-        T_world_box=boxes[1][0],
-        scene_half=boxes[1][1],
-        damping=arr(damping),
-        n_groups=n_groups,
-        iterations=int(iterations),
-    )
+    return jax.tree_util.tree_map(lambda x: x.astype(dtype) if jnp.issubdtype(x.dtype, jnp.floating) else x, world)
 
 
 def arm_tool_poses(problem: ArmDockingProblem, pose: Array) -> tuple[Array, Array, Array]:
