@@ -49,7 +49,7 @@ def _time(fn, repeat):
     return out, {"compile_and_first_s": first, "best_s": min(times), "median_s": statistics.median(times)}
 
 
-def main() -> None:
+def _parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--runs", type=int, default=7, help="independent GA runs in one batch")
     ap.add_argument("--population", type=int, default=None, help="GA population (default: config, 60)")
@@ -65,7 +65,75 @@ def main() -> None:
     ap.add_argument("--skip", default="", help="comma list of parts to skip: ga,grid,cmaes")
     ap.add_argument("--scene", default="paper", help="configs/docking/scene/<name>.yaml")
     ap.add_argument("--ga", default="paper", help="configs/ga/<name>.yaml")
-    args = ap.parse_args()
+    return ap
+
+
+def _ga_part(args, problem, ga_parts, n_points: int) -> dict:
+    """The GA's ``args.runs`` runs in one batch, timed."""
+    codec, ga, params = ga_parts
+    keys = jax.random.split(jax.random.key(0), args.runs)
+    res, t = _time(lambda: evo.run_ga_batch(keys, problem, codec, ga, params), args.repeat)
+    evals = int(np.sum(res.evaluations))
+    return {
+        "runs": args.runs,
+        "population": ga.population_size,
+        "max_generations": ga.max_generations,
+        "eval_chunk": ga.eval_chunk,
+        "generations": np.asarray(res.generations).tolist(),
+        "evaluations": np.asarray(res.evaluations).tolist(),
+        "best_fitness": np.asarray(res.best_fitness).tolist(),
+        **t,
+        "evaluations_per_s": evals / t["best_s"],
+        "ik_targets_per_s": evals * n_points / t["best_s"],
+    }
+
+
+def _grid_part(args, problem, n_points: int) -> dict:
+    """The dense grid, compiled on a tiny grid, then timed once on the full one (it is long on
+    a CPU; the compiled search does not depend on the grid size)."""
+    counts = tuple(int(c) for c in args.grid.split(","))
+    low, high = problem.pose_low, problem.pose_high
+    periodic = evo.grid_periodicity(problem)
+    t0 = time.perf_counter()
+    jax.block_until_ready(evo.grid_search(problem, low, high, (2, 2, 2, 2), periodic, args.chunk))
+    t_compile = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    res = jax.block_until_ready(evo.grid_search(problem, low, high, counts, periodic, args.chunk))
+    t = {"compile_and_tiny_grid_s": t_compile, "best_s": time.perf_counter() - t0}
+    n = int(np.prod(counts))
+    return {
+        "counts": list(counts),
+        "candidates": n,
+        "chunk": args.chunk,
+        "best_fitness": float(res.fitness),
+        "pose": np.asarray(res.x).tolist(),
+        **t,
+        "candidates_per_s": n / t["best_s"],
+        "ik_targets_per_s": n * n_points / t["best_s"],
+    }
+
+
+def _cmaes_part(args, problem) -> dict:
+    """CMA-ES's ``args.cma_runs`` runs, timed."""
+    ckeys = jax.random.split(jax.random.key(1), args.cma_runs)
+    res, t = _time(
+        lambda: evo.run_cmaes(ckeys, problem, problem.pose_low, problem.pose_high,
+                              args.cma_population, args.cma_generations, 0.3),
+        args.repeat,
+    )
+    evals = args.cma_runs * args.cma_population * args.cma_generations
+    return {
+        "runs": args.cma_runs,
+        "population": args.cma_population,
+        "generations": args.cma_generations,
+        "best_fitness": np.asarray(res.best_fitness).tolist(),
+        **t,
+        "evaluations_per_s": evals / t["best_s"],
+    }
+
+
+def main() -> None:
+    args = _parser().parse_args()
     skip = set(filter(None, args.skip.split(",")))
 
     with initialize_config_dir(config_dir=str(ROOT / "configs"), version_base="1.3"):
@@ -76,7 +144,7 @@ def main() -> None:
     g = dataclasses.replace(g, population_size=args.population or g.population_size,
                             max_generations=args.max_generations or g.max_generations, eval_chunk=eval_chunk)
     problem = evo.docking_problem(scene, args.dtype)
-    codec, ga, params = evo.make_ga(g, problem)
+    ga_parts = evo.make_ga(g, problem)
     arm = isinstance(problem, evo.ArmDockingProblem)
     # IK targets per evaluation: control points (closed form), or tool poses × seeds (numerical).
     n_points = int(problem.T_world_tool.shape[0] * problem.seeds.shape[0]) if arm else int(problem.p_control.shape[0])
@@ -95,71 +163,16 @@ def main() -> None:
         **({"ik_iterations": problem.iterations} if arm else {}),
         "load_average_start": os.getloadavg(),
     }
-
     if "ga" not in skip:
-        keys = jax.random.split(jax.random.key(0), args.runs)
-        res, t = _time(lambda: evo.run_ga_batch(keys, problem, codec, ga, params), args.repeat)
-        gens = np.asarray(res.generations)
-        evals = int(np.sum(res.evaluations))
-        report["ga"] = {
-            "runs": args.runs,
-            "population": ga.population_size,
-            "max_generations": ga.max_generations,
-            "eval_chunk": ga.eval_chunk,
-            "generations": gens.tolist(),
-            "evaluations": np.asarray(res.evaluations).tolist(),
-            "best_fitness": np.asarray(res.best_fitness).tolist(),
-            **t,
-            "evaluations_per_s": evals / t["best_s"],
-            "ik_targets_per_s": evals * n_points / t["best_s"],
-        }
-
+        report["ga"] = _ga_part(args, problem, ga_parts, n_points)
     if "grid" not in skip:
-        counts = tuple(int(c) for c in args.grid.split(","))
-        low, high = problem.pose_low, problem.pose_high
-        periodic = evo.grid_periodicity(problem)
-        # The compiled search does not depend on the grid size: compile on a tiny grid, then
-        # time the full one once (it is long on a CPU).
-        t0 = time.perf_counter()
-        jax.block_until_ready(evo.grid_search(problem, low, high, (2, 2, 2, 2), periodic, args.chunk))
-        t_compile = time.perf_counter() - t0
-        t0 = time.perf_counter()
-        res = jax.block_until_ready(evo.grid_search(problem, low, high, counts, periodic, args.chunk))
-        t_run = time.perf_counter() - t0
-        t = {"compile_and_tiny_grid_s": t_compile, "best_s": t_run}
-        n = int(np.prod(counts))
-        report["grid"] = {
-            "counts": list(counts),
-            "candidates": n,
-            "chunk": args.chunk,
-            "best_fitness": float(res.fitness),
-            "pose": np.asarray(res.x).tolist(),
-            **t,
-            "candidates_per_s": n / t["best_s"],
-            "ik_targets_per_s": n * n_points / t["best_s"],
-        }
-
+        report["grid"] = _grid_part(args, problem, n_points)
     if "cmaes" not in skip and args.cma_runs > 0:
-        ckeys = jax.random.split(jax.random.key(1), args.cma_runs)
-        res, t = _time(
-            lambda: evo.run_cmaes(ckeys, problem, problem.pose_low, problem.pose_high,
-                                  args.cma_population, args.cma_generations, 0.3),
-            args.repeat,
-        )
-        evals = args.cma_runs * args.cma_population * args.cma_generations
-        report["cmaes"] = {
-            "runs": args.cma_runs,
-            "population": args.cma_population,
-            "generations": args.cma_generations,
-            "best_fitness": np.asarray(res.best_fitness).tolist(),
-            **t,
-            "evaluations_per_s": evals / t["best_s"],
-        }
+        report["cmaes"] = _cmaes_part(args, problem)
     if "ga" in report and "cmaes" in report:
         report["ga_over_cmaes_evaluations_per_s"] = report["ga"]["evaluations_per_s"] / report["cmaes"]["evaluations_per_s"]
     report["load_average_end"] = os.getloadavg()
     print(json.dumps(report))
-
 
 if __name__ == "__main__":
     main()

@@ -134,7 +134,7 @@ def measure_peer(q, check, w_fn, peer_w, peer_kci, tdev, sync, repeats) -> dict:
     return out
 
 
-def main() -> None:
+def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--device", default="cpu", choices=["cpu", "cuda"])
     parser.add_argument("--batches", default="1e3,1e4,1e5,1e6")
@@ -145,7 +145,47 @@ def main() -> None:
     parser.add_argument("--tip", default=None, help="tip link of --urdf (default: its only leaf)")
     parser.add_argument("--task", default="full", help="full, position, orientation or rows, e.g. vx,vy,vz,wz")
     parser.add_argument("--accuracy-poses", type=int, default=2000, help="near-singular poses of the accuracy check")
-    args = parser.parse_args()
+    return parser
+
+
+def _gram_fns(chain, rows_) -> dict:
+    """The previous (Gram) forms of w and KCI through the same paths: one Pallas kernel on a
+    GPU, else the XLA fusion of the unrolled Jacobian, as they ran."""
+    gram_xla = {"w": lambda chain, q, rows: gram_w_from_rows([kin.jacobian_rows(chain, q)[r] for r in rows]),
+                "kci": lambda chain, q, rows: gram_kci_from_rows([kin.jacobian_rows(chain, q)[r] for r in rows])}
+    gram_form = {"w": gram_w_from_rows, "kci": gram_kci_from_rows}
+
+    def gram_fn(index):
+        if jax.default_backend() == "gpu":
+            return jax.jit(lambda q: _gpu.index_on_gpu(gram_form[index], gram_xla[index], chain, q, rows_))
+        return jax.jit(lambda q: gram_xla[index](chain, q, rows_))
+
+    return {index: gram_fn(index) for index in gram_form}
+
+
+def _peer_fns(chain, task_idx: list[int], device: str) -> tuple:
+    """pytorch-kinematics' w and KCI of the chain on ``device``, the torch device and a sync."""
+    tdev = torch.device(device)
+    peer = pk.build_serial_chain_from_urdf(kin.to_urdf(chain), "tool").to(dtype=torch.float32, device=tdev)
+
+    def peer_w(q):
+        J = peer.jacobian(q)[:, task_idx]
+        G = J @ J.transpose(-1, -2) if J.shape[-2] <= J.shape[-1] else J.transpose(-1, -2) @ J
+        return torch.sqrt(torch.clamp(torch.linalg.det(G), min=0.0))
+
+    def peer_kci(q):
+        s = torch.linalg.svdvals(peer.jacobian(q)[:, task_idx])
+        return s[..., -1] / s[..., 0]
+
+    def sync():
+        if device == "cuda":
+            torch.cuda.synchronize()
+
+    return peer_w, peer_kci, tdev, sync
+
+
+def main() -> None:
+    args = _parser().parse_args()
     batches = [int(float(b)) for b in args.batches.split(",")]
     task = args.task if args.task in ("full", "position", "orientation") else tuple(args.task.split(","))
     task_idx = list(indices.task_rows(task))
@@ -159,37 +199,11 @@ def main() -> None:
     rows_ = indices.task_rows(task)
     xla_fns = {"w": jax.jit(lambda q: _manipulability_of(chain, q, rows_)),
                "kci": jax.jit(lambda q: _kci_of(chain, q, rows_))}
-    # The previous (Gram) forms through the same paths: one Pallas kernel on a GPU, else the XLA
-    # fusion of the unrolled Jacobian, as they ran.
-    gram_xla = {"w": lambda chain, q, rows: gram_w_from_rows([kin.jacobian_rows(chain, q)[r] for r in rows]),
-                "kci": lambda chain, q, rows: gram_kci_from_rows([kin.jacobian_rows(chain, q)[r] for r in rows])}
-    gram_form = {"w": gram_w_from_rows, "kci": gram_kci_from_rows}
-
-    def gram_fn(index):
-        if jax.default_backend() == "gpu":
-            return jax.jit(lambda q: _gpu.index_on_gpu(gram_form[index], gram_xla[index], chain, q, rows_))
-        return jax.jit(lambda q: gram_xla[index](chain, q, rows_))
-
-    gram_fns = {index: gram_fn(index) for index in gram_form}
+    gram_fns = _gram_fns(chain, rows_)
     acc = accuracy(chain, rows_, {("uvms_jax", "w"): w_fn, ("uvms_jax", "kci"): kci_fn,
                                   ("gram", "w"): gram_fns["w"], ("gram", "kci"): gram_fns["kci"]}, args.accuracy_poses)
 
-    tdev = torch.device(args.device)
-    peer = pk.build_serial_chain_from_urdf(kin.to_urdf(chain), "tool").to(dtype=torch.float32, device=tdev)
-
-    def peer_w(q):
-        J = peer.jacobian(q)[:, task_idx]
-        G = J @ J.transpose(-1, -2) if J.shape[-2] <= J.shape[-1] else J.transpose(-1, -2) @ J
-        return torch.sqrt(torch.clamp(torch.linalg.det(G), min=0.0))
-
-    def peer_kci(q):
-        s = torch.linalg.svdvals(peer.jacobian(q)[:, task_idx])
-        return s[..., -1] / s[..., 0]
-
-    def sync():
-        if args.device == "cuda":
-            torch.cuda.synchronize()
-
+    peer_w, peer_kci, tdev, sync = _peer_fns(chain, task_idx, args.device)
     rows = []
     for n in batches:
         key = jax.random.key(n)

@@ -33,7 +33,7 @@ from pathlib import Path
 NETWORK = "ffbn_kci"
 
 
-def main() -> None:
+def _parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--device", default="cpu", help="JAX platform: cpu, gpu/cuda (default cpu)")
     ap.add_argument("--jacobian", choices=("spatial", "geometric"), default="spatial",
@@ -45,7 +45,32 @@ def main() -> None:
     ap.add_argument("--resume", type=Path, default=None,
                     help="a record of an earlier run (same settings) to continue after its largest size")
     ap.add_argument("--step", type=int, default=None, help="size step of the loop (default: the settings', 1)")
-    args = ap.parse_args()
+    return ap
+
+
+def _resume(record: dict, earlier: dict, args, step: int, k_loop, device_kind: str) -> tuple:
+    """Continue ``earlier``'s record (a SystemExit if its settings differ): its steps, command
+    and parts go into ``record``; returns the first size to try and the loop's key there."""
+    import jax
+
+    same = ("jacobian", "n_train", "n_test", "error_goal", "trainer", "target_mse", "max_epochs")
+    if any(earlier[k] != record[k] for k in same):
+        raise SystemExit(f"--resume {args.resume}: its settings differ from this run's in "
+                         f"{[k for k in same if earlier[k] != record[k]]}")
+    # Which sizes each part of the loop tried, and in what steps, stays in the record.
+    record["steps"], record["command"] = earlier["steps"], earlier["command"] + " ; " + record["command"]
+    record["parts"] = earlier.get("parts", [{"from": 1, "step": earlier.get("hidden_step", 1),
+                                             "device": earlier["device"]}])
+    start = earlier["largest_size_tried"] + step
+    # The step-1 loop's key of size `start` (design_ffbn splits its key once per size).
+    for _ in range(start - 1):
+        k_loop, _ = jax.random.split(k_loop)
+    record["parts"].append({"from": start, "step": step, "device": device_kind})
+    return start, k_loop
+
+
+def main() -> None:
+    args = _parser().parse_args()
     os.environ["JAX_PLATFORMS"] = {"gpu": "cuda"}.get(args.device, args.device)
 
     import logging
@@ -94,19 +119,7 @@ def main() -> None:
     start, k_loop = 1, k_net
     record["parts"] = [{"from": 1, "step": step, "device": device.device_kind}]
     if earlier is not None:
-        same = ("jacobian", "n_train", "n_test", "error_goal", "trainer", "target_mse", "max_epochs")
-        if any(earlier[k] != record[k] for k in same):
-            raise SystemExit(f"--resume {args.resume}: its settings differ from this run's in "
-                             f"{[k for k in same if earlier[k] != record[k]]}")
-        # Which sizes each part of the loop tried, and in what steps, stays in the record.
-        record["steps"], record["command"] = earlier["steps"], earlier["command"] + " ; " + record["command"]
-        record["parts"] = earlier.get("parts", [{"from": 1, "step": earlier.get("hidden_step", 1),
-                                                 "device": earlier["device"]}])
-        start = earlier["largest_size_tried"] + step
-        # The step-1 loop's key of size `start` (design_ffbn splits its key once per size).
-        for _ in range(start - 1):
-            k_loop, _ = jax.random.split(k_loop)
-        record["parts"].append({"from": start, "step": step, "device": device.device_kind})
+        start, k_loop = _resume(record, earlier, args, step, k_loop, device.device_kind)
 
     def save(step=None, loop="design loop"):
         if step is not None:

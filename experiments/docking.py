@@ -9,7 +9,7 @@ A thin entry point: config → :class:`uvms_jax.evo.DockingSettings` → :func:`
   wmax_best.png       its w_max heat map (eq. 16); the paper's ill-placed pose (Fig. 10) beside
                       it is drawn by `make papers` (uvms_jax.papers.docking)
   convergence.png     best fitness per generation of every GA and CMA-ES run
-  summary.json        acceptance figures (GA vs grid, batch time, evaluations/s, quarter/facing checks)
+  results.json        acceptance figures (GA vs grid, batch time, evaluations/s, quarter/facing checks)
                       and the certificate: the chosen pose, and the GA's best against the dense
                       grid + zoom reference (ga_certified; a multistart search certifies nothing)
 For an arm scene (docking/preset=bravo7, bravo7_tables) best_pose.json (IK solution and w per

@@ -19,14 +19,14 @@ overrides shared by all jobs are listed above the table.
     python experiments/gather.py multirun/weights \\
         --columns 'solvers.*.cost' solvers.exact.path
 
-The result file defaults to the first of ``results.json`` (schedule, pipeline),
-``summary.json`` (docking, plan) and ``report.json`` (surrogate) found in the first job.
+The result file is ``results.json``, the summary every stage writes (docking, surrogate, plan,
+schedule, hardware run, pipeline); folders written before every stage used that name are read
+from their older names (``summary.json``, ``report.json``, ``result.json``).
 """
 
 from __future__ import annotations
 
 import argparse
-import csv
 import fnmatch
 import json
 import math
@@ -37,9 +37,11 @@ from typing import Any
 
 import yaml
 
+from uvms_jax.files import write_atomic, write_csv
 from uvms_jax.settings import load_yaml
 
-DEFAULT_FILES = ("results.json", "summary.json", "report.json")
+# Every stage's summary, then its older names (docking and plan, surrogate, hardware run).
+DEFAULT_FILES = ("results.json", "summary.json", "report.json", "result.json")
 FIXED = ("job", "status")
 MAX_DEFAULT_COLUMNS = 12  # without --columns, the markdown keeps the first 12 varying columns
 
@@ -152,15 +154,12 @@ def write(rows: list[dict[str, Any]], override_keys: list[str], out: Path,
     out.mkdir(parents=True, exist_ok=True)
     all_cols = select_columns(rows, override_keys, ["*"])
     csv_path, md_path = out / "gathered.csv", out / "gathered.md"
-    with csv_path.open("w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=all_cols)
-        w.writeheader()
-        w.writerows([{c: _fmt(r.get(c)) for c in all_cols} for r in rows])
+    write_csv(csv_path, [[_fmt(r.get(c)) for c in all_cols] for r in rows], header=all_cols)
     # Overrides shared by every job go above the table; the table keeps the ones that vary.
     common = [k for k in override_keys if len({str(r.get(k)) for r in rows}) == 1]
     head = f"Common overrides: {', '.join(f'`{k}={rows[0].get(k)}`' for k in common)}\n\n" if common else ""
     columns = [c for c in select_columns(rows, override_keys, patterns) if c not in common]
-    md_path.write_text(head + to_markdown(rows, columns))
+    write_atomic(md_path, head + to_markdown(rows, columns))
     return csv_path, md_path
 
 

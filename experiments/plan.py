@@ -3,7 +3,7 @@
 Writes into the Hydra run directory: ``targets.json`` (IK targets), ``edges.csv`` (one row per
 planner and edge), ``metrics_<planner>.json`` (the five metric matrices), ``cost_<planner>.csv``
 (thesis eq. 4.16 cost matrix, NaN = forbidden), ``plan.json`` (the configured schedule, format
-of ``uvms_jax.planfile``), ``summary.json`` and PNGs (end-effector paths in the scene, joint
+of ``uvms_jax.planfile``), ``results.json`` and PNGs (end-effector paths in the scene, joint
 curves, rendered frames where offscreen rendering works).
 
     .venv/bin/python experiments/plan.py plan.planners=[RRTConnect] plan.budget_s=2
@@ -31,6 +31,7 @@ os.environ.setdefault("MUJOCO_GL", "egl")  # headless offscreen rendering where 
 
 from uvms_jax import hw  # noqa: E402
 from uvms_jax import plan as P  # noqa: E402
+from uvms_jax.files import write_atomic  # noqa: E402
 from uvms_jax.settings import from_mapping  # noqa: E402
 
 log = logging.getLogger(__name__)
@@ -56,7 +57,7 @@ def main(cfg: DictConfig) -> dict:
         check = hw.check_plan(plan, robot)  # the hardware's dry run: limits, continuity, timing
         summary["plan_json"] = {"segments": check.n_segments, "estimated_s": check.estimated_s}
     summary["frames"] = P.render_frames(scene, task_plan.targets, out) if settings.render else 0
-    (out / "summary.json").write_text(json.dumps(summary, indent=1))
+    write_atomic(out / "results.json", json.dumps(summary, indent=1))
     log.info("outputs in %s", out)
     return summary
 

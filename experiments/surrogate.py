@@ -6,7 +6,7 @@ Thin Hydra entry point: configs/surrogate.yaml → ``surrogate.SurrogateSettings
 design loops until the maximum relative test error (eq. 21) is below E, and times every network
 against the analytic index. Writes into the Hydra run directory:
 
-  report.json                 per network: hidden units, spread, max relative test error,
+  results.json                 per network: hidden units, spread, max relative test error,
                               operation counts, design time, time for 1e3 / 1e5 / 1e6 inputs
                               vs the analytic index; acceptance figures
   ffbn_w_design.png, ffbn_kci_design.png   test error vs hidden neurons (Fig. 10/14)

@@ -1,6 +1,6 @@
 """Result files that are never half-written, and run folders that say when a run did not end.
 
-* :func:`write_atomic` / :func:`atomic_path`: a file is written to a temporary file in its own
+* :func:`write_atomic` / :func:`atomic_path` / :func:`write_csv`: a file is written to a temporary file in its own
   folder, flushed to disk, then renamed over the target (``os.replace``, atomic on POSIX and
   Windows): a reader sees the old file or the new one, never a part; a run killed while writing
   leaves at most a ``.*.tmp`` file beside it, never a truncated result.
@@ -19,18 +19,19 @@
 from __future__ import annotations
 
 import contextlib
+import csv
 import json
 import os
 import signal
 import sys
 import tempfile
 import time
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
 
 __all__ = ["EXIT_INTERRUPTED", "EXIT_TERMINATED", "RUNNING", "UsedFolderError", "atomic_path", "clear_running",
            "mark_running", "marker_summary", "refuse_used_folder", "sigterm_as_interrupt", "used_run_folder",
-           "write_atomic"]
+           "write_atomic", "write_csv"]
 
 RUNNING = "RUNNING"  # the marker file's name in a run folder
 # Exit statuses of a run stopped by a signal: 128 + the signal's number, as shells report them.
@@ -76,6 +77,27 @@ def write_atomic(path: Path | str, data: str | bytes) -> Path:
             tmp.write_text(data, encoding="utf-8")
         else:
             tmp.write_bytes(data)
+    return path
+
+
+def write_csv(path: Path | str, rows: Iterable[Sequence] | Sequence[Mapping], header: Sequence[str] | None = None) -> Path:
+    """Write a CSV table to ``path`` atomically (:func:`atomic_path`): ``header`` then ``rows``
+    (sequences), or, without ``header``, ``rows`` as mappings under the first one's keys.
+
+    Raises:
+      ValueError: no header and no rows (the columns are unknown).
+    """
+    path = Path(path)
+    if header is None:
+        rows = list(rows)
+        if not rows:
+            raise ValueError(f"{path.name}: no header and no rows; the columns are unknown")
+        header = list(rows[0])
+        rows = [[row[k] for k in header] for row in rows]
+    with atomic_path(path) as tmp, tmp.open("w", newline="") as f:
+        writer = csv.writer(f)
+        writer.writerow(header)
+        writer.writerows(rows)
     return path
 
 

@@ -64,7 +64,7 @@ def test_sigterm_is_sigint_for_uvms_hw(tmp_path):
     output = proc.communicate(timeout=60)[0]
     assert proc.returncode == EXIT_TERMINATED, output[-3000:]
     assert "Traceback" not in output and "interrupted, arm told to hold" in output
-    result = json.loads((out / "result.json").read_text())
+    result = json.loads((out / "results.json").read_text())
     assert result["status"] == "interrupted" and not (out / RUNNING).exists()
 
 

@@ -182,7 +182,8 @@ def test_fitness_is_deterministic_and_follows_eq_15(panel_problem, solutions):
     np.testing.assert_allclose(np.asarray(e.M_a), M_a, rtol=1e-6)
     D = np.linalg.norm(POSES[:, :3] - np.asarray(p.p_i), axis=-1)  # docking point = vehicle origin here
     np.testing.assert_allclose(np.asarray(e.D), D, rtol=1e-5)
-    expected = np.where([True, True, False], float(p.a) * M_a - float(p.b) * D, 0.0)  # eq. 15
+    a, b = (float(p.objective.weight(n)) for n in ("manipulability", "distance"))  # the scene's a, b
+    expected = np.where([True, True, False], a * M_a - b * D, 0.0)  # eq. 15
     np.testing.assert_allclose(np.asarray(e.fitness), expected, rtol=1e-5, atol=1e-6)
     assert float(e.M_a[0]) > 0.01
 
@@ -253,7 +254,7 @@ def test_bravo7_fast_preset_runs_end_to_end(tmp_path):
     summary = evo.write_docking(run, tmp_path)
     assert run.grid.fitness > 0 and run.refined_grid.fitness >= run.grid.fitness
     assert run.wmax_best is None and summary["ga_evaluations_per_s"] > 0
-    for name in ("best_pose.json", "docked_top_view.png", "convergence.png", "summary.json", "runs.csv"):
+    for name in ("best_pose.json", "docked_top_view.png", "convergence.png", "results.json", "runs.csv"):
         assert (tmp_path / name).exists()
 
 

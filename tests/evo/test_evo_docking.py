@@ -38,9 +38,9 @@ def test_tiny_run_writes_every_file(tmp_path):
     assert run.refined_grid.fitness >= run.grid.fitness
     summary = evo.write_docking(run, tmp_path)
     names = {"runs.csv", "grid_optimum.json", "cmaes.json", "wmax.json", "wmax_best.png", "convergence.png",
-             "summary.json"}
+             "results.json"}
     assert names <= {p.name for p in tmp_path.iterdir()}
-    assert json.loads((tmp_path / "summary.json").read_text())["ga_fitness"] == summary["ga_fitness"]
+    assert json.loads((tmp_path / "results.json").read_text())["ga_fitness"] == summary["ga_fitness"]
     # A dense grid (one polish start) is a reference: the GA's best against it certifies.
     c = summary["certificate"]
     assert c["reference"]["fitness"] == run.refined_grid.fitness and c["reference"]["search"] == "dense grid + zoom"

@@ -51,7 +51,7 @@ def test_sim_run_completes(plan_file, tmp_path, capsys):
     assert main(["run", str(plan_file), "--sim", "--out", str(out)]) == 0
     res = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
     assert res["ok"] and res["max_gate_error_rad"] <= 0.01 and res["sim"]["limit_violations"] == 0
-    assert (out / "run.csv").exists() and (out / "run.png").exists() and (out / "result.json").exists()
+    assert (out / "run.csv").exists() and (out / "run.png").exists() and (out / "results.json").exists()
 
 
 def test_sim_stuck_joint_exit_1(plan_file, tmp_path, capsys):

@@ -268,5 +268,5 @@ def test_thesis_plan_cli_real_time(tmp_path):
     from uvms_jax.hw.cli import main
 
     assert main(["run", str(EXAMPLE), "--sim", "--no-plot", "--out", str(tmp_path)]) == 0
-    res = json.loads((tmp_path / "result.json").read_text())
+    res = json.loads((tmp_path / "results.json").read_text())
     assert res["max_gate_error_rad"] <= GATE and res["sim"]["limit_violations"] == 0

@@ -1,5 +1,5 @@
 """Fault runs: each completes or stops into hold with its reason, and none hangs — through
-``uvms-hw run`` (real time, simulated arm over UDP, reason in ``result.json``) and, for the whole
+``uvms-hw run`` (real time, simulated arm over UDP, reason in ``results.json``) and, for the whole
 matrix (drop, corruption, latency, stuck joint, hardware fault, link loss), on the in-process
 link on a virtual clock."""
 
@@ -32,7 +32,7 @@ def plan_file(tmp_path):
 
 
 def _result(out):
-    return json.loads((out / "result.json").read_text())
+    return json.loads((out / "results.json").read_text())
 
 
 @pytest.mark.parametrize(("flags", "abort_reason"), [

@@ -53,7 +53,7 @@ def test_interrupted_run_plan_writes_its_partial_results(tmp_path):
     assert run.status == "interrupted" and run.sim is not None
     (tmp_path / RUNNING).write_text("{}")
     report = write_run(run, tmp_path, plot=False)
-    on_disk = json.loads((tmp_path / "result.json").read_text())
+    on_disk = json.loads((tmp_path / "results.json").read_text())
     assert on_disk == report and on_disk["status"] == "interrupted" and on_disk["ok"] is False
     assert on_disk["gates"] == 3
     rows = (tmp_path / "run.csv").read_text().splitlines()
@@ -104,7 +104,7 @@ def test_sigint_ends_a_run_quickly_with_partial_results(tmp_path):
     assert proc.returncode == cli.EXIT_INTERRUPTED == 130, stderr
     assert "Traceback" not in stderr and "KeyboardInterrupt" not in stderr
     assert "interrupted, arm told to hold" in stderr
-    res = json.loads((out / "result.json").read_text())
+    res = json.loads((out / "results.json").read_text())
     assert res == json.loads(stdout)
     assert res["status"] == "interrupted" and res["ok"] is False and "told to hold" in res["reason"]
     assert res["ticks"] > 10 and res["link"] == "udp"
@@ -118,7 +118,7 @@ def test_killed_run_is_marked_and_its_folder_refused_without_overwrite(tmp_path,
     proc, _ = _start(out)
     proc.kill()  # SIGKILL: nothing of the run's own can run
     proc.wait(timeout=10)
-    assert (out / RUNNING).exists() and not (out / "result.json").exists()
+    assert (out / RUNNING).exists() and not (out / "results.json").exists()
     marker = json.loads((out / RUNNING).read_text())
     assert marker["pid"] == proc.pid
     plan = tmp_path / "plan.json"
@@ -134,8 +134,8 @@ def test_killed_run_is_marked_and_its_folder_refused_without_overwrite(tmp_path,
     real = cli.run_plan
     monkeypatch.setattr(cli, "run_plan", lambda plan, robot, *, link, **kw: real(plan, robot, link="loopback", **kw))
     assert cli.main(["run", str(plan), "--sim", "--no-plot", "--overwrite", "--out", str(out)]) == cli.EXIT_OK
-    assert json.loads((out / "result.json").read_text())["status"] == "completed"
+    assert json.loads((out / "results.json").read_text())["status"] == "completed"
     assert not (out / RUNNING).exists()
     # A finished run's folder is refused as well.
     assert cli.main(["run", str(plan), "--sim", "--no-plot", "--out", str(out)]) == cli.EXIT_REFUSED
-    assert "already holds a run (result.json, run.csv)" in capsys.readouterr().err
+    assert "already holds a run (results.json, run.csv)" in capsys.readouterr().err

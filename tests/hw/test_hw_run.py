@@ -33,8 +33,8 @@ def test_write_run_files_and_report(tmp_path):
     run = run_plan(short_plan(), BRAVO, sim=SimConfig(drop=0.02, seed=3))
     out = tmp_path / "a" / "b"
     report = write_run(run, out, plan_path="plan.json")
-    assert {p.name for p in out.iterdir()} == {"run.csv", "run.png", "result.json"}
-    assert json.loads((out / "result.json").read_text()) == report
+    assert {p.name for p in out.iterdir()} == {"run.csv", "run.png", "results.json"}
+    assert json.loads((out / "results.json").read_text()) == report
     assert set(report) == REPORT_KEYS | {"plan", "out", "sim"}
     assert report["plan"] == "plan.json" and report["out"] == str(out) and report["link"] == "loopback"
     assert report["sim"]["dropped"] == run.sim.dropped > 0

@@ -116,7 +116,7 @@ def _check_run(res: dict, run, dof: int, gripper: bool, stages=STAGES) -> None:
         fixed = res["baseline"].get("fixed")
         assert fixed is not None, res["baseline"]
         fixed_plan = json.loads((run / "baseline" / "schedule" / "plan.json").read_text())
-        fixed_hw = json.loads((run / "baseline" / "hw" / "result.json").read_text())
+        fixed_hw = json.loads((run / "baseline" / "hw" / "results.json").read_text())
         assert fixed["ok"] and fixed_hw["gates"] == _gates(fixed_plan)
 
 

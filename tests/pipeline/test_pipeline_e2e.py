@@ -19,12 +19,12 @@ from uvms_jax.planfile import load_plan
 
 STAGE_FILES = {  # each stage's folder must hold these files
     "surrogate": ["reach_map.json"],
-    "docking": ["runs.csv", "grid_optimum.json", "best_pose.json", "docked_top_view.png", "summary.json"],
+    "docking": ["runs.csv", "grid_optimum.json", "best_pose.json", "docked_top_view.png", "results.json"],
     "plan": ["edges.csv", "targets.json", "cost_RRTConnect.csv", "ee_paths_RRTConnect.png"],
     "schedule": ["table.md", "results.json", "plan.json"],
-    "hw": ["run.csv", "result.json", "joint_trajectory.yaml"],
+    "hw": ["run.csv", "results.json", "joint_trajectory.yaml"],
     "hover": ["hover.png"],
-    "baseline": ["plan/edges.csv", "schedule/plan.json", "hw/result.json"],
+    "baseline": ["plan/edges.csv", "schedule/plan.json", "hw/results.json"],
 }
 
 

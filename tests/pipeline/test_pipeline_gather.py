@@ -98,3 +98,15 @@ def test_weight_sweep_multirun_and_gather(tmp_path):
                         "solvers.astar.cost | solvers.exact.cost | solvers.exact.path |")
     assert len(table) == 2 + 5 and all(w in out.stdout for w in WEIGHTS)
     assert (sweep / "gathered.csv").exists()
+
+
+def test_gather_reads_a_hardware_run_and_older_result_names(gather, tmp_path):
+    """A job's summary is results.json whatever its stage (a hardware run's here); a folder
+    written before that name was shared keeps its older one (``result.json``, hw's)."""
+    for i, name in enumerate(("results.json", "result.json")):
+        job = tmp_path / ("new" if i == 0 else "old") / "0"
+        (job / ".hydra").mkdir(parents=True)
+        (job / ".hydra" / "overrides.yaml").write_text(f"- speed_scale={0.5 + i}\n")
+        (job / name).write_text(json.dumps({"status": "completed", "ok": True, "duration_s": 4.0 + i}))
+        rows, keys = gather.gather(job.parent)
+        assert keys == ["speed_scale"] and rows[0]["status"] == "ok" and rows[0]["duration_s"] == 4.0 + i

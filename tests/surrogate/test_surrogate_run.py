@@ -170,7 +170,7 @@ def test_write_surrogates_writes_the_files(tiny_run, tmp_path):
     report_path = surrogate.write_surrogates(tiny_run, tmp_path)
     files = sorted(str(p.relative_to(tmp_path)) for p in tmp_path.rglob("*") if p.is_file())
     assert files == sorted([
-        "report.json", "training.png", "ffbn_w_design.png", "rbfn_w_design.png",
+        "results.json", "training.png", "ffbn_w_design.png", "rbfn_w_design.png",
         "data/d2_train.npz", "data/d2_train.json", "data/d2_test.npz", "data/d2_test.json",
         "networks/ffbn_w.npz", "networks/ffbn_w.json", "networks/rbfn_w.npz", "networks/rbfn_w.json",
     ])

@@ -1,7 +1,8 @@
 """Docking-pose optimisation (docs/theory.md §3; Sotiropoulos, Aspragathos & Andritsos 2011).
 
 The docking problem (area manipulability M_a, eq. 1; distance D, eq. 3; fitness eq. 15 over
-the search set Wd, eq. 14), the paper's binary GA (Table 2) as pure ``init/ask/tell``
+the search set Wd, eq. 14; its terms a registry, :func:`register_fitness_term`, summed behind
+the :class:`Problem` protocol), the paper's binary GA (Table 2) as pure ``init/ask/tell``
 functions with whole runs in one jitted loop, a chunked dense grid search and CMA-ES
 (evosax) as baselines, and the ``w_max`` map of eq. 16. The same optimisers dock any arm
 under a vehicle (:class:`ArmDockingProblem`: targets as tool poses, batched multi-seed
@@ -38,6 +39,12 @@ from uvms_jax.evo._docking import grid_periodicity
 from uvms_jax.evo._docking import make_ga
 from uvms_jax.evo._docking import pose_checks
 from uvms_jax.evo._docking import run_docking
+from uvms_jax.evo._fitness import FITNESS_TERMS
+from uvms_jax.evo._fitness import FitnessInputs
+from uvms_jax.evo._fitness import Objective
+from uvms_jax.evo._fitness import Problem
+from uvms_jax.evo._fitness import make_objective
+from uvms_jax.evo._fitness import register_fitness_term
 from uvms_jax.evo._ga import BinaryGA
 from uvms_jax.evo._ga import GAParams
 from uvms_jax.evo._ga import GAResult
@@ -55,7 +62,6 @@ from uvms_jax.evo._grid import zoom_from
 from uvms_jax.evo._problem import DockingEval
 from uvms_jax.evo._problem import DockingProblem
 from uvms_jax.evo._problem import base_transform
-from uvms_jax.evo._problem import docking_fitness
 from uvms_jax.evo._problem import docking_point
 from uvms_jax.evo._problem import evaluate
 from uvms_jax.evo._problem import evaluate_traced
@@ -78,6 +84,7 @@ from uvms_jax.evo._settings import GASettings
 from uvms_jax.evo._settings import GridSettings
 from uvms_jax.evo._settings import PanelSettings
 from uvms_jax.evo._settings import SceneSettings
+from uvms_jax.evo._settings import TermSettings
 from uvms_jax.evo._settings import WmaxSettings
 from uvms_jax.evo._shard import ShardedProblem
 from uvms_jax.evo._geometry import SLACK

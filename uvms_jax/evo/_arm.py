@@ -15,7 +15,7 @@ are alternatives, e.g. the symmetric grasps of an object). For a vehicle pose:
   vehicle's and the scene's boxes);
 - ``w`` of a target is the best manipulability over its valid solutions (0 if none), and
   ``M_a = min over targets`` (the paper's eq. 1 aggregation);
-- the fitness is the paper's eq. 15 (:func:`uvms_jax.evo._problem.docking_fitness`), with
+- the fitness is the paper's eq. 15 (the problem's :class:`~uvms_jax.evo.Objective`), with
   ``D`` the distance of the vehicle's docking point from its initial position and the search
   set Wd = the pose box, minus poses where the vehicle body meets the scene.
 
@@ -35,7 +35,8 @@ from jax import Array
 
 from uvms_jax import indices, kin
 from uvms_jax.evo._collide import boxes_overlap
-from uvms_jax.evo._problem import DockingEval, base_transform, docking_fitness
+from uvms_jax.evo._fitness import FitnessInputs, Objective, make_objective, paper_weights
+from uvms_jax.evo._problem import DockingEval, base_transform
 from uvms_jax.evo._geometry import SphereWorld
 from uvms_jax.evo._world import capsule_world, world_collides
 from uvms_jax.kin import Chain
@@ -55,7 +56,7 @@ class ArmDockingProblem:
       pose_low, pose_high: ``(4,)`` box of vehicle poses ``[x, y, z, ψ]`` [m, rad].
       p_dock: ``(3,)`` docking point of the vehicle in V [m] (D of eq. 3 is measured there).
       p_i: ``(3,)`` initial position of the docking point in W [m].
-      a, b: weights of eq. 8.
+      objective: the fitness terms and their weights (eq. 8: ``a``, ``b``; :mod:`uvms_jax.evo._fitness`).
       world: the arm's collision world, one row per target (:class:`~uvms_jax.evo.SphereWorld`).
       T_vehicle_box, vehicle_half: ``(mv, 4, 4), (mv, 3)`` vehicle body boxes in V [m].
       T_world_box, scene_half: ``(ms, 4, 4), (ms, 3)`` scene boxes (panel, tables) in W [m]:
@@ -74,8 +75,7 @@ class ArmDockingProblem:
     pose_high: Array
     p_dock: Array
     p_i: Array
-    a: Array
-    b: Array
+    objective: Objective
     world: SphereWorld
     T_vehicle_box: Array
     vehicle_half: Array
@@ -103,6 +103,7 @@ def make_arm_docking_problem(
     a: float,
     b: float,
     link_radius: float,
+    terms: dict[str, float] | None = None,
     vehicle_boxes=((), ()),
     scene_boxes=((), ()),
     world: SphereWorld | None = None,
@@ -121,8 +122,9 @@ def make_arm_docking_problem(
       group: ``(k,)`` target of each pose (default: each pose its own target).
       low, high: ``(4,)`` box of vehicle poses ``[x, y, z, ψ]`` [m, rad].
       p_dock: ``(3,)`` docking point in the vehicle frame [m]; p_i: its initial world position.
-      a, b: weights of eq. 8.
+      a, b: weights of eq. 8 (the fitness terms ``manipulability`` and ``distance``).
       link_radius: capsule radius of the links [m] (the collision world without ``world``).
+      terms: further registered fitness terms, name → weight (:func:`~uvms_jax.evo.register_fitness_term`).
       vehicle_boxes: ``(T_vehicle_box (mv, 4, 4), half (mv, 3))`` in the vehicle frame.
       scene_boxes: ``(T_world_box (ms, 4, 4), half (ms, 3))`` in the world.
       world: the collision world, one row per target (e.g. the planner's,
@@ -132,11 +134,42 @@ def make_arm_docking_problem(
       dtype: float dtype (default: JAX's default float).
 
     Raises:
-      ValueError: on wrong shapes, an empty box, a bad grouping, non-positive sizes or a
-        world whose rows are not the targets.
+      ValueError: on wrong shapes, an empty box, a bad grouping, non-positive sizes, a
+        world whose rows are not the targets or an unknown fitness term.
     """
     dtype = dtype or jnp.zeros(()).dtype
     arr = lambda x: jnp.asarray(np.asarray(x, dtype=np.float64), dtype=dtype)
+    T_tool, group = _checked_targets(T_world_tool, group)
+    mount = np.asarray(T_vehicle_base, dtype=np.float64)
+    if mount.shape != (4, 4):
+        raise ValueError(f"T_vehicle_base must have shape (4, 4), got {mount.shape}")
+    low, high = np.asarray(low, dtype=np.float64), np.asarray(high, dtype=np.float64)
+    if low.shape != (4,) or high.shape != (4,) or np.any(low > high):
+        raise ValueError(f"pose box must be two (4,) corners with low <= high, got {low} and {high}")
+    if link_radius <= 0 or n_seeds < 1 or iterations < 1 or damping <= 0:
+        raise ValueError(f"need link_radius > 0, n_seeds >= 1, iterations >= 1, damping > 0, got "
+                         f"{link_radius}, {n_seeds}, {iterations}, {damping}")
+    boxes = [tuple(arr(x) for x in _checked_boxes(label, given))
+             for label, given in (("vehicle_boxes", vehicle_boxes), ("scene_boxes", scene_boxes))]
+    n_groups = int(group.max()) + 1
+    if world is None:
+        world = capsule_world(chain, link_radius, mount, vehicle_boxes, scene_boxes, n_groups, SPHERE_SPACING, dtype)
+    world = _checked_world(world, chain, n_groups, dtype)
+    lo, up = np.asarray(chain.lower, dtype=np.float64), np.asarray(chain.upper, dtype=np.float64)
+    u = np.asarray(jax.random.uniform(jax.random.key(seed), (n_seeds, chain.n_joints), dtype=jnp.float32))
+    return ArmDockingProblem(
+        chain=kin.with_dtype(chain, dtype), T_vehicle_base=arr(mount), T_world_tool=arr(T_tool),
+        group=jnp.asarray(group, dtype=jnp.int32), seeds=arr(lo + u * (up - lo)), pose_low=arr(low),
+        pose_high=arr(high), p_dock=arr(p_dock), p_i=arr(p_i),
+        objective=make_objective(paper_weights(a, b, terms), dtype), world=world,
+        T_vehicle_box=boxes[0][0], vehicle_half=boxes[0][1], T_world_box=boxes[1][0], scene_half=boxes[1][1],
+        damping=arr(damping), n_groups=n_groups, iterations=int(iterations),
+    )
+
+
+def _checked_targets(T_world_tool, group) -> tuple[np.ndarray, np.ndarray]:
+    """``T_world_tool (k, 4, 4)`` and ``group (k,)`` (default: each pose its own target) as
+    NumPy arrays, or a ValueError naming what is wrong."""
     T_tool = np.asarray(T_world_tool, dtype=np.float64)
     if T_tool.ndim != 3 or T_tool.shape[1:] != (4, 4) or T_tool.shape[0] < 1:
         raise ValueError(f"T_world_tool must have shape (k, 4, 4) with k >= 1, got {T_tool.shape}")
@@ -147,53 +180,26 @@ def make_arm_docking_problem(
     if group.shape != (k,) or not np.issubdtype(group.dtype, np.integer) or group.min() != 0 \
             or set(np.unique(group)) != set(range(int(group.max()) + 1)):
         raise ValueError(f"group must be ({k},) integers covering 0 … g − 1, got {group}")
-    mount = np.asarray(T_vehicle_base, dtype=np.float64)
-    if mount.shape != (4, 4):
-        raise ValueError(f"T_vehicle_base must have shape (4, 4), got {mount.shape}")
-    low, high = np.asarray(low, dtype=np.float64), np.asarray(high, dtype=np.float64)
-    if low.shape != (4,) or high.shape != (4,) or np.any(low > high):
-        raise ValueError(f"pose box must be two (4,) corners with low <= high, got {low} and {high}")
-    if link_radius <= 0 or n_seeds < 1 or iterations < 1 or damping <= 0:
-        raise ValueError(f"need link_radius > 0, n_seeds >= 1, iterations >= 1, damping > 0, got "
-                         f"{link_radius}, {n_seeds}, {iterations}, {damping}")
-    boxes = []
-    for label, (T_box, half) in (("vehicle_boxes", vehicle_boxes), ("scene_boxes", scene_boxes)):
-        T_box = np.asarray(T_box, dtype=np.float64).reshape(-1, 4, 4)
-        half = np.asarray(half, dtype=np.float64).reshape(-1, 3)
-        if T_box.shape[0] != half.shape[0] or np.any(half <= 0):
-            raise ValueError(f"{label}: need as many poses as positive half sizes, got {T_box.shape[0]} and {half}")
-        boxes.append((arr(T_box), arr(half)))
-    n_groups = int(group.max()) + 1
-    if world is None:
-        world = capsule_world(chain, link_radius, mount, vehicle_boxes, scene_boxes, n_groups, SPHERE_SPACING, dtype)
-    elif world.rows.radius.shape[0] != n_groups or int(jnp.max(world.rows.body, initial=0)) > chain.n_joints:
+    return T_tool, group
+
+
+def _checked_boxes(label: str, boxes) -> tuple[np.ndarray, np.ndarray]:
+    """``(T_box (m, 4, 4), half (m, 3))`` of ``boxes`` (a pose and positive half sizes each), or
+    a ValueError naming ``label``."""
+    T_box = np.asarray(boxes[0], dtype=np.float64).reshape(-1, 4, 4)
+    half = np.asarray(boxes[1], dtype=np.float64).reshape(-1, 3)
+    if T_box.shape[0] != half.shape[0] or np.any(half <= 0):
+        raise ValueError(f"{label}: need as many poses as positive half sizes, got {T_box.shape[0]} and {half}")
+    return T_box, half
+
+
+def _checked_world(world: SphereWorld, chain: Chain, n_groups: int, dtype) -> SphereWorld:
+    """``world`` in the problem's float dtype (indices and masks stay as they are), or a
+    ValueError when its rows are not the ``n_groups`` targets or name bodies beyond the arm."""
+    if world.rows.radius.shape[0] != n_groups or int(jnp.max(world.rows.body, initial=0)) > chain.n_joints:
         raise ValueError(f"world has {world.rows.radius.shape[0]} rows for {n_groups} targets, or bodies beyond the "
                          f"arm's {chain.n_joints}")
-    # The world in the problem's float dtype (indices and masks stay as they are).
-    world = jax.tree_util.tree_map(lambda x: x.astype(dtype) if jnp.issubdtype(x.dtype, jnp.floating) else x, world)
-    lo, up = np.asarray(chain.lower, dtype=np.float64), np.asarray(chain.upper, dtype=np.float64)
-    u = np.asarray(jax.random.uniform(jax.random.key(seed), (n_seeds, chain.n_joints), dtype=jnp.float32))
-    return ArmDockingProblem(
-        chain=kin.with_dtype(chain, dtype),
-        T_vehicle_base=arr(mount),
-        T_world_tool=arr(T_tool),
-        group=jnp.asarray(group, dtype=jnp.int32),
-        seeds=arr(lo + u * (up - lo)),
-        pose_low=arr(low),
-        pose_high=arr(high),
-        p_dock=arr(p_dock),
-        p_i=arr(p_i),
-        a=arr(a),
-        b=arr(b),
-        world=world,
-        T_vehicle_box=boxes[0][0],
-        vehicle_half=boxes[0][1],
-        T_world_box=boxes[1][0],
-        scene_half=boxes[1][1],
-        damping=arr(damping),
-        n_groups=n_groups,
-        iterations=int(iterations),
-    )
+    return jax.tree_util.tree_map(lambda x: x.astype(dtype) if jnp.issubdtype(x.dtype, jnp.floating) else x, world)
 
 
 def arm_tool_poses(problem: ArmDockingProblem, pose: Array) -> tuple[Array, Array, Array]:
@@ -255,7 +261,8 @@ def arm_terms(problem: ArmDockingProblem, pose: Array, w: Array) -> DockingEval:
     D = jnp.linalg.norm(p_d - p.p_i, axis=-1)  # eq. 3
     inside = jnp.all((pose >= p.pose_low) & (pose <= p.pose_high), axis=-1)
     feasible = inside & vehicle_clear(p, pose)  # eq. 14: Wd
-    return DockingEval(fitness=docking_fitness(M_a, D, feasible, p.a, p.b), M_a=M_a, D=D, feasible=feasible)
+    fitness = p.objective(FitnessInputs(pose, M_a, D), feasible)  # eq. 15
+    return DockingEval(fitness=fitness, M_a=M_a, D=D, feasible=feasible)
 
 
 def evaluate_arm_traced(problem: ArmDockingProblem, pose: Array) -> DockingEval:
@@ -267,7 +274,7 @@ _evaluate_arm_jit = jax.jit(evaluate_arm_traced)
 
 
 def _check_poses(problem: ArmDockingProblem, pose) -> Array:
-    pose = jnp.asarray(pose, dtype=problem.a.dtype)
+    pose = jnp.asarray(pose, dtype=problem.pose_low.dtype)
     if pose.ndim == 0 or pose.shape[-1] != 4:
         raise ValueError(f"pose must have shape (..., 4) = [x, y, z, psi], got {pose.shape}")
     if bool(jnp.isnan(pose).any()):

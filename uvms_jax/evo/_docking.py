@@ -22,17 +22,15 @@ from uvms_jax.evo._cmaes import run_cmaes
 from uvms_jax.evo._ga import BinaryGA, GAParams, ga_batch_compiled, run_ga
 from uvms_jax.evo._grid import distinct_best, grid_search, refine_grid_search, zoom_from
 from uvms_jax.evo._arm import ArmDockingProblem, ArmReport, arm_report, evaluate_arm
+from uvms_jax.evo._fitness import Problem
 from uvms_jax.evo._problem import DockingProblem, docking_point, evaluate, make_docking_problem
 from uvms_jax.evo._scenes import ArmTask, arm_docking_problem
-from uvms_jax.evo._settings import FIELDS, ArmSceneSettings, DockingSettings, GASettings, SceneSettings
+from uvms_jax.evo._settings import FIELDS, ArmSceneSettings, DockingSettings, GASettings, SceneSettings, term_weights
 from uvms_jax.evo._wmax import WmaxMap, wmax_map
 
 log = logging.getLogger(__name__)
 
 PERIODIC = (False, False, False, True)  # ψ wraps: the grid does not sample −π and π twice
-
-Problem = DockingProblem | ArmDockingProblem
-
 
 def docking_problem(scene: SceneSettings | ArmSceneSettings, dtype: str = "float32",
                     task: ArmTask | None = None, robot=None) -> Problem:
@@ -47,7 +45,8 @@ def docking_problem(scene: SceneSettings | ArmSceneSettings, dtype: str = "float
         return arm_docking_problem(scene, task, jnp.dtype(dtype), robot)
     if task is not None:
         raise ValueError("the paper's scene has its own task area: pass a task only with an arm scene")
-    return make_docking_problem(**dataclasses.asdict(scene), dtype=jnp.dtype(dtype))
+    plain = {f.name: getattr(scene, f.name) for f in dataclasses.fields(scene) if f.name != "terms"}
+    return make_docking_problem(**plain, terms=term_weights(scene.terms), dtype=jnp.dtype(dtype))
 
 
 def evaluate_any(problem: Problem, pose):
@@ -251,6 +250,41 @@ def _polish(problem: Problem, grid, ga, g, periodic) -> tuple:
             time.perf_counter() - t0, (zoom.x[kept], zoom.fitness[kept]))
 
 
+def _ga_runs(s: DockingSettings, problem: Problem, ga_parts: tuple, bar) -> tuple:
+    """The GA's ``R`` runs in one call, compiled ahead of time so that the timed call runs only
+    once; each run alone too with ``s.time_single_runs``. Returns the batch's result, the
+    seconds of each run (the batch's time when not timed alone), the batch's seconds and its
+    compile seconds."""
+    codec, ga, params = ga_parts
+    keys = jax.random.split(jax.random.key(s.seed), s.n_runs)
+    t0 = time.perf_counter()
+    compiled = ga_batch_compiled(keys, problem, codec, ga, params)
+    t_compile = time.perf_counter() - t0
+    res, t_batch = _timed(compiled, keys, problem, codec, params)
+    log.info("GA: %d runs in %.3f s after compilation (compile + first run %.1f s)", s.n_runs, t_batch, t_compile)
+    bar.update()
+    seconds = [t_batch] * s.n_runs
+    if s.time_single_runs:
+        run_ga(keys[0], problem, codec, ga, params)  # compile the single-run path
+        seconds = [_timed(run_ga, keys[r], problem, codec, ga, params)[1] for r in range(s.n_runs)]
+        bar.update()
+    return res, seconds, t_batch, t_compile
+
+
+def _cmaes_runs(s: DockingSettings, problem: Problem, bar) -> CMAESRuns:
+    """The CMA-ES baseline's runs, timed after a compiling call."""
+    c = s.cmaes
+    ckeys = jax.random.split(jax.random.key(s.seed + 1), c.n_runs)
+    args = (ckeys, problem, problem.pose_low, problem.pose_high, c.population_size, c.generations, c.std_init)
+    _timed(run_cmaes, *args)  # compile
+    cma, t_cma = _timed(run_cmaes, *args)
+    cmaes = CMAESRuns(np.asarray(cma.best_x), np.asarray(cma.best_fitness), np.asarray(cma.history),
+                      t_cma, c.population_size * c.generations)
+    log.info("CMA-ES: %d runs in %.2f s, best %.4f", c.n_runs, t_cma, float(np.max(cmaes.fitness)))
+    bar.update()
+    return cmaes
+
+
 def run_docking(settings: DockingSettings, task: ArmTask | None = None, robot=None) -> DockingRun:
     """The docking experiment: GA batch (compiled ahead, then timed), optional single-run
     timing, dense grid + zoom refinement, optional CMA-ES, w_max maps, pose checks.
@@ -273,19 +307,7 @@ def run_docking(settings: DockingSettings, task: ArmTask | None = None, robot=No
     # Each step is one compiled call (the GA batch, the grid, ...): progress counts steps.
     bar = progress.bar(total=3 + s.time_single_runs + s.cmaes.enabled, desc="docking", unit="step")
 
-    # GA: R runs in one call, compiled ahead of time so that the timed call runs only once.
-    keys = jax.random.split(jax.random.key(s.seed), s.n_runs)
-    t0 = time.perf_counter()
-    compiled = ga_batch_compiled(keys, problem, codec, ga, params)
-    t_compile = time.perf_counter() - t0
-    res, t_batch = _timed(compiled, keys, problem, codec, params)
-    log.info("GA: %d runs in %.3f s after compilation (compile + first run %.1f s)", s.n_runs, t_batch, t_compile)
-    bar.update()
-    seconds = [t_batch] * s.n_runs
-    if s.time_single_runs:
-        run_ga(keys[0], problem, codec, ga, params)  # compile the single-run path
-        seconds = [_timed(run_ga, keys[r], problem, codec, ga, params)[1] for r in range(s.n_runs)]
-        bar.update()
+    res, seconds, t_batch, t_compile = _ga_runs(s, problem, (codec, ga, params), bar)
 
     # Grid reference: a global grid (compiled once for any size), then zoom stages.
     g = s.grid
@@ -308,17 +330,7 @@ def run_docking(settings: DockingSettings, task: ArmTask | None = None, robot=No
     log.info("grid: %d candidates in %.1f s, optimum %.4f; refined (%d more) %.4f",
              grid.n_candidates, t_grid, grid_opt.fitness, refined.candidates, refined.fitness)
 
-    cmaes = None
-    if s.cmaes.enabled:
-        c = s.cmaes
-        ckeys = jax.random.split(jax.random.key(s.seed + 1), c.n_runs)
-        args = (ckeys, problem, low, high, c.population_size, c.generations, c.std_init)
-        _timed(run_cmaes, *args)  # compile
-        cma, t_cma = _timed(run_cmaes, *args)
-        cmaes = CMAESRuns(np.asarray(cma.best_x), np.asarray(cma.best_fitness), np.asarray(cma.history),
-                          t_cma, c.population_size * c.generations)
-        log.info("CMA-ES: %d runs in %.2f s, best %.4f", c.n_runs, t_cma, float(np.max(cmaes.fitness)))
-        bar.update()
+    cmaes = _cmaes_runs(s, problem, bar) if s.cmaes.enabled else None
     bar.close()
 
     poses, fitness = np.asarray(res.best_x), np.asarray(res.best_fitness)

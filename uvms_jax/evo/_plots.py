@@ -11,7 +11,7 @@ from uvms_jax import kin
 from uvms_jax.evo._collide import link_points
 from uvms_jax.evo._problem import base_transform
 from uvms_jax.evo._wmax import WmaxMap
-from uvms_jax.plotting import pyplot
+from uvms_jax.plotting import pyplot, save_figure
 
 
 def plot_wmax(m: WmaxMap, title: str, path: Path, vmax: float) -> None:
@@ -25,8 +25,7 @@ def plot_wmax(m: WmaxMap, title: str, path: Path, vmax: float) -> None:
     ax.set(xlabel="x in G [m]", ylabel="y in G [m]", title=f"{title}\nzero-w area {100 * m.zero_fraction:.1f} %")
     ax.set_aspect("equal")
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    save_figure(fig, path, dpi=120)
 
 
 def plot_convergence(ga_hist, cma_hist, references: dict[str, float], path: Path) -> None:
@@ -47,8 +46,7 @@ def plot_convergence(ga_hist, cma_hist, references: dict[str, float], path: Path
     ax.xaxis.set_major_locator(plt.MaxNLocator(integer=True))
     ax.legend(loc="lower right")
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    save_figure(fig, path, dpi=120)
 
 
 def _footprint(T: np.ndarray, half: np.ndarray) -> np.ndarray:
@@ -119,5 +117,4 @@ def plot_docked_top_view(problem, pose, q, ok, w, path: Path, margin: float = 0.
            title=f"Docked vehicle pose (top view)\nx = {pose[0]:.3f} m, y = {pose[1]:.3f} m, "
                  f"z = {pose[2]:.3f} m, ψ = {np.degrees(pose[3]):.1f}°")
     fig.legend(loc="outside lower center", ncols=2, fontsize=8)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    save_figure(fig, path, dpi=120)

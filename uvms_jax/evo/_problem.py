@@ -18,6 +18,7 @@ from flax import struct
 from jax import Array
 
 from uvms_jax import indices, kin
+from uvms_jax.evo._fitness import FitnessInputs, Objective, make_objective, paper_weights
 from uvms_jax.kin import Chain, docking_arm, with_dtype
 
 Pose = Array  # (..., 4) [x, y, z, ψ] of the arm base in G [m, rad]
@@ -54,7 +55,8 @@ class DockingProblem:
       d: height margin of eq. 11 [m].
       p_i: ``(3,)`` initial vehicle base (suction cup) point in G (eq. 4) [m].
       p_bp: ``(3,)`` vehicle base point in B [m].
-      a, b: weights of eq. 8 (M_a in m³-like units of w, D in m).
+      objective: the fitness terms and their weights (eq. 8: ``a`` on M_a in m³-like units of
+        w, ``b`` on D in m; :mod:`uvms_jax.evo._fitness`).
       tool_yaw: demanded tool yaw in G [rad] when ``yaw_mode == "fixed"``.
       yaw_mode: ``"heading"`` (tool z along the candidate's ψ, the default of docs/theory.md §3) or ``"fixed"``
         (static).
@@ -69,8 +71,7 @@ class DockingProblem:
     d: Array
     p_i: Array
     p_bp: Array
-    a: Array
-    b: Array
+    objective: Objective
     tool_yaw: Array
     yaw_mode: str = struct.field(pytree_node=False, default="heading")
 
@@ -104,6 +105,7 @@ def make_docking_problem(
     yaw_mode: str,
     tool_yaw: float,
     arm_lengths: tuple[float, float, float],
+    terms: dict[str, float] | None = None,
     dtype=None,
 ) -> DockingProblem:
     """Build the docking problem from plain values (docs/theory.md §3). The paper's scene is
@@ -116,16 +118,17 @@ def make_docking_problem(
       control_points_per_side: 2 = the four corners (paper), n > 2 = an n×n grid.
       p_init, psi_init: initial arm base position [m] and yaw [rad] (eq. 6).
       p_bp: vehicle base point (suction cup) in B [m].
-      a, b: weights of eq. 8.
+      a, b: weights of eq. 8 (the fitness terms ``manipulability`` and ``distance``).
       d: margin above the face for z (eq. 11) [m].
       yaw_mode, tool_yaw: tool yaw at the control points: ``"heading"`` follows ψ,
         ``"fixed"`` uses ``tool_yaw`` [rad] in G.
       arm_lengths: ``(l0, l1, l2)`` of the docking arm [m].
+      terms: further registered fitness terms, name → weight (:func:`~uvms_jax.evo.register_fitness_term`).
       dtype: float dtype of the arrays (default: JAX's default float).
 
     Raises:
-      ValueError: on non-positive sizes, a task area that does not fit the face, or an
-        unknown yaw mode.
+      ValueError: on non-positive sizes, a task area that does not fit the face, an unknown
+        yaw mode or an unknown fitness term.
     """
     if yaw_mode not in YAW_MODES:
         raise ValueError(f"yaw_mode must be one of {YAW_MODES}, got {yaw_mode!r}")
@@ -151,8 +154,7 @@ def make_docking_problem(
         d=arr(d),
         p_i=p_i,
         p_bp=arr(p_bp),
-        a=arr(a),
-        b=arr(b),
+        objective=make_objective(paper_weights(a, b, terms), dtype),
         tool_yaw=arr(tool_yaw),
         yaw_mode=yaw_mode,
     )
@@ -179,7 +181,7 @@ class DockingEval(NamedTuple):
     """Per-candidate terms of the objective, each ``(...)``.
 
     Attributes:
-      fitness: eq. 15 (``a·M_a − b·D`` inside Wd, 0 outside).
+      fitness: eq. 15 (the problem's objective, ``a·M_a − b·D`` by default, inside Wd; 0 outside).
       M_a: area manipulability, eq. 1.
       D: distance from the initial to the proposed vehicle base point, eq. 3 [m].
       feasible: membership of Wd, eq. 14.
@@ -189,11 +191,6 @@ class DockingEval(NamedTuple):
     M_a: Array
     D: Array
     feasible: Array
-
-
-def docking_fitness(M_a: Array, D: Array, feasible: Array, a: Array, b: Array) -> Array:
-    """Eq. 8 and 15: ``a·M_a − b·D`` inside the search set Wd, 0 outside (any docking problem)."""
-    return jnp.where(feasible, a * M_a - b * D, 0.0)
 
 
 def _area_inputs(problem: DockingProblem, pose: Array) -> tuple[Array, Array]:
@@ -206,7 +203,8 @@ def _terms(problem: DockingProblem, pose: Array, M_a: Array) -> DockingEval:
     """Objective terms of base poses ``(..., 4)`` from their area manipulability ``M_a (...)``."""
     D = jnp.linalg.norm(docking_point(pose, problem.p_bp) - problem.p_i, axis=-1)  # eq. 3
     feasible = in_search_set(problem, pose)  # eq. 14
-    return DockingEval(fitness=docking_fitness(M_a, D, feasible, problem.a, problem.b), M_a=M_a, D=D, feasible=feasible)
+    fitness = problem.objective(FitnessInputs(pose, M_a, D), feasible)  # eq. 15
+    return DockingEval(fitness=fitness, M_a=M_a, D=D, feasible=feasible)
 
 
 def evaluate_traced(problem: DockingProblem, pose: Array) -> DockingEval:

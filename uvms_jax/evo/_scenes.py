@@ -9,7 +9,7 @@ import numpy as np
 from uvms_jax import frames
 from uvms_jax import robot as robots
 from uvms_jax.evo._arm import ArmDockingProblem, make_arm_docking_problem
-from uvms_jax.evo._settings import ArmSceneSettings, BoxSettings, PanelSettings
+from uvms_jax.evo._settings import ArmSceneSettings, BoxSettings, PanelSettings, term_weights
 from uvms_jax.evo._geometry import SphereWorld
 
 
@@ -140,6 +140,7 @@ def arm_docking_problem(scene: ArmSceneSettings, task: ArmTask | None = None, dt
         p_i=scene.p_init,
         a=scene.a,
         b=scene.b,
+        terms=term_weights(scene.terms),
         link_radius=robot.link_radius,
         world=task.world,
         vehicle_boxes=boxes(scene.vehicle_boxes),

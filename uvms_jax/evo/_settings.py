@@ -12,6 +12,7 @@ import math
 from collections.abc import Mapping
 from typing import Any
 
+from uvms_jax.evo._fitness import FITNESS_TERMS, PAPER_TERMS
 from uvms_jax.settings import check_fields, from_mapping, setting
 
 FIELDS = ("x", "y", "z", "psi")  # the variables of a docking pose, in chromosome order
@@ -19,8 +20,32 @@ DTYPES = ("float32", "float64")  # DockingSettings.dtype
 
 
 @dataclasses.dataclass(frozen=True)
+class TermSettings:
+    """A fitness term beyond eq. 8's two: a registered name (:func:`~uvms_jax.evo.register_fitness_term`)
+    and its weight in the sum."""
+
+    name: str = setting(choices=FITNESS_TERMS)
+    weight: float = 1.0
+
+    def __post_init__(self):
+        check_fields(self)
+        if self.name in PAPER_TERMS:
+            raise ValueError(f"fitness term {self.name!r} is weighed by the scene's a or b, not by its terms")
+
+
+def term_weights(terms: tuple[TermSettings, ...]) -> dict[str, float]:
+    """``name → weight`` of a scene's further fitness terms (a ValueError if one is named twice)."""
+    names = [t.name for t in terms]
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:
+        raise ValueError(f"fitness terms {twice} are named twice")
+    return {t.name: t.weight for t in terms}
+
+
+@dataclasses.dataclass(frozen=True)
 class SceneSettings:
-    """The docking scene (``configs/docking/scene/*.yaml``); see :func:`make_docking_problem`."""
+    """The docking scene (``configs/docking/scene/*.yaml``); see :func:`make_docking_problem`.
+    ``a``, ``b`` weigh eq. 8's terms; ``terms`` adds registered ones with their weights."""
 
     block_size: tuple[float, float, float] = (2.0, 2.0, 2.0)
     task_center: tuple[float, float, float] = (0.0, 0.0, 0.0)
@@ -35,6 +60,10 @@ class SceneSettings:
     yaw_mode: str = "heading"
     tool_yaw: float = 0.0
     arm_lengths: tuple[float, float, float] = (0.1, 0.4, 0.4)
+    terms: tuple[TermSettings, ...] = ()
+
+    def __post_init__(self):
+        term_weights(self.terms)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -90,7 +119,7 @@ class ArmSceneSettings:
         the symmetric grasps); None keeps all. Fewer make each evaluation cheaper.
       pose_low, pose_high: box of vehicle poses ``[x, y, z, ψ]`` [m, rad] (holds Wd).
       p_dock: docking point in V [m]; p_init: its initial position in W [m] (D of eq. 3).
-      a, b: weights of eq. 8.
+      a, b: weights of eq. 8; terms: further registered fitness terms and their weights.
       ik_seeds, ik_iterations, ik_damping, ik_seed: numerical IK (seeds fixed for the run):
         seeds ≥ 1, iterations ≥ 1, damping > 0.
     """
@@ -110,6 +139,7 @@ class ArmSceneSettings:
     p_init: tuple[float, float, float] = (-2.5, -1.5, 1.0)
     a: float = 300.0
     b: float = 0.5
+    terms: tuple[TermSettings, ...] = ()
     ik_seeds: int = setting(32, ge=1)
     ik_iterations: int = setting(40, ge=1)
     ik_damping: float = setting(0.5, gt=0)
@@ -117,6 +147,7 @@ class ArmSceneSettings:
 
     def __post_init__(self):
         check_fields(self)
+        term_weights(self.terms)
 
 
 @dataclasses.dataclass(frozen=True)

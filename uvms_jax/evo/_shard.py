@@ -35,6 +35,16 @@ class ShardedProblem:
     problem: Any
     mesh: Mesh = struct.field(pytree_node=False)
 
+    @property
+    def pose_low(self) -> jax.Array:
+        """The wrapped problem's ``(4,)`` lower corner of the candidate box."""
+        return self.problem.pose_low
+
+    @property
+    def pose_high(self) -> jax.Array:
+        """The wrapped problem's ``(4,)`` upper corner of the candidate box."""
+        return self.problem.pose_high
+
     def fitness(self, x: jax.Array) -> jax.Array:
         """``problem.fitness`` of ``x (n, m)``, with ``n`` sharded over the mesh."""
         spec = PartitionSpec(BATCH_AXIS, *([None] * (x.ndim - 1)))

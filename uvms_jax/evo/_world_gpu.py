@@ -85,7 +85,11 @@ def _obstacle_table(world: SphereWorld) -> Array:
 def _build(sizes: tuple[int, ...], n_faces: tuple[int, ...], n_base_boxes: int, n_base_faces: int,
            n_frame_rows: int, interpret: bool):
     """``(rows (k, L), obstacles (1, L'), frames (k, R, lanes)) → (k, lanes)`` int32, one
-    program per tool pose and block of configurations."""
+    program per tool pose and block of configurations.
+
+    Over 80 lines as one function: the kernel's helpers (``place``, ``sphere_hits``,
+    ``pair_hits``, ``capsule_hits``) close over one program's refs and the table's offsets;
+    outside it each would take them all as arguments."""
     from jax.experimental import pallas as pl
     from jax.experimental.pallas import triton as plt
 

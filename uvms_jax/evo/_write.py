@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-import csv
 import json
 from pathlib import Path
 
 import numpy as np
 
+from uvms_jax.files import write_atomic, write_csv
 from uvms_jax.evo._docking import DockingRun, GridOptimum
 from uvms_jax.evo._plots import plot_convergence, plot_docked_top_view, plot_wmax
 from uvms_jax.evo._settings import FIELDS
@@ -22,7 +22,7 @@ def _optimum(g: GridOptimum) -> dict:
 
 
 def docking_summary(run: DockingRun) -> dict:
-    """Acceptance figures of a run (the contents of summary.json)."""
+    """Acceptance figures of a run (the contents of results.json)."""
     s = run.settings
     references = {"grid": run.grid.fitness, "refined_grid": run.refined_grid.fitness}
     f_ga = run.fitness
@@ -76,7 +76,7 @@ def _write_wmax(run: DockingRun, out: Path) -> None:
     for name, m in maps.items():
         label = ", ".join(f"{float(v):.3f}" for v in m.pose)
         plot_wmax(m.map, f"{name.replace('_', '-')} pose [{label}]", out / f"wmax_{name}.png", vmax)
-    (out / "wmax.json").write_text(json.dumps({
+    write_atomic(out / "wmax.json", json.dumps({
         name: {"pose": _pose(m.pose), "zero_w_fraction": m.map.zero_fraction, "Ma": m.M_a,
                "w_max_mean": float(m.map.w_max.mean()), "n_per_side": run.settings.wmax.n_per_side}
         for name, m in maps.items()
@@ -88,7 +88,7 @@ def _write_arm_pose(run: DockingRun, out: Path) -> None:
     target, and a top view."""
     best = run.best
     pose, ik = best.pose, best.ik
-    (out / "best_pose.json").write_text(json.dumps({
+    write_atomic(out / "best_pose.json", json.dumps({
         "pose": _pose(pose), "source": best.source, "fitness": best.fitness, "Ma": float(ik.terms.M_a),
         "candidates": [{"pose": _pose(x), "fitness": float(f)} for x, f in zip(run.candidates, run.candidate_fitness)],
         "targets": [{"reached": bool(o), "w": float(wi), "q": None if not o else qi.round(5).tolist()}
@@ -106,7 +106,7 @@ def write_docking(run: DockingRun, out: Path) -> dict:
     map) for the paper's scene, or
     best_pose.json (IK solution and w per target, the distinct candidate poses) and
     docked_top_view.png for an arm scene,
-    convergence.png, summary.json.
+    convergence.png, results.json.
     """
     out = Path(out)
     s = run.settings
@@ -114,11 +114,11 @@ def write_docking(run: DockingRun, out: Path) -> dict:
             "seconds": run.grid.seconds,
             "refined": {**_optimum(run.refined_grid), "candidates": run.refined_grid.candidates,
                         "seconds": run.refined_grid.seconds, "stages": list(run.refine_stage_fitness)}}
-    (out / "grid_optimum.json").write_text(json.dumps(grid, indent=2))
+    write_atomic(out / "grid_optimum.json", json.dumps(grid, indent=2))
 
     if run.cmaes is not None:
         c = run.cmaes
-        (out / "cmaes.json").write_text(json.dumps({
+        write_atomic(out / "cmaes.json", json.dumps({
             "runs": [{**dict(zip(FIELDS, np.asarray(x).tolist())), "fitness": float(f)} for x, f in zip(c.poses, c.fitness)],
             "seconds": c.seconds,
             "evaluations_per_run": c.evaluations_per_run,
@@ -126,12 +126,9 @@ def write_docking(run: DockingRun, out: Path) -> dict:
             "ratio_to_refined_grid": (c.fitness / run.refined_grid.fitness).tolist(),
         }, indent=2))
 
-    with open(out / "runs.csv", "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow([*FIELDS, "fitness", "Ma", "generations", "seconds"])
-        for r in range(len(run.fitness)):
-            w.writerow([*run.poses[r].round(6).tolist(), round(float(run.fitness[r]), 6), round(float(run.M_a[r]), 6),
-                        int(run.generations[r]), round(run.run_seconds[r], 4)])
+    write_csv(out / "runs.csv", [[*run.poses[r].round(6).tolist(), round(float(run.fitness[r]), 6),
+                                  round(float(run.M_a[r]), 6), int(run.generations[r]), round(run.run_seconds[r], 4)]
+                                 for r in range(len(run.fitness))], header=[*FIELDS, "fitness", "Ma", "generations", "seconds"])
 
     if run.wmax_best is not None:
         _write_wmax(run, out)
@@ -142,5 +139,5 @@ def write_docking(run: DockingRun, out: Path) -> dict:
                      {"grid optimum": run.grid.fitness, "refined grid": run.refined_grid.fitness},
                      out / "convergence.png")
     summary = docking_summary(run)
-    (out / "summary.json").write_text(json.dumps(summary, indent=2))
+    write_atomic(out / "results.json", json.dumps(summary, indent=2))
     return summary

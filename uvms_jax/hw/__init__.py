@@ -27,7 +27,7 @@ the simulator server, the executor loop, :func:`write_run` and the CLI):
   :class:`LoopbackTransport` on a :class:`VirtualClock`, with fault injection
   (:class:`SimConfig`);
 * the stage: :func:`run_plan` (arm check and dry run, then execution on a simulated or real link) →
-  :class:`HwRun`; :func:`write_run` writes ``run.csv``, ``run.png`` and ``result.json``;
+  :class:`HwRun`; :func:`write_run` writes ``run.csv``, ``run.png`` and ``results.json``;
 * entry point: ``uvms-hw`` (:mod:`uvms_jax.hw.cli`).
 """
 

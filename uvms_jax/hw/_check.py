@@ -76,6 +76,43 @@ def check_arm(plan: Plan, robot) -> None:
         raise PlanError(f"plan was made for arm {_describe(plan.arm)}, not for arm {_describe(mine)}")
 
 
+def _time_problems(where: str, t: np.ndarray) -> list[str]:
+    """A segment's times ``(k,)`` [s]: finite, from 0, increasing (the first problem only)."""
+    if not len(t):
+        return []
+    if not np.all(np.isfinite(t)):
+        return [f"{where}: non-finite time"]
+    if t[0] != 0.0:
+        return [f"{where}: t[0] = {t[0]} s, must be 0"]
+    if np.any(np.diff(t) <= 0):
+        k = int(np.argmax(np.diff(t) <= 0))
+        return [f"{where}: times not increasing at waypoint {k}->{k + 1}"]
+    return []
+
+
+def _limit_problems(where: str, q: np.ndarray, joints) -> list[str]:
+    """Every waypoint of ``q (k, n)`` [rad] whose joint is not finite or outside its limits."""
+    problems = []
+    for k, row in enumerate(q):
+        for j, spec in enumerate(joints):
+            if not math.isfinite(row[j]):
+                problems.append(f"{where} waypoint {k}: joint {spec.name} is {row[j]}")
+            elif not spec.contains(row[j]):
+                problems.append(f"{where} waypoint {k}: joint {spec.name} = {row[j]:.4f} rad "
+                                f"outside [{spec.lower}, {spec.upper}]")
+    return problems
+
+
+def _jaws_problems(where: str, jaws_mm: float, jaws) -> list[str]:
+    """A gripper step to ``jaws_mm`` [mm]: the arm has jaws (``jaws``, their spec) and the
+    opening is within their limits."""
+    if jaws is None:
+        return [f"{where}: a gripper step ({jaws_mm} mm), but the arm has no gripper"]
+    if not (math.isfinite(jaws_mm) and jaws.contains(jaws_mm)):
+        return [f"{where}: jaws {jaws_mm} mm outside [{jaws.lower}, {jaws.upper}]"]
+    return []
+
+
 def check_plan(
     plan: Plan,
     robot,
@@ -115,21 +152,7 @@ def check_plan(
         t = np.asarray(seg.t, dtype=float)
         q = np.asarray(seg.q, dtype=float).reshape(len(seg.q), len(names))
         n_wp += len(q)
-        if len(t):
-            if not np.all(np.isfinite(t)):
-                problems.append(f"{where}: non-finite time")
-            elif t[0] != 0.0:
-                problems.append(f"{where}: t[0] = {t[0]} s, must be 0")
-            elif np.any(np.diff(t) <= 0):
-                k = int(np.argmax(np.diff(t) <= 0))
-                problems.append(f"{where}: times not increasing at waypoint {k}->{k + 1}")
-        for k, row in enumerate(q):
-            for j, spec in enumerate(joints):
-                if not math.isfinite(row[j]):
-                    problems.append(f"{where} waypoint {k}: joint {spec.name} is {row[j]}")
-                elif not spec.contains(row[j]):
-                    problems.append(f"{where} waypoint {k}: joint {spec.name} = {row[j]:.4f} rad "
-                                    f"outside [{spec.lower}, {spec.upper}]")
+        problems += _time_problems(where, t) + _limit_problems(where, q, joints)
         if len(q) and prev_q is not None and np.all(np.isfinite(q[0])):
             jump = np.abs(q[0] - prev_q)
             if np.max(jump) > config.continuity_tol_rad:
@@ -151,10 +174,7 @@ def check_plan(
             prev_q = q[-1]
         if seg.jaws_mm is not None:
             n_grip += 1
-            if jaws is None:
-                problems.append(f"{where}: a gripper step ({seg.jaws_mm} mm), but the arm has no gripper")
-            elif not (math.isfinite(seg.jaws_mm) and jaws.contains(seg.jaws_mm)):
-                problems.append(f"{where}: jaws {seg.jaws_mm} mm outside [{jaws.lower}, {jaws.upper}]")
+            problems += _jaws_problems(where, seg.jaws_mm, jaws)
     if n_wp == 0:
         problems.append("plan has no waypoints: the start position is unknown")
     if problems:

@@ -1,7 +1,7 @@
 """The hardware stage: run a plan on a link (simulated or real) and write what happened.
 
 :func:`run_plan` is what ``uvms-hw run`` and the end-to-end pipeline both call;
-:func:`write_run` writes its files (``run.csv``, ``run.png``, ``result.json``).
+:func:`write_run` writes its files (``run.csv``, ``run.png``, ``results.json``).
 """
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ __all__ = ["RUN_FILES", "SIM_LINKS", "HwRun", "SimCounts", "existing_run_files",
            "run_report", "write_run"]
 
 # What a run writes into its folder (and the marker it carries while it runs).
-RUN_FILES = ("result.json", "run.csv", "run.png", RUNNING)
+RUN_FILES = ("results.json", "run.csv", "run.png", RUNNING)
 
 # Simulated links by name: the arm in-process on a virtual clock (a run costs only its
 # computation), or behind a UDP socket on 127.0.0.1 in real time (the real arm's code path).
@@ -207,7 +207,7 @@ def _finite(value: float, digits: int | None = None) -> float | None:
 
 
 def run_report(run: HwRun, out: Path | str | None = None, plan_path: Path | str | None = None) -> dict[str, Any]:
-    """``result.json``'s content: the run's key figures, plain JSON values.
+    """``results.json``'s content: the run's key figures, plain JSON values.
 
     Keys: ``ok``, ``status`` (``completed``, ``aborted`` or ``interrupted``: :attr:`HwRun.status`),
     ``reason``, ``gates``, ``max_gate_error_rad`` [rad], ``max_gate_error_mm`` [mm]
@@ -275,7 +275,7 @@ def prepare_out(out: Path | str, *, overwrite: bool = False) -> Path:
 
 def write_run(run: HwRun, out: Path | str, *, plot: bool = True,
               plan_path: Path | str | None = None) -> dict[str, Any]:
-    """Write ``run.csv`` (every tick), ``result.json`` (:func:`run_report`) and ``run.png``
+    """Write ``run.csv`` (every tick), ``results.json`` (:func:`run_report`) and ``run.png``
     (if ``plot`` and anything was logged) into ``out`` (created), each atomically (a temporary
     file renamed over it), then remove the folder's :data:`~uvms_jax.files.RUNNING` marker;
     returns the report. The plot comes last: a run interrupted again while plotting has its
@@ -284,7 +284,7 @@ def write_run(run: HwRun, out: Path | str, *, plot: bool = True,
     out.mkdir(parents=True, exist_ok=True)
     run.log.write_csv(out / "run.csv")
     report = run_report(run, out, plan_path)
-    write_atomic(out / "result.json", json.dumps(report, indent=2) + "\n")
+    write_atomic(out / "results.json", json.dumps(report, indent=2) + "\n")
     clear_running(out)
     if plot and run.log.rows:
         run.log.plot(out / "run.png")

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import csv
 import dataclasses
 import math
 from collections.abc import Sequence
@@ -10,8 +9,8 @@ from pathlib import Path
 
 import numpy as np
 
-from uvms_jax.files import atomic_path
-from uvms_jax.plotting import pyplot
+from uvms_jax.files import write_csv
+from uvms_jax.plotting import pyplot, save_figure
 
 __all__ = ["RunLog"]
 
@@ -41,12 +40,7 @@ class RunLog:
     def write_csv(self, path: str | Path) -> Path:
         """Write the log to ``path`` (parent folders created), atomically: a run stopped while
         writing leaves the previous file or none, never a truncated one."""
-        path = Path(path)
-        with atomic_path(path) as tmp, tmp.open("w", newline="") as f:
-            w = csv.writer(f)
-            w.writerow(self.header())
-            w.writerows(self.rows)
-        return path
+        return write_csv(path, self.rows, header=self.header())
 
     def measured(self, joints: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
         """Times ``(k,)`` [s] and measured states ``(k, len(joints))`` of the rows in which
@@ -76,7 +70,4 @@ class RunLog:
         fig.suptitle(title)
         # one legend for all panels, above them: never over the data
         fig.legend(*axes[0, 0].get_legend_handles_labels(), loc="outside upper right", ncols=2, fontsize=8)
-        with atomic_path(path) as tmp:
-            fig.savefig(tmp, dpi=100, format="png")
-        plt.close(fig)
-        return path
+        return save_figure(fig, path, dpi=100)

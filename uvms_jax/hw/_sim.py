@@ -140,34 +140,12 @@ class SimArm:
         self._upper = np.array([j.upper for j in self.joints])
         self._lower_mj, self._upper_mj = self._lower * self._scale, self._upper * self._scale
         self._index = {j.device_id: i for i, j in enumerate(self.joints)}
-        if q0 is None:
-            q0 = [j.lower if j.unit == "mm" else 0.5 * (j.lower + j.upper) for j in self.joints]
-        q0 = np.asarray(q0, dtype=float)
-        if q0.shape != (len(self.joints),):
-            raise ValueError(f"q0 must have {len(self.joints)} values ({', '.join(names)}), got {q0.shape}")
-        for j, v in zip(self.joints, q0):
-            if not j.contains(v):
-                raise ValueError(f"initial {j.name} = {v} outside [{j.lower}, {j.upper}]")
+        q0 = _initial_positions(self.joints, q0)
         self.data.qpos[self._qadr] = q0 * self._scale
         self._mj.mj_forward(self.model, self.data)
         if world is not None:
             world.prepare(self.model, self.data)
-        # Buoyancy of each body with mass: body ids, lifts [N] along the world's up, and the
-        # lift-weighted mean of the parts' centres of buoyancy less the body's centre of mass
-        # [m, in the body], fixed in the base frame (the base does not move). A world applies
-        # its own.
-        self._buoy_ids, lifts, arms = self._buoyant_bodies() if world is None else _NO_BODIES
-        self._buoy_arm = arms
-        lift = lifts[:, None] * world_up(config.base_rpy)  # (k, 3) [N]
-        self.data.xfrc_applied[self._buoy_ids, :3] = lift
-        # Its moment arm turns with the link: r × F = [F]×ᵀ r, whose row j is F × e_j (k, 3, 3) [N].
-        self._buoy_moment = np.cross(lift[:, None, :], np.eye(3))
-        # Views of MjData (fetching one is slow in a per-step loop) and the rows of the buoyant
-        # bodies: a slice when their ids run on (they do along a chain).
-        self._xmat, self._xfrc = self.data.xmat, self.data.xfrc_applied
-        ids = self._buoy_ids
-        contiguous = ids.size and np.array_equal(ids, np.arange(ids[0], ids[0] + ids.size))
-        self._buoy_rows = slice(int(ids[0]), int(ids[0]) + ids.size) if contiguous else ids
+        self._init_buoyancy()
         # The velocity loop's integral [rad; m], started at what holds the arm still where it is.
         self._integral = self._holding_torque() / _KI
         n = len(self.joints)
@@ -188,6 +166,30 @@ class SimArm:
         self._tool = self.model.site(TOOL_SITE).id
         self._base = self.model.body(base_body(robot)).id
         self._jaws = robot.gripper is not None  # the last joint is the jaws
+        self._init_current_limits()
+
+    def _init_buoyancy(self) -> None:
+        """Buoyancy of each body with mass: body ids, lifts [N] along the world's up, and the
+        lift-weighted mean of the parts' centres of buoyancy less the body's centre of mass
+        [m, in the body], fixed in the base frame (the base does not move). A world applies
+        its own."""
+        self._buoy_ids, lifts, arms = self._buoyant_bodies() if self.world is None else _NO_BODIES
+        self._buoy_arm = arms
+        lift = lifts[:, None] * world_up(self.config.base_rpy)  # (k, 3) [N]
+        self.data.xfrc_applied[self._buoy_ids, :3] = lift
+        # Its moment arm turns with the link: r × F = [F]×ᵀ r, whose row j is F × e_j (k, 3, 3) [N].
+        self._buoy_moment = np.cross(lift[:, None, :], np.eye(3))
+        # Views of MjData (fetching one is slow in a per-step loop) and the rows of the buoyant
+        # bodies: a slice when their ids run on (they do along a chain).
+        self._xmat, self._xfrc = self.data.xmat, self.data.xfrc_applied
+        ids = self._buoy_ids
+        contiguous = ids.size and np.array_equal(ids, np.arange(ids[0], ids[0] + ids.size))
+        self._buoy_rows = slice(int(ids[0]), int(ids[0]) + ids.size) if contiguous else ids
+
+    def _init_current_limits(self) -> None:
+        """Each joint's torque constant [N·m/A or N/A] from its effort limit, and the velocity
+        loop's integral bound from the current limit (none for the jaws)."""
+        robot = self.robot
         efforts = np.array([*robot.effort_limits, *([robot.gripper.effort] if self._jaws else [])], dtype=float)
         efforts[~(efforts > 0)] = _DEFAULT_EFFORT
         self._torque_constant = efforts / (_EFFORT_CURRENT_MA * 1e-3)
@@ -500,3 +502,15 @@ def _ypr_rates(yaw: float, pitch: float, omega: np.ndarray) -> np.ndarray:
     return np.linalg.solve(basis, omega)
 
 
+def _initial_positions(joints, q0) -> np.ndarray:
+    """``(n + 1,)`` initial positions in wire units [rad …, mm]: ``q0``, or mid-range for the
+    arm and the jaws' lower limit; a ValueError for a wrong count or a value outside a limit."""
+    if q0 is None:
+        q0 = [j.lower if j.unit == "mm" else 0.5 * (j.lower + j.upper) for j in joints]
+    q0 = np.asarray(q0, dtype=float)
+    if q0.shape != (len(joints),):
+        raise ValueError(f"q0 must have {len(joints)} values ({', '.join(j.name for j in joints)}), got {q0.shape}")
+    for j, v in zip(joints, q0):
+        if not j.contains(v):
+            raise ValueError(f"initial {j.name} = {v} outside [{j.lower}, {j.upper}]")
+    return q0

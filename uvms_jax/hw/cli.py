@@ -16,10 +16,10 @@ PLAN is a ``plan.json`` or a ``trajectory_msgs/JointTrajectory``-shaped file, YA
 its suffix (:mod:`uvms_jax.planfile`); ``export`` writes a plan as the latter.
 Exit status: 0 plan completed (or dry run passed, or exported); 1 run aborted safely (arm told
 to hold); 2 plan refused or bad arguments; 130 interrupted (Ctrl-C, SIGINT: the arm told to hold,
-the partial results written, ``result.json`` ``"status": "interrupted"``); 143 the same for
+the partial results written, ``results.json`` ``"status": "interrupted"``); 143 the same for
 SIGTERM. Outputs in ``--out``
 (default ``outputs/hw/<time>``; a folder that already holds a run is refused unless
-``--overwrite``): ``run.csv`` (commanded vs measured), ``result.json`` and ``run.png``, each
+``--overwrite``): ``run.csv`` (commanded vs measured), ``results.json`` and ``run.png``, each
 written atomically; the folder carries a ``RUNNING`` marker until they are written, so a run
 killed outright (SIGKILL) is recognisable.
 Defaults come from :class:`~uvms_jax.hw.HwConfig` / ``SimConfig`` (or ``--config``, a YAML
@@ -292,7 +292,7 @@ def _interrupted(run: HwRun | None, out: Path, args: argparse.Namespace) -> int:
         report = write_run(run, out, plot=False, plan_path=args.plan)
         print(json.dumps(report))
     else:
-        write_atomic(out / "result.json", json.dumps(
+        write_atomic(out / "results.json", json.dumps(
             {"ok": False, "status": "interrupted", "reason": "interrupted (SIGINT) before the run started: "
              "nothing was sent", "plan": str(args.plan), "out": str(out)}, indent=2) + "\n")
         clear_running(out)

@@ -51,6 +51,33 @@ class Chain:
         return len(self.kinds)
 
 
+def _check_twists(twists: np.ndarray, kinds: Sequence[str]) -> None:
+    """A ValueError for a joint of unknown kind or whose twist ``(6,)`` is not a unit
+    revolute axis (``|ω| = 1``) or a unit prismatic direction (``ω = 0, |v| = 1``)."""
+    for i, kind in enumerate(kinds):
+        v, w = twists[i, :3], twists[i, 3:]
+        if kind == REVOLUTE and not np.isclose(np.linalg.norm(w), 1.0, atol=1e-9):
+            raise ValueError(f"joint {i}: revolute axis must be a unit vector, |ω| = {np.linalg.norm(w)}")
+        elif kind == PRISMATIC and not (np.allclose(w, 0.0) and np.isclose(np.linalg.norm(v), 1.0, atol=1e-9)):
+            raise ValueError(f"joint {i}: prismatic twist must have ω = 0 and |v| = 1")
+        elif kind not in (REVOLUTE, PRISMATIC):
+            raise ValueError(f"joint {i}: unknown joint kind {kind!r} (expected 'revolute' or 'prismatic')")
+
+
+def _default_joint_frames(twists: np.ndarray, kinds: Sequence[str]) -> np.ndarray:
+    """``(n, 4, 4)`` joint frames aligned with the base at a point of each joint's axis: ``ω × v``
+    for a revolute joint, the previous frame's origin for a prismatic one."""
+    T_base_joint0 = np.tile(np.eye(4), (len(kinds), 1, 1))
+    previous = np.zeros(3)
+    for i, kind in enumerate(kinds):
+        v, w = twists[i, :3], twists[i, 3:]
+        # For ξ = [−ω × q, ω], ω × v is the point of the axis closest to the origin.
+        point = np.cross(w, v) if kind == REVOLUTE else previous
+        T_base_joint0[i, :3, 3] = point
+        previous = point
+    return T_base_joint0
+
+
 def make_chain(
     twists,
     T_base_tool0,
@@ -98,28 +125,13 @@ def make_chain(
             "joint limits inverted or empty (lower >= upper) for joints "
             + ", ".join(f"{names[i]} [{lower[i]}, {upper[i]}]" for i in bad)
         )
-    for i, kind in enumerate(kinds):
-        v, w = twists[i, :3], twists[i, 3:]
-        if kind == REVOLUTE and not np.isclose(np.linalg.norm(w), 1.0, atol=1e-9):
-            raise ValueError(f"joint {i}: revolute axis must be a unit vector, |ω| = {np.linalg.norm(w)}")
-        elif kind == PRISMATIC and not (np.allclose(w, 0.0) and np.isclose(np.linalg.norm(v), 1.0, atol=1e-9)):
-            raise ValueError(f"joint {i}: prismatic twist must have ω = 0 and |v| = 1")
-        elif kind not in (REVOLUTE, PRISMATIC):
-            raise ValueError(f"joint {i}: unknown joint kind {kind!r} (expected 'revolute' or 'prismatic')")
+    _check_twists(twists, kinds)
     if joint_names is None:
         joint_names = [f"q{i + 1}" for i in range(n)]
     if len(joint_names) != n:
         raise ValueError(f"expected {n} joint names, got {len(joint_names)}")
-    if T_base_joint0 is None:
-        T_base_joint0 = np.tile(np.eye(4), (n, 1, 1))
-        previous = np.zeros(3)
-        for i, kind in enumerate(kinds):
-            v, w = twists[i, :3], twists[i, 3:]
-            # For ξ = [−ω × q, ω], ω × v is the point of the axis closest to the origin.
-            point = np.cross(w, v) if kind == REVOLUTE else previous
-            T_base_joint0[i, :3, 3] = point
-            previous = point
-    T_base_joint0 = np.asarray(T_base_joint0, dtype=np.float64)
+    T_base_joint0 = np.asarray(_default_joint_frames(twists, kinds) if T_base_joint0 is None else T_base_joint0,
+                               dtype=np.float64)
     if T_base_joint0.shape != (n, 4, 4):
         raise ValueError(f"T_base_joint0 must have shape ({n}, 4, 4), got {T_base_joint0.shape}")
     velocity_limits = np.ones(n) if velocity_limits is None else np.asarray(velocity_limits, dtype=np.float64)

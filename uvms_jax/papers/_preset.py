@@ -5,7 +5,7 @@ from __future__ import annotations
 import dataclasses
 from pathlib import Path
 
-from uvms_jax.plotting import pyplot
+from uvms_jax import plotting
 
 
 @dataclasses.dataclass(frozen=True)
@@ -62,7 +62,5 @@ def join_and(words: list[str]) -> str:
 def save_figure(fig, img: Path, name: str) -> str:
     """Save a figure as a small PNG ``img/name``; returns its path relative to docs/ (the
     document links ``img/papers/<name>``)."""
-    img.mkdir(parents=True, exist_ok=True)
-    fig.savefig(img / name, dpi=100, bbox_inches="tight")
-    pyplot().close(fig)
+    plotting.save_figure(fig, img / name, dpi=100, bbox_inches="tight")
     return f"img/papers/{name}"

@@ -256,6 +256,34 @@ def plot_wmax_maps(p: Preset, poses: dict, img: Path) -> tuple[str, dict]:
     return path, {k: float(np.mean(m == 0)) for k, m in maps.items()}
 
 
+def _paper_table3_rows(base, corners: np.ndarray, order: list[int], far: np.ndarray) -> tuple[list, np.ndarray]:
+    """Table 3's seven poses under our model (rows of the [D11] table: pose, the paper's
+    fitness and M_a, our M_a and w_max at the corners K, L, M, N, the shoulder's distance to
+    the far corner M [m], the heading's offset), and those distances ``(7,)`` [m]."""
+    w_corner = np.asarray(w_max_at(base, D11_TABLE3[:, :4], corners))
+    shoulder = D11_TABLE3[:, :3] + np.array([0.0, 0.0, base.lengths[0]])
+    far_dist = np.linalg.norm(shoulder - far, axis=-1)
+    rows = []
+    for i, (x, y, z, psi, f, ma) in enumerate(D11_TABLE3):
+        rows.append([i + 1, f"({x:.2f}, {y:.2f}, {z:.2f}, {psi:.2f})", f"{f:.2f}", f"{ma:.3f}",
+                     f"{float(np.min(w_corner[i])):.3f}",
+                     " / ".join(f"{w_corner[i][k]:.3f}" for k in order), f"{far_dist[i]:.2f}",
+                     f"{heading_offset(D11_TABLE3[i:i + 1, :4])[0]:.0f}°"])
+    return rows, far_dist
+
+
+def _readings_table(ours: np.ndarray) -> tuple[str, list[str]]:
+    """M_a of the paper's poses and of ``ours (4,)`` under each reading of the arm (a Markdown
+    table), and the readings under which M_a reaches the paper's size."""
+    r_rows, paper_sized = [], []
+    for r in progress.bar(READINGS, desc="docking readings", unit="reading"):
+        at_paper, at_ours = area_m(r, D11_TABLE3[:, :4]), float(area_m(r, ours[None])[0])
+        r_rows.append([r.label, f"{at_paper[0]:.4f}", f"{at_paper.min():.3f}–{at_paper.max():.3f}", f"{at_ours:.4f}"])
+        if max(at_paper.max(), at_ours) >= PAPER_SIZED * D11_TABLE3[:, 5].min():
+            paper_sized.append(f"{r.label} ({at_ours:.3f} at our pose, {at_paper.max():.3f} at the paper's)")
+    return md_table(["reading", "M_a at paper run 1", "M_a at paper runs 1–7", "M_a at our pose"], r_rows), paper_sized
+
+
 def docking_fields(p: Preset, img: Path) -> dict:
     """The [D11] section's numbers, tables and figure: the fields of its template
     (experiments/papers_templates/docking.md)."""
@@ -267,16 +295,8 @@ def docking_fields(p: Preset, img: Path) -> dict:
     # Table 3: the paper's seven poses under our model, and the headings.
     corners = indices.control_points((0.0, 0.0, 0.0), D11_TASK_SIZE, 2)
     order = [CORNER_OF[k] for k in "KLMN"]
-    w_corner = np.asarray(w_max_at(base, D11_TABLE3[:, :4], corners))
-    shoulder = D11_TABLE3[:, :3] + np.array([0.0, 0.0, base.lengths[0]])
     far = corners[CORNER_OF["M"]]
-    far_dist = np.linalg.norm(shoulder - far, axis=-1)
-    rows = []
-    for i, (x, y, z, psi, f, ma) in enumerate(D11_TABLE3):
-        rows.append([i + 1, f"({x:.2f}, {y:.2f}, {z:.2f}, {psi:.2f})", f"{f:.2f}", f"{ma:.3f}",
-                     f"{float(np.min(w_corner[i])):.3f}",
-                     " / ".join(f"{w_corner[i][k]:.3f}" for k in order), f"{far_dist[i]:.2f}",
-                     f"{heading_offset(D11_TABLE3[i:i + 1, :4])[0]:.0f}°"])
+    rows, far_dist = _paper_table3_rows(base, corners, order, far)
     ga_poses, ga_fitness = ga_runs()
     facing = facing_centre(grid)
     m_facing = area_m(base, facing)
@@ -309,13 +329,7 @@ def docking_fields(p: Preset, img: Path) -> dict:
 
     # The bound and the readings.
     bound, q_bound = w_bound(p)
-    r_rows, paper_sized = [], []
-    for r in progress.bar(READINGS, desc="docking readings", unit="reading"):
-        at_paper, at_ours = area_m(r, D11_TABLE3[:, :4]), float(area_m(r, ours[None])[0])
-        r_rows.append([r.label, f"{at_paper[0]:.4f}", f"{at_paper.min():.3f}–{at_paper.max():.3f}", f"{at_ours:.4f}"])
-        if max(at_paper.max(), at_ours) >= PAPER_SIZED * D11_TABLE3[:, 5].min():
-            paper_sized.append(f"{r.label} ({at_ours:.3f} at our pose, {at_paper.max():.3f} at the paper's)")
-    readings = md_table(["reading", "M_a at paper run 1", "M_a at paper runs 1–7", "M_a at our pose"], r_rows)
+    readings, paper_sized = _readings_table(ours)
 
     fig, zero = plot_wmax_maps(p, {"paper run 1 (Fig. 9)": D11_TABLE3[0, :4],
                                    "paper ill-placed pose (Fig. 10)": np.array(D11_ILL_PLACED_POSE),

@@ -18,6 +18,7 @@ from uvms_jax import robot as robots
 from uvms_jax import plan as planning
 from uvms_jax.pipeline._precheck import baseline_scenario, vehicle_hull
 from uvms_jax.pipeline._report import StageReport
+from uvms_jax.files import write_atomic
 from uvms_jax.text import md_table
 from uvms_jax.pipeline._settings import PipelineSettings
 
@@ -92,7 +93,7 @@ def surrogates(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
     k = int(problem.group.shape[0])
     res = {"n_train_samples": run.n_train, "n_test_samples": run.n_test, "analytic_seconds": run.analytic_seconds,
            "train_seconds": run.train_seconds, "vehicle_pose_equivalents": (run.n_train + run.n_test) / k, **t}
-    (out / "reach_map.json").write_text(json.dumps({**res, "settings": dataclasses.asdict(r)}, indent=1))
+    write_atomic(out / "reach_map.json", json.dumps({**res, "settings": dataclasses.asdict(r)}, indent=1))
     table = md_table(["tool poses (train / test)", "reached", "analytic scoring [s]", "FFBN units", "training [s]",
                       "test RMSE of w", "max error of w", "largest w"],
                      [[f"{run.n_train} / {run.n_test}", f"{100 * t['reached_fraction']:.0f} %", run.analytic_seconds,

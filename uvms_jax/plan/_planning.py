@@ -159,6 +159,34 @@ def check_ends(checker: CollisionChecker, q_start, q_goal, context: Context) -> 
     return q_start, q_goal
 
 
+def _query_setup(checker: CollisionChecker, context: Context, planner: str, params, resolutions: tuple[float, float],
+                 fast: SphereChecker | None, ends: tuple[np.ndarray, np.ndarray]) -> tuple:
+    """OMPL's ``SimpleSetup`` of one query (:func:`plan_motion`'s arguments): the joint space,
+    MuJoCo's state checks at ``resolutions[0]`` [rad], ``fast``'s motion checks at
+    ``resolutions[1]`` [rad] when given, the planner and the start and goal states. Returns
+    ``(ss, si, validator, (space, start, goal))``: the caller keeps them while OMPL plans."""
+    resolution, recheck_resolution = resolutions
+    n = len(ends[0])
+    space, ss, si = joint_space(checker.lower, checker.upper)
+    # States: MuJoCo (one call per state is what it is fastest at). Motions: OMPL's state-by-
+    # state checks, or one SphereChecker call per motion.
+    ss.setStateValidityChecker(checker.state_validator(n, context))
+    si.setStateValidityCheckingResolution(resolution / space.getMaximumExtent())
+    validator = None
+    if fast is not None:
+        if fast.reference is not checker:
+            raise ValueError("fast must be a SphereChecker built on the given checker")
+        fast._pairs(context)  # the context's pair tables (built once, ~2 ms): now, not in the timed solve
+        validator = _SegmentValidator(si, fast, context, recheck_resolution, n)
+        si.setMotionValidator(validator)
+    ss.setPlanner(make_planner(planner, si, params))
+    start, goal = space.allocState(), space.allocState()
+    start[0:n] = ends[0].tolist()
+    goal[0:n] = ends[1].tolist()
+    ss.setStartAndGoalStates(start, goal)
+    return ss, si, validator, (space, start, goal)
+
+
 def plan_motion(
     checker: CollisionChecker,
     q_start,
@@ -208,23 +236,8 @@ def plan_motion(
     check_parameters(planner, params or {})
     q_start, q_goal = check_ends(checker, q_start, q_goal, context)
     n = len(q_start)
-    space, ss, si = joint_space(checker.lower, checker.upper)
-    # States: MuJoCo (one call per state is what it is fastest at). Motions: OMPL's state-by-
-    # state checks, or one SphereChecker call per motion.
-    ss.setStateValidityChecker(checker.state_validator(n, context))
-    si.setStateValidityCheckingResolution(resolution / space.getMaximumExtent())
-    validator = None
-    if fast is not None:
-        if fast.reference is not checker:
-            raise ValueError("fast must be a SphereChecker built on the given checker")
-        fast._pairs(context)  # the context's pair tables (built once, ~2 ms): now, not in the timed solve
-        validator = _SegmentValidator(si, fast, context, recheck_resolution, n)
-        si.setMotionValidator(validator)
-    ss.setPlanner(make_planner(planner, si, params))
-    start, goal = space.allocState(), space.allocState()
-    start[0:n] = q_start.tolist()
-    goal[0:n] = q_goal.tolist()
-    ss.setStartAndGoalStates(start, goal)
+    ss, si, validator, (space, start, goal) = _query_setup(checker, context, planner, params, (resolution, recheck_resolution),
+                                                    fast, (q_start, q_goal))
     spent, attempts = 0.0, 0
     result = PlanResult(False, np.zeros((0, n)), 0.0, 0)
     while spent < budget_s:
@@ -248,7 +261,7 @@ def plan_motion(
         if ok:
             break
         ss.clear()
-    del ss, si, validator
+    del ss, si, validator, space
     return dataclasses.replace(result, planning_time_s=spent, attempts=attempts)
 
 

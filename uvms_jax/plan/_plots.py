@@ -17,7 +17,7 @@ from uvms_jax.plan._scene import Scene
 from uvms_jax.plan._targets import NodeTarget
 from uvms_jax.plan._tasks import EdgeResult
 from uvms_jax.plan._video import scene_camera
-from uvms_jax.plotting import pyplot
+from uvms_jax.plotting import pyplot, save_figure
 
 __all__ = ["plot_ee_paths", "plot_plan_joints", "render_frames"]
 
@@ -80,8 +80,7 @@ def plot_ee_paths(scene: Scene, results: Sequence[EdgeResult], path: Path) -> No
                Line2D([], [], marker="o", color="tab:red", ls="", label="base plate"),
                Line2D([], [], color="0.5", label="table top")]
     fig.legend(handles=handles, loc="outside lower center", ncol=4)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, dpi=110)
 
 
 def plot_plan_joints(plan: planfile.Plan, path: Path) -> None:
@@ -102,8 +101,7 @@ def plot_plan_joints(plan: planfile.Plan, path: Path) -> None:
     ax.set(xlabel="time [s] (waypoints; synchronised rest-to-rest legs)", ylabel="joint angle [rad]",
            title="plan.json joint waypoints")
     fig.legend(title="joint", loc="outside right upper")  # beside the axes, off the curves
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, dpi=110)
 
 
 def render_frame(scene: Scene, q, path: Path) -> bool:

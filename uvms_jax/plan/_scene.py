@@ -256,33 +256,38 @@ class Scene:
 
     # -- MJCF ----------------------------------------------------------------------------
     def _build_xml(self) -> tuple[str, float]:
+        """The scene's MJCF and the jaw fingers' reach beyond the tool point [m]."""
+        parts = _MjcfParts()
+        self._cage_xml(parts)
+        self._items_xml(parts)
+        arm, finger_length = self._arm_xml(parts)
+        base = robots.base_body(self.robot)
+        excludes = "".join(f'<exclude body1="{a}" body2="{b}"/>' for a, b in self.self_collision["always"]
+                           if base not in (a, b))
+        xml = (
+            '<mujoco model="thesis_cage">\n  <compiler angle="radian"/>\n  <option gravity="0 0 0"/>\n'
+            '  <visual><global offwidth="960" offheight="720"/></visual>\n'
+            f"  <asset>\n    {chr(10).join(parts.assets)}\n  </asset>\n"
+            f"  <worldbody>\n    <light pos=\"0 0 3\" dir=\"0 0 -1\"/>\n    {chr(10).join(parts.world)}\n"
+            f"{ET.tostring(arm, encoding='unicode')}\n  </worldbody>\n"
+            f"  <contact>{excludes}</contact>\n</mujoco>\n"
+        )
+        return xml, finger_length
+
+    def _cage_xml(self, parts: "_MjcfParts") -> None:
+        """The ceiling and the table under everything (half-spaces), the cage's frame, the mount."""
         s = self.spec
-        assets: list[str] = []
-
-        def mesh(name: str, verts: np.ndarray) -> str:
-            assets.append(f'<mesh name="{name}" vertex="{numbers(verts)}"/>')
-            return name
-
-        world: list[str] = []
-
-        def box(label: str, T: np.ndarray, size, rgba: str, bits=SCENE_BITS) -> None:
-            mname = mesh(f"m_{label}", box_vertices(size))
-            world.append(
-                f'<geom name="{label}" type="mesh" mesh="{mname}" pos="{numbers(T[:3, 3])}" '
-                f'quat="{numbers(frames.matrix_quat(T[:3, :3]))}" rgba="{rgba}" contype="{bits[0]}" conaffinity="{bits[1]}"/>'
-            )
-
         if s.cage_size is not None:
             L, W, H = s.cage_size
             # The ceiling and the table under everything are half-spaces (MuJoCo planes): exact,
             # cheap against every shape, and they also forbid slipping past their edges.
-            world.append(
+            parts.world.append(
                 f'<geom name="ceiling" type="plane" pos="0 0 {H}" quat="0 1 0 0" size="{L / 2} {W / 2} 0.05" '
                 f'rgba="0.7 0.7 0.7 0.2" contype="{SCENE_BITS[0]}" conaffinity="{SCENE_BITS[1]}"/>'
             )
         under = s.tables[0]
         top = under.T_world_top
-        world.append(
+        parts.world.append(
             f'<geom name="{under.name}" type="plane" pos="{numbers(top[:3, 3])}" quat="{numbers(frames.matrix_quat(top[:3, :3]))}" '
             f'size="{under.size[0] / 2} {under.size[1] / 2} 0.05" rgba="0.6 0.55 0.5 1" '
             f'contype="{SCENE_BITS[0]}" conaffinity="{SCENE_BITS[1]}"/>'
@@ -292,48 +297,57 @@ class Scene:
             k = 0
             for sx in (-1, 1):
                 for sy in (-1, 1):
-                    box(f"cage:post{k}", frames.pose(p=(sx * (L - p) / 2, sy * (W - p) / 2, H / 2)), (p, p, H), "0.6 0.6 0.65 1")
+                    parts.box(f"cage:post{k}", frames.pose(p=(sx * (L - p) / 2, sy * (W - p) / 2, H / 2)), (p, p, H),
+                              "0.6 0.6 0.65 1")
                     k += 1
             for z in (p / 2, H - p / 2):
                 for sx in (-1, 1):
-                    box(f"cage:x{k}", frames.pose(p=(sx * (L - p) / 2, 0, z)), (p, W - 2 * p, p), "0.6 0.6 0.65 1")
-                    box(f"cage:y{k}", frames.pose(p=(0, sx * (W - p) / 2, z)), (L - 2 * p, p, p), "0.6 0.6 0.65 1")
+                    parts.box(f"cage:x{k}", frames.pose(p=(sx * (L - p) / 2, 0, z)), (p, W - 2 * p, p), "0.6 0.6 0.65 1")
+                    parts.box(f"cage:y{k}", frames.pose(p=(0, sx * (W - p) / 2, z)), (L - 2 * p, p, p), "0.6 0.6 0.65 1")
                     k += 1
         ms = s.mount_size
-        mount_T = self.T_world_base @ frames.pose(p=(0, 0, -ms[2] / 2))
-        box("mount", mount_T, ms, "0.3 0.3 0.3 1", MOUNT_BITS)
+        parts.box("mount", self.T_world_base @ frames.pose(p=(0, 0, -ms[2] / 2)), ms, "0.3 0.3 0.3 1", MOUNT_BITS)
+
+    def _items_xml(self, parts: "_MjcfParts") -> None:
+        """The tables on the floor, the obstacles, the base plates and the objects."""
+        s = self.spec
         for t in s.tables[1:]:
-            box(t.name, t.T_world_box, t.size, "0.75 0.8 0.9 0.6")
+            parts.box(t.name, t.T_world_box, t.size, "0.75 0.8 0.9 0.6")
         bits = f'contype="{SCENE_BITS[0]}" conaffinity="{SCENE_BITS[1]}" rgba="0.55 0.6 0.7 0.8"'
         for o in s.obstacles:
             T = o.T_world
             pose = f'pos="{numbers(T[:3, 3])}" quat="{numbers(frames.matrix_quat(T[:3, :3]))}"'
             if o.shape == "sphere":
-                world.append(f'<geom name="{o.name}" type="sphere" size="{o.dims[0]!r}" {pose} {bits}/>')
+                parts.world.append(f'<geom name="{o.name}" type="sphere" size="{o.dims[0]!r}" {pose} {bits}/>')
             elif o.shape == "capsule":  # primitive: arm capsule vs capsule is exact in MuJoCo
-                world.append(f'<geom name="{o.name}" type="capsule" size="{o.dims[0]!r} {o.dims[1] / 2!r}" {pose} {bits}/>')
+                parts.world.append(f'<geom name="{o.name}" type="capsule" size="{o.dims[0]!r} {o.dims[1] / 2!r}" '
+                                   f'{pose} {bits}/>')
             elif o.shape == "mesh" and not o.vertices:  # MuJoCo reads the file and collides with its convex hull
                 mname = f"m_obstacle_{o.name}"
-                assets.append(f'<mesh name="{mname}" file={quoteattr(str(Path(o.file).resolve()))} '
-                              f'scale="{numbers([o.scale] * 3)}"/>')
-                world.append(f'<geom name="{o.name}" type="mesh" mesh="{mname}" {pose} {bits}/>')
+                parts.assets.append(f'<mesh name="{mname}" file={quoteattr(str(Path(o.file).resolve()))} '
+                                    f'scale="{numbers([o.scale] * 3)}"/>')
+                parts.world.append(f'<geom name="{o.name}" type="mesh" mesh="{mname}" {pose} {bits}/>')
             else:  # boxes and cylinders as convex meshes (see the module docstring), meshes of vertices
-                mname = mesh(f"m_obstacle_{o.name}", o.hull_vertices())
-                world.append(f'<geom name="{o.name}" type="mesh" mesh="{mname}" {pose} {bits}/>')
+                mname = parts.mesh(f"m_obstacle_{o.name}", o.hull_vertices())
+                parts.world.append(f'<geom name="{o.name}" type="mesh" mesh="{mname}" {pose} {bits}/>')
         for b in s.bases:
             T = self.T_world_base_top(b.node) @ frames.pose(p=(0, 0, -b.size[2] / 2))
-            box(f"n{b.node}:{b.name}", T, b.size, "0.9 0.3 0.2 1")
+            parts.box(f"n{b.node}:{b.name}", T, b.size, "0.9 0.3 0.2 1")
         for o in s.objects:
             T = self.T_world_object(o.node)
-            mname = mesh(f"m_{o.name}", o.vertices())
-            world.append(
+            mname = parts.mesh(f"m_{o.name}", o.vertices())
+            parts.world.append(
                 f'<geom name="n{o.node}:{o.name}" type="mesh" mesh="{mname}" pos="{numbers(T[:3, 3])}" '
                 f'quat="{numbers(frames.matrix_quat(T[:3, :3]))}" rgba="1 0.55 0.1 1" contype="{SCENE_BITS[0]}" conaffinity="{SCENE_BITS[1]}"/>'
             )
 
-        robot = self.robot
+    def _arm_xml(self, parts: "_MjcfParts") -> tuple[ET.Element, float]:
+        """The arm's body tree with each geom's collision bits, its jaw fingers as convex
+        meshes and in-hand copies of the objects (off by default); and the fingers' reach
+        beyond the tool point [m]."""
+        s, robot = self.spec, self.robot
         arm = ET.fromstring(robots.mjcf_body(robot, s.mount_pos, frames.matrix_quat(self.T_world_base[:3, :3]), s.jaws_open))
-        assets += robots.mjcf_assets(robot)  # the description's meshes, boxes and cylinders of the arm
+        parts.assets += robots.mjcf_assets(robot)  # the description's meshes, boxes and cylinders of the arm
         last = arm.find(".//site[@name='tool']/..")
         tool_site = last.find("site[@name='tool']")
         T_link_tool = frames.pose(frames.quat_matrix(tool_site.get("quat")), [float(v) for v in tool_site.get("pos").split()])
@@ -353,29 +367,38 @@ class Scene:
                     tip = np.linalg.inv(T_link_tool) @ np.r_[pos, 1.0]
                     finger_length = max(finger_length, tip[2] + size[2] / 2)
                     g.set("type", "mesh")
-                    g.set("mesh", mesh(f"m_{g.get('name')}", box_vertices(size)))
+                    g.set("mesh", parts.mesh(f"m_{g.get('name')}", box_vertices(size)))
                     del g.attrib["size"]
         # In-hand copies of the objects, fixed to the last link at the grasp (off by default).
         for o in s.objects:
             T = T_link_tool @ self.T_tool_obj_for(o.node)
-            mname = f"m_{o.name}"
             ET.SubElement(last, "geom", {
-                "name": f"held_{o.name}", "type": "mesh", "mesh": mname, "pos": numbers(T[:3, 3]),
+                "name": f"held_{o.name}", "type": "mesh", "mesh": f"m_{o.name}", "pos": numbers(T[:3, 3]),
                 "quat": numbers(frames.matrix_quat(T[:3, :3])), "rgba": "1 0.55 0.1 0.8", "contype": str(HELD_BITS[0]),
                 "conaffinity": str(HELD_BITS[1]),
             })
-        excludes = "".join(f'<exclude body1="{a}" body2="{b}"/>' for a, b in self.self_collision["always"]
-                           if base not in (a, b))
-        xml = (
-            '<mujoco model="thesis_cage">\n  <compiler angle="radian"/>\n  <option gravity="0 0 0"/>\n'
-            '  <visual><global offwidth="960" offheight="720"/></visual>\n'
-            f"  <asset>\n    {chr(10).join(assets)}\n  </asset>\n"
-            f"  <worldbody>\n    <light pos=\"0 0 3\" dir=\"0 0 -1\"/>\n    {chr(10).join(world)}\n"
-            f"{ET.tostring(arm, encoding='unicode')}\n  </worldbody>\n"
-            f"  <contact>{excludes}</contact>\n</mujoco>\n"
-        )
-        return xml, finger_length
+        return arm, finger_length
 
+
+class _MjcfParts:
+    """The scene's MJCF as it is built: ``<asset>`` lines and ``<worldbody>`` geom lines."""
+
+    def __init__(self):
+        self.assets: list[str] = []
+        self.world: list[str] = []
+
+    def mesh(self, name: str, verts: np.ndarray) -> str:
+        """Add a mesh asset of vertices ``(v, 3)`` [m]; returns its name."""
+        self.assets.append(f'<mesh name="{name}" vertex="{numbers(verts)}"/>')
+        return name
+
+    def box(self, label: str, T: np.ndarray, size, rgba: str, bits=SCENE_BITS) -> None:
+        """Add a box of full ``size`` [m] at ``T (4, 4)`` as a convex mesh geom."""
+        mname = self.mesh(f"m_{label}", box_vertices(size))
+        self.world.append(
+            f'<geom name="{label}" type="mesh" mesh="{mname}" pos="{numbers(T[:3, 3])}" '
+            f'quat="{numbers(frames.matrix_quat(T[:3, :3]))}" rgba="{rgba}" contype="{bits[0]}" conaffinity="{bits[1]}"/>'
+        )
 
 def build_scene(robot: robots.Robot, spec: SceneSpec | Mapping[str, Any], T_world_base=None) -> Scene:
     """Build the MuJoCo scene of a robot in a scenario.

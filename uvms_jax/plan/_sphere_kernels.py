@@ -311,7 +311,11 @@ def _first_collision(q0, q1, steps, order, start, active, R_root, p_root, parent
                      faces, poly_start, poly_end, poly_c, poly_r, boxes, pp_geom, pp_poly, ss_a, ss_b, st_geom, st_c, st_r,
                      margin):
     """Index into ``order`` (from ``start`` on) of the first sample ``q0 + (i/steps)(q1 − q0)``,
-    ``i = order[t]``, that the spheres reject, or −1 (see :class:`SphereChecker`)."""
+    ``i = order[t]``, that the spheres reject, or −1 (see :class:`SphereChecker`).
+
+    Over 80 lines as one function: the motion's whole loop is one compiled Numba kernel, whose
+    scratch arrays (frames, placed spheres) are allocated once per call and reused per sample;
+    split into calls, each sample would pass them all and stop early less cheaply."""
     n_body = parent.shape[0]
     # Slot 0 holds the root (the body the arm hangs from), body b sits in slot b + 1.
     R = np.empty((n_body + 1, 3, 3))

@@ -108,20 +108,7 @@ class SphereChecker:
         m = reference.scene.model
         d = mujoco.MjData(m)
         mujoco.mj_kinematics(m, d)
-        bodies = [b for b in range(1, m.nbody) if m.body_weldid[b] == b]
-        for b in bodies:
-            if m.body_jntnum[b] != 1 or m.jnt_type[m.body_jntadr[b]] != mujoco.mjtJoint.mjJNT_HINGE \
-                    or np.any(m.jnt_pos[m.body_jntadr[b]] != 0):
-                raise ValueError(f"body {b} of the arm must have one hinge at its origin")
-        slot = {b: i for i, b in enumerate(bodies)}
-        root = m.body_parentid[bodies[0]]
-        self._origin = d.xpos[bodies[0]].copy()  # fixed: the first joint turns about it
-        self._chain = (d.xmat[root].reshape(3, 3).copy(), d.xpos[root].copy(),
-                       np.array([slot.get(m.body_parentid[b], -1) for b in bodies]),
-                       np.stack([frames.quat_matrix(m.body_quat[b]) for b in bodies]),
-                       np.stack([m.body_pos[b] for b in bodies]).astype(float),
-                       np.stack([m.jnt_axis[m.body_jntadr[b]] for b in bodies]).astype(float),
-                       np.array([m.jnt_qposadr[m.body_jntadr[b]] for b in bodies]))
+        slot, self._origin, self._chain = _arm_chain(m, d)
         centres, radii, sph_body = [], [], []
         self._moving: list[int] = []  # geom ids of moving geoms, in kernel order
         g_start, g_end, g_body, g_centre, g_radius, g_seg, g_cap = [], [], [], [], [], [], []
@@ -130,35 +117,14 @@ class SphereChecker:
         for g in range(m.ngeom):
             b = m.geom_bodyid[g]
             moving = m.body_weldid[b] != 0
-            pos, R = ((m.geom_pos[g].astype(float), frames.quat_matrix(m.geom_quat[g])) if moving else
-                      (d.geom_xpos[g].copy(), d.geom_xmat[g].reshape(3, 3).copy()))
-            t = m.geom_type[g]
-            seg, cap = np.zeros((2, 3)), 0.0
-            if t == mujoco.mjtGeom.mjGEOM_CAPSULE:
-                c, r = capsule_spheres(pos, R, m.geom_size[g, 0], m.geom_size[g, 1], spacing)
-                seg, cap = pos + np.outer([-1.0, 1.0], R[:, 2] * m.geom_size[g, 1]), float(m.geom_size[g, 0])
-            elif t == mujoco.mjtGeom.mjGEOM_SPHERE:
-                c, r = pos[None], m.geom_size[g, :1].astype(float)
-            elif t == mujoco.mjtGeom.mjGEOM_MESH:
-                k = m.geom_dataid[g]
-                v = pos + m.mesh_vert[m.mesh_vertadr[k]: m.mesh_vertadr[k] + m.mesh_vertnum[k]].astype(float) @ R.T
-                if not moving:
-                    eq = _hull_faces(v)
-                    self._poly_range[g] = (len(faces), len(faces) + len(eq))
-                    mid = (v.min(0) + v.max(0)) / 2
-                    self._poly_ball[g] = (mid, float(np.max(np.linalg.norm(v - mid, axis=1))))
-                    faces += list(eq)
-                    continue
-                c, r = _mesh_spheres(v, cell)
-            elif t == mujoco.mjtGeom.mjGEOM_PLANE and not moving:
-                n = R[:, 2]  # solid behind the plane: signed distance n·(x − p0)
-                self._poly_range[g] = (len(faces), len(faces) + 1)
-                self._poly_ball[g] = (pos, np.inf)
-                faces.append(np.r_[n, -n @ pos])
+            shape = _geom_shape(m, d, g, moving, spacing, cell)
+            if shape[0] == "polytope":  # a fixed mesh's hull or a plane's half-space
+                _, eq, ball = shape
+                self._poly_range[g] = (len(faces), len(faces) + len(eq))
+                self._poly_ball[g] = ball
+                faces += list(eq)
                 continue
-            else:
-                raise ValueError(f"geom {mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_GEOM, g)!r}: type {int(t)} "
-                                 "is not supported by the sphere checker")
+            _, c, r, seg, cap = shape
             if not moving:
                 self._static[g] = (c, r)
                 continue
@@ -359,3 +325,62 @@ class SphereChecker:
         [rad] in ``context`` (the same value), with MuJoCo run only where
         :meth:`clearance_lower_bounds` leaves the minimum open."""
         return self.reference.min_clearance(Q, context, self.clearance_lower_bounds(Q, context))
+
+
+def _arm_chain(m: mujoco.MjModel, d: mujoco.MjData) -> tuple[dict[int, int], np.ndarray, tuple]:
+    """The arm's moving bodies in the model at ``d``'s kinematics: body id → slot, the first
+    joint's origin in the world ``(3,)`` [m] (fixed: the first joint turns about it), and the
+    chain's arrays for the kernel (root frame, parent slots, body rotations and positions,
+    joint axes, qpos addresses).
+
+    Raises:
+      ValueError: a body that does not have exactly one hinge at its origin.
+    """
+    bodies = [b for b in range(1, m.nbody) if m.body_weldid[b] == b]
+    for b in bodies:
+        if m.body_jntnum[b] != 1 or m.jnt_type[m.body_jntadr[b]] != mujoco.mjtJoint.mjJNT_HINGE \
+                or np.any(m.jnt_pos[m.body_jntadr[b]] != 0):
+            raise ValueError(f"body {b} of the arm must have one hinge at its origin")
+    slot = {b: i for i, b in enumerate(bodies)}
+    root = m.body_parentid[bodies[0]]
+    chain = (d.xmat[root].reshape(3, 3).copy(), d.xpos[root].copy(),
+             np.array([slot.get(m.body_parentid[b], -1) for b in bodies]),
+             np.stack([frames.quat_matrix(m.body_quat[b]) for b in bodies]),
+             np.stack([m.body_pos[b] for b in bodies]).astype(float),
+             np.stack([m.jnt_axis[m.body_jntadr[b]] for b in bodies]).astype(float),
+             np.array([m.jnt_qposadr[m.body_jntadr[b]] for b in bodies]))
+    return slot, d.xpos[bodies[0]].copy(), chain
+
+
+def _geom_shape(m: mujoco.MjModel, d: mujoco.MjData, g: int, moving: bool, spacing: float, cell: float) -> tuple:
+    """Geom ``g`` for the sphere checker: ``("spheres", centres (s, 3), radii (s,), capsule
+    segment (2, 3), capsule radius)`` (in its body's frame if ``moving``, else the world's; a
+    radius of 0 and no segment for a non-capsule), or for a fixed mesh or plane ``("polytope",
+    faces (f, 4), (centre, radius) of a ball around it)``.
+
+    Raises:
+      ValueError: a geom type the sphere checker does not support.
+    """
+    pos, R = ((m.geom_pos[g].astype(float), frames.quat_matrix(m.geom_quat[g])) if moving else
+              (d.geom_xpos[g].copy(), d.geom_xmat[g].reshape(3, 3).copy()))
+    t = m.geom_type[g]
+    seg, cap = np.zeros((2, 3)), 0.0
+    if t == mujoco.mjtGeom.mjGEOM_CAPSULE:
+        c, r = capsule_spheres(pos, R, m.geom_size[g, 0], m.geom_size[g, 1], spacing)
+        seg, cap = pos + np.outer([-1.0, 1.0], R[:, 2] * m.geom_size[g, 1]), float(m.geom_size[g, 0])
+    elif t == mujoco.mjtGeom.mjGEOM_SPHERE:
+        c, r = pos[None], m.geom_size[g, :1].astype(float)
+    elif t == mujoco.mjtGeom.mjGEOM_MESH:
+        k = m.geom_dataid[g]
+        v = pos + m.mesh_vert[m.mesh_vertadr[k]: m.mesh_vertadr[k] + m.mesh_vertnum[k]].astype(float) @ R.T
+        if not moving:
+            mid = (v.min(0) + v.max(0)) / 2
+            return "polytope", _hull_faces(v), (mid, float(np.max(np.linalg.norm(v - mid, axis=1))))
+        c, r = _mesh_spheres(v, cell)
+    elif t == mujoco.mjtGeom.mjGEOM_PLANE and not moving:
+        n = R[:, 2]  # solid behind the plane: signed distance n·(x − p0)
+        return "polytope", [np.r_[n, -n @ pos]], (pos, np.inf)
+    else:
+        raise ValueError(f"geom {mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_GEOM, g)!r}: type {int(t)} "
+                         "is not supported by the sphere checker")
+    return "spheres", c, r, seg, cap

@@ -14,6 +14,7 @@ and the way up).
 from __future__ import annotations
 
 import dataclasses
+from typing import NamedTuple
 
 import numpy as np
 
@@ -83,14 +84,46 @@ def sphere_world(checker: SphereChecker, rows: list[tuple[Context, ...]], attach
     names = [m.body(b).name for b in range(1, m.nbody) if m.body_weldid[b] == b]
     if names != list(robot.link_names):
         raise ValueError(f"the scene's moving bodies {names} are not the arm's links {list(robot.link_names)}")
+    base_geoms = set(scene.base_geoms)
+    static = sorted(checker._static)
+    attached = set(attached) | base_geoms  # a base link of meshes: polytopes fixed to the base
+    o = _obstacles(checker, attached, base_geoms, static)
+    built = [_world_row(checker, contexts, o, static, base_geoms) for contexts in rows]
+    return evo.make_sphere_world(_pad(built), o.boxes, o.faces, np.reshape(o.balls, (-1, 4)), checker.margin,
+                                 o.n_base_boxes, o.n_base_faces, dtype, o.face_sizes)
+
+
+class _Obstacles(NamedTuple):
+    """The scene's fixed obstacles in a sphere world's frames (base-fixed ones first).
+
+    Attributes:
+      col: polytope index → ``("box" | "face", column)`` in the masks.
+      boxes: ``{"c", "R", "half", "vehicle"}`` lists of the boxes (centre, axes, half extents
+        [m], part of the vehicle's body).
+      faces: ``(n, F, 4)`` the other polytopes' face planes (repeated to F).
+      balls: fixed spheres in the world ``[c, r]`` [m]; ball_of: static geom → their indices.
+      n_base_boxes, n_base_faces: how many boxes and polytopes are fixed to the base.
+      face_sizes: each polytope's number of faces.
+    """
+
+    col: dict
+    boxes: dict
+    faces: np.ndarray
+    balls: list
+    ball_of: dict
+    n_base_boxes: int
+    n_base_faces: int
+    face_sizes: list
+
+
+def _obstacles(checker: SphereChecker, attached: set[int], base_geoms: set[int], static: list[int]) -> _Obstacles:
+    """The checker's polytopes (those ``attached`` to the base in its frame, the rest in the
+    world) and its fixed spheres not on the base link, in the columns' order."""
+    scene = checker.reference.scene
+    m = scene.model
     T_base_world = np.linalg.inv(scene.T_world_base)
     R_bw, p_bw = T_base_world[:3, :3], T_base_world[:3, 3]
-    sph_body, centres, radii, g_start, g_end, g_body, _, _, g_seg, g_cap = checker._spheres
     polys, starts, ends, _, _, boxes, _ = checker._polytopes
-    base_geoms = set(scene.base_geoms)
-    attached = set(attached) | base_geoms  # a base link of meshes: polytopes fixed to the base
-    static = sorted(checker._static)
-
     # Obstacles: the base's first, then the world's (the order of the masks' columns).
     box_cols, face_cols, col = {"base": [], "world": []}, {"base": [], "world": []}, {}
     for k, g in enumerate(polys):
@@ -123,53 +156,57 @@ def sphere_world(checker: SphereChecker, rows: list[tuple[Context, ...]], attach
             cs, rs = checker._static[s]
             ball_of[s] = list(range(len(balls), len(balls) + len(rs)))
             balls += [np.r_[ci, ri] for ci, ri in zip(cs, rs)]
+    return _Obstacles(col, {"c": c, "R": R, "half": half, "vehicle": vehicle}, faces, balls, ball_of,
+                      len(box_cols["base"]), len(face_cols["base"]), [ends[k] - starts[k] for k in face_order])
 
-    built = []
-    for contexts in rows:
-        poly_on, static_on, self_on = _row(checker, contexts, polys, static)
-        used = poly_on.any(1) | static_on.any(1) | self_on.any(1) | self_on.any(0)
-        body, cen, rad, first = [], [], [], {}
-        for i in np.flatnonzero(used):
-            first[i] = len(rad)
-            for q in range(g_start[i], g_end[i]):
-                body.append(sph_body[q] + 1)
-                cen.append(centres[q])
-                rad.append(radii[q])
-        base_first = {}
-        for si, s in enumerate(static):
-            if s in base_geoms and static_on[:, si].any():
-                cs, rs = checker._static[s]
-                base_first[si] = len(rad)
-                body += [0] * len(rs)
-                cen += list((cs - scene.T_world_base[:3, 3]) @ scene.T_world_base[:3, :3])  # into B
-                rad += list(rs)
-        N = len(rad)
-        box_on = np.zeros((N, len(box_order)), bool)
-        face_on = np.zeros((N, len(face_order)), bool)
-        ball_on = np.zeros((N, len(balls)), bool)
-        pairs, caps = [], []
-        spheres_of = lambda i: range(first[i], first[i] + g_end[i] - g_start[i])  # noqa: E731
-        for i in first:
-            for k in np.flatnonzero(poly_on[i]):
-                kind, j = col[k]
-                (box_on if kind == "box" else face_on)[list(spheres_of(i)), j] = True
-            for si in np.flatnonzero(static_on[i]):
-                s = static[si]
-                if s in base_geoms:
-                    n_s = len(checker._static[s][1])
-                    pairs += [(a, b) for a in spheres_of(i) for b in range(base_first[si], base_first[si] + n_s)]
-                else:
-                    ball_on[np.ix_(list(spheres_of(i)), ball_of[s])] = True
-            for j in np.flatnonzero(self_on[i]):
-                if g_cap[i] > 0 and g_cap[j] > 0:  # two capsules: their axes' exact distance
-                    caps.append((g_body[i] + 1, g_body[j] + 1, g_seg[i], g_seg[j], g_cap[i] + g_cap[j]))
-                else:
-                    pairs += [(a, b) for a in spheres_of(i) for b in spheres_of(j)]
-        built.append((body, cen, rad, box_on, face_on, ball_on, pairs, caps))
-    return evo.make_sphere_world(_pad(built), {"c": c, "R": R, "half": half, "vehicle": vehicle}, faces,
-                                 np.reshape(balls, (-1, 4)), checker.margin, len(box_cols["base"]),
-                                 len(face_cols["base"]), dtype, [ends[k] - starts[k] for k in face_order])
 
+def _world_row(checker: SphereChecker, contexts, o: _Obstacles, static: list[int], base_geoms: set[int]) -> tuple:
+    """One row of the world: the spheres of the moving geoms tested in ``contexts`` (and of
+    the base link's fixed ones they meet, in B), and their masks against the obstacles, pairs
+    and capsule pairs."""
+    scene = checker.reference.scene
+    sph_body, centres, radii, g_start, g_end, g_body, _, _, g_seg, g_cap = checker._spheres
+    polys = checker._polytopes[0]
+    poly_on, static_on, self_on = _row(checker, contexts, polys, static)
+    used = poly_on.any(1) | static_on.any(1) | self_on.any(1) | self_on.any(0)
+    body, cen, rad, first = [], [], [], {}
+    for i in np.flatnonzero(used):
+        first[i] = len(rad)
+        for q in range(g_start[i], g_end[i]):
+            body.append(sph_body[q] + 1)
+            cen.append(centres[q])
+            rad.append(radii[q])
+    base_first = {}
+    for si, s in enumerate(static):
+        if s in base_geoms and static_on[:, si].any():
+            cs, rs = checker._static[s]
+            base_first[si] = len(rad)
+            body += [0] * len(rs)
+            cen += list((cs - scene.T_world_base[:3, 3]) @ scene.T_world_base[:3, :3])  # into B
+            rad += list(rs)
+    N = len(rad)
+    box_on = np.zeros((N, len(o.boxes["c"])), bool)
+    face_on = np.zeros((N, len(o.faces)), bool)
+    ball_on = np.zeros((N, len(o.balls)), bool)
+    pairs, caps = [], []
+    spheres_of = lambda i: range(first[i], first[i] + g_end[i] - g_start[i])  # noqa: E731
+    for i in first:
+        for k in np.flatnonzero(poly_on[i]):
+            kind, j = o.col[k]
+            (box_on if kind == "box" else face_on)[list(spheres_of(i)), j] = True
+        for si in np.flatnonzero(static_on[i]):
+            s = static[si]
+            if s in base_geoms:
+                n_s = len(checker._static[s][1])
+                pairs += [(a, b) for a in spheres_of(i) for b in range(base_first[si], base_first[si] + n_s)]
+            else:
+                ball_on[np.ix_(list(spheres_of(i)), o.ball_of[s])] = True
+        for j in np.flatnonzero(self_on[i]):
+            if g_cap[i] > 0 and g_cap[j] > 0:  # two capsules: their axes' exact distance
+                caps.append((g_body[i] + 1, g_body[j] + 1, g_seg[i], g_seg[j], g_cap[i] + g_cap[j]))
+            else:
+                pairs += [(a, b) for a in spheres_of(i) for b in spheres_of(j)]
+    return body, cen, rad, box_on, face_on, ball_on, pairs, caps
 
 def _pad(built: list) -> dict:
     """The rows' lists as arrays padded to the longest row (padding tests nothing)."""

@@ -10,13 +10,13 @@ edge are empty except its planning time). ``metrics_<planner>.json``: metric →
 
 from __future__ import annotations
 
-import csv
 import json
 from pathlib import Path
 
 import numpy as np
 
 from uvms_jax import planfile, sched
+from uvms_jax.files import atomic_path, write_atomic, write_csv
 from uvms_jax.plan._plots import plot_ee_paths, plot_plan_joints
 from uvms_jax.plan._taskgraph import TaskGraphPlan
 from uvms_jax.plan._tasks import EdgeResult
@@ -34,37 +34,31 @@ def _edge_row(r: EdgeResult) -> dict:
     return {"planner": r.planner, "src": r.src, "dst": r.dst, "success": r.success, **m, "revalidated": r.revalidated}
 
 
-def _write_csv(path: Path, rows: list[dict]) -> None:
-    with path.open("w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
-
-
 def write_task_graph(task_plan: TaskGraphPlan, out: Path) -> None:
     """Write ``targets.json``, ``edges.csv`` and per planner ``metrics_<planner>.json``,
     ``cost_<planner>.csv`` and ``ee_paths_<planner>.png`` into the folder ``out``."""
     out = Path(out)
     scene = task_plan.scene
-    (out / "targets.json").write_text(json.dumps({
+    write_atomic(out / "targets.json", json.dumps({
         str(n): {"q_pre": t.q_pre.tolist(), "q_at": t.q_at.tolist(), "yaw": t.yaw,
                  "manipulability": t.manipulability, "candidates": t.n_candidates}
         for n, t in task_plan.targets.items()} | {"start": scene.start_q.tolist()}, indent=1))
     # The self-collision pairs the checker skips, as computed for this arm (docs/robots.md).
-    (out / "self_collision.json").write_text(json.dumps(scene.self_collision, indent=1))
+    write_atomic(out / "self_collision.json", json.dumps(scene.self_collision, indent=1))
     rows = []
     for planner, results in task_plan.by_planner.items():
         rows += [_edge_row(r) for r in results]
         mats = task_plan.metrics[planner]
-        (out / f"metrics_{planner}.json").write_text(json.dumps(
+        write_atomic(out / f"metrics_{planner}.json", json.dumps(
             {k: np.where(np.isnan(v), None, v).tolist() for k, v in zip(_FILE_METRICS, mats)}))
-        np.savetxt(out / f"cost_{planner}.csv", task_plan.costs[planner], delimiter=",", fmt="%.6g")
+        with atomic_path(out / f"cost_{planner}.csv") as tmp:
+            np.savetxt(tmp, task_plan.costs[planner], delimiter=",", fmt="%.6g")
         plot_ee_paths(scene, results, out / f"ee_paths_{planner}.png")
-    _write_csv(out / "edges.csv", rows)
+    write_csv(out / "edges.csv", rows)
 
 
 def write_plan(plan: planfile.Plan, out: Path) -> None:
-    """Write ``plan.json`` (``planfile.plan_to_dict``) and its joint plot ``joints.png`` into ``out``."""
+    """Write ``plan.json`` (:func:`uvms_jax.planfile.save_plan`) and its joint plot ``joints.png`` into ``out``."""
     out = Path(out)
-    (out / "plan.json").write_text(json.dumps(planfile.plan_to_dict(plan), indent=1))
+    planfile.save_plan(plan, out / "plan.json")
     plot_plan_joints(plan, out / "joints.png")

@@ -59,11 +59,30 @@ def exact(problem: PickPlaceProblem) -> Schedule:
     U = _Layers(M)
     if N > M:
         return Schedule((), float("inf"), time.perf_counter() - t0, "exact", {"states": 0})
+    D, arg_A, arg_D, n_states = _forward(P, U, c_start_obj, pick, deliver)
+    total = D[0] + c_goal[U.members[N]]  # (nU, N slots): all objects placed
+    iu, tb = np.unravel_index(int(np.argmin(total)), total.shape)
+    if not np.isfinite(total[iu, tb]):
+        return Schedule((), float("inf"), time.perf_counter() - t0, "exact", {"states": n_states})
+    rev = _backtrack(P, U, arg_A, arg_D, int(iu), int(tb), via_start, (s, goal, objs, bases))
+    path = tuple(reversed(rev))
+    return Schedule(path, path_cost(problem, path), time.perf_counter() - t0, "exact", {"states": n_states})
 
-    # Layer c holds D_c[iP, iU, tb]: the cheapest way to have placed the objects of P (index
-    # iP among the sets of c objects) on the bases of U, standing at U's tb-th base. Sets are
-    # stored with their members (``P.members[c]``), so only predecessors that exist are
-    # gathered: (P − o, U − b) for o ∈ P, b ∈ U.
+
+def _forward(P: "_Layers", U: "_Layers", c_start_obj: np.ndarray, pick: np.ndarray,
+             deliver: np.ndarray) -> tuple[np.ndarray, list, list, int]:
+    """The DP's layers, one per number of delivered objects (:func:`exact`'s docstring).
+
+    Layer c holds D_c[iP, iU, tb]: the cheapest way to have placed the objects of P (index iP
+    among the sets of c objects) on the bases of U, standing at U's tb-th base. Sets are
+    stored with their members (``P.members[c]``), so only predecessors that exist are
+    gathered: (P − o, U − b) for o ∈ P, b ∈ U.
+
+    Returns:
+      the last layer ``D (1, nU, N)``, the argmins of each layer's pick (``arg_A``) and
+      delivery (``arg_D``), and the number of finite states.
+    """
+    N = P.n
     A = c_start_obj[None, :, None]  # A_0[iP, o, iU]: layer 0 has only the start
     arg_A = [np.full((1, 1, N), -1, dtype=np.int16)]  # [iP, iU, o] slot picked from, -1 = start
     arg_D = [None]
@@ -90,14 +109,18 @@ def exact(problem: PickPlaceProblem) -> Schedule:
                 arg = np.where(better, np.int16(tb), arg)
             arg_A.append(arg)
             A = np.ascontiguousarray(A.transpose(0, 2, 1))  # [iP, o, iU] for row gathers
-    total = D[0] + c_goal[U.members[N]]  # (nU, N slots): all objects placed
-    iu, tb = np.unravel_index(int(np.argmin(total)), total.shape)
-    if not np.isfinite(total[iu, tb]):
-        return Schedule((), float("inf"), time.perf_counter() - t0, "exact", {"states": n_states})
+    return D, arg_A, arg_D, n_states
 
+
+def _backtrack(P: "_Layers", U: "_Layers", arg_A: list, arg_D: list, iu: int, tb: int, via_start: np.ndarray,
+               nodes: tuple) -> list[int]:
+    """The optimal schedule's nodes, goal first, from the DP's argmins and the best final
+    state ``(all objects, U's iu-th set, its tb-th base)``; ``nodes`` is ``(start, goal,
+    object nodes, base nodes)``."""
+    s, goal, objs, bases = nodes
     rev = [goal]
     ip = 0
-    for c in range(N, 0, -1):
+    for c in range(P.n, 0, -1):
         to = int(arg_D[c][ip, iu, tb])
         o = int(P.members[c][ip, to])
         j = int(U.members[c][iu, tb])
@@ -107,9 +130,7 @@ def exact(problem: PickPlaceProblem) -> Schedule:
         if tb >= 0 and via_start[int(U.members[c - 1][iu, tb]), o]:
             rev.append(s)
     rev.append(s)
-    path = tuple(reversed(rev))
-    return Schedule(path, path_cost(problem, path), time.perf_counter() - t0, "exact", {"states": n_states})
-
+    return rev
 
 class _Layers:
     """Subsets of ``n`` items grouped by size ``c``: ``members[c]`` ``(count, c)`` sorted
@@ -117,6 +138,7 @@ class _Layers:
     without each member."""
 
     def __init__(self, n: int):
+        self.n = n
         masks = np.arange(1 << n, dtype=np.int64)
         bits = (masks[:, None] >> np.arange(n)) & 1
         pop = bits.sum(axis=1)

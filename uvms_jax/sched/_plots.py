@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Mapping, Sequence
 
-from uvms_jax.plotting import pyplot
+from uvms_jax.plotting import pyplot, save_figure
 from uvms_jax.sched._problem import PickPlaceProblem
 from uvms_jax.sched._schedule import Schedule
 from uvms_jax.sched._solvers import SOLVERS
@@ -31,8 +31,7 @@ def plot_sweep(out: Path, sweep: Sequence, solved: Mapping[str, Schedule]) -> No
     b.set(xscale="log", yscale="log", xlabel="GRASP iterations", ylabel="wall time [ms]", title="Time vs iterations (Figs 5.11–5.12)")
     handles, labels = a.get_legend_handles_labels()
     fig.legend(handles, labels, loc="outside lower center", ncol=len(labels), fontsize=8)
-    fig.savefig(out / "grasp_iterations.png", dpi=120)
-    plt.close(fig)
+    save_figure(fig, out / "grasp_iterations.png", dpi=120)
 
 
 def plot_route(out: Path, problem: PickPlaceProblem, schedule: Schedule, greedy: Schedule | None) -> None:
@@ -62,5 +61,4 @@ def plot_route(out: Path, problem: PickPlaceProblem, schedule: Schedule, greedy:
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, 0.0), fontsize=8)
     ax.set_axis_off()
     ax.set_title("Chosen route")
-    fig.savefig(out / "route.png", dpi=120, bbox_inches="tight")
-    plt.close(fig)
+    save_figure(fig, out / "route.png", dpi=120, bbox_inches="tight")

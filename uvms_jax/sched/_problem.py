@@ -154,51 +154,10 @@ class PickPlaceProblem:
           ValueError: wrong shape, infinite or negative costs, unknown or clashing nodes, an
             object without a base, or a cost matrix that leaves no feasible schedule.
         """
-        cost = np.array(cost, dtype=np.float64)
-        if cost.ndim != 2 or cost.shape[0] != cost.shape[1]:
-            raise ValueError(f"cost matrix must be square (n, n); got shape {cost.shape}")
+        cost = _checked_cost(cost)
         n = cost.shape[0]
-        if n < 4:
-            raise ValueError(f"cost matrix needs at least 4 nodes (start, object, base, goal); got {n}")
-        if np.isinf(cost).any():
-            raise ValueError("cost matrix contains ±inf; mark forbidden moves with NaN")
-        if (cost[np.isfinite(cost)] < 0).any():
-            raise ValueError("cost matrix contains negative costs; costs must be >= 0")
-        goal = n - 1 if goal is None else goal
-        for name, node in (("start", start), ("goal", goal)):
-            if not (isinstance(node, (int, np.integer)) and 0 <= node < n):
-                raise ValueError(f"{name} node {node!r} is not a node of the {n}-node cost matrix")
-        if start == goal:
-            raise ValueError(f"start and goal must be different nodes; both are {start}")
-        start, goal = int(start), int(goal)
-
-        if not compat:
-            raise ValueError("compat is empty: the problem needs at least one object")
-        items = {}
-        for o, raw in compat.items():
-            o = _node(o, n, "object")
-            if o in items:
-                raise ValueError(f"compat names object node {o} twice")
-            items[o] = raw
-        objects = sorted(items)
-        for o in objects:
-            if o in (start, goal):
-                raise ValueError(f"object node {o} is also the start or goal node")
-        bases = tuple(i for i in range(n) if i not in (start, goal) and i not in objects)
-        allowed = []
-        for o in objects:
-            bs = sorted(_node(b, n, f"base (of object {o})") for b in items[o])
-            if not bs:
-                raise ValueError(f"object node {o} has no allowed base")
-            if len(set(bs)) != len(bs):
-                raise ValueError(f"object node {o} lists a base twice: {bs}")
-            for b in bs:
-                if b not in bases:
-                    raise ValueError(
-                        f"object node {o} lists node {b} as a base, but node {b} is the "
-                        "start, the goal or an object"
-                    )
-            allowed.append(tuple(bs))
+        start, goal = _checked_ends(start, n - 1 if goal is None else goal, n)
+        objects, bases, allowed = _checked_compat(compat, n, start, goal)
 
         kind = np.full(n + 1, BASE, dtype=np.int8)
         kind[start], kind[goal], kind[n] = START, GOAL, PAD
@@ -228,6 +187,65 @@ class PickPlaceProblem:
         )
         _check_feasible(problem)
         return problem
+
+
+def _checked_cost(cost) -> np.ndarray:
+    """``(n, n)`` float64 copy of a cost matrix (n ≥ 4, finite entries ≥ 0, NaN = forbidden)."""
+    cost = np.array(cost, dtype=np.float64)
+    if cost.ndim != 2 or cost.shape[0] != cost.shape[1]:
+        raise ValueError(f"cost matrix must be square (n, n); got shape {cost.shape}")
+    n = cost.shape[0]
+    if n < 4:
+        raise ValueError(f"cost matrix needs at least 4 nodes (start, object, base, goal); got {n}")
+    if np.isinf(cost).any():
+        raise ValueError("cost matrix contains ±inf; mark forbidden moves with NaN")
+    if (cost[np.isfinite(cost)] < 0).any():
+        raise ValueError("cost matrix contains negative costs; costs must be >= 0")
+    return cost
+
+
+def _checked_ends(start, goal, n: int) -> tuple[int, int]:
+    """``(start, goal)`` as ints: two different nodes of an ``n``-node matrix."""
+    for name, node in (("start", start), ("goal", goal)):
+        if not (isinstance(node, (int, np.integer)) and 0 <= node < n):
+            raise ValueError(f"{name} node {node!r} is not a node of the {n}-node cost matrix")
+    if start == goal:
+        raise ValueError(f"start and goal must be different nodes; both are {start}")
+    return int(start), int(goal)
+
+
+def _checked_compat(compat: Mapping[int, Sequence[int]], n: int, start: int,
+                    goal: int) -> tuple[list[int], tuple[int, ...], list[tuple[int, ...]]]:
+    """The objects (sorted), the bases (every other node but start and goal) and each object's
+    allowed bases (sorted) of an object → bases map."""
+    if not compat:
+        raise ValueError("compat is empty: the problem needs at least one object")
+    items = {}
+    for o, raw in compat.items():
+        o = _node(o, n, "object")
+        if o in items:
+            raise ValueError(f"compat names object node {o} twice")
+        items[o] = raw
+    objects = sorted(items)
+    for o in objects:
+        if o in (start, goal):
+            raise ValueError(f"object node {o} is also the start or goal node")
+    bases = tuple(i for i in range(n) if i not in (start, goal) and i not in objects)
+    allowed = []
+    for o in objects:
+        bs = sorted(_node(b, n, f"base (of object {o})") for b in items[o])
+        if not bs:
+            raise ValueError(f"object node {o} has no allowed base")
+        if len(set(bs)) != len(bs):
+            raise ValueError(f"object node {o} lists a base twice: {bs}")
+        for b in bs:
+            if b not in bases:
+                raise ValueError(
+                    f"object node {o} lists node {b} as a base, but node {b} is the "
+                    "start, the goal or an object"
+                )
+        allowed.append(tuple(bs))
+    return objects, bases, allowed
 
 
 jax.tree_util.register_dataclass(

@@ -3,7 +3,6 @@ results.json, and the figures grasp_iterations.png and route.png."""
 
 from __future__ import annotations
 
-import csv
 import dataclasses
 import json
 import math
@@ -11,6 +10,7 @@ from pathlib import Path
 
 import jax
 
+from uvms_jax.files import write_atomic, write_csv
 from uvms_jax.sched._costs import METRICS
 from uvms_jax.sched._edges import schedule_edges
 from uvms_jax.sched._plots import plot_route, plot_sweep
@@ -42,14 +42,11 @@ def write_schedule(run: ScheduleRun, out: Path, plots: bool = True) -> dict:
     _write_table(out, run.rows, run.note)
     sweep = [dataclasses.asdict(p) for p in run.sweep]
     if sweep:
-        with open(out / "grasp_sweep.csv", "w", newline="") as f:
-            w = csv.DictWriter(f, fieldnames=list(sweep[0]))
-            w.writeheader()
-            w.writerows(sweep)
+        write_csv(out / "grasp_sweep.csv", sweep)
     edges = [e._asdict() for e in schedule_edges(run.problem, run.best.path)]
-    (out / "schedule_edges.json").write_text(json.dumps(edges, indent=1))
+    write_atomic(out / "schedule_edges.json", json.dumps(edges, indent=1))
     results = schedule_results(run)
-    (out / "results.json").write_text(json.dumps(results, indent=1))
+    write_atomic(out / "results.json", json.dumps(results, indent=1))
     if plots:
         if run.sweep:
             plot_sweep(out, run.sweep, run.solved)
@@ -59,10 +56,7 @@ def write_schedule(run: ScheduleRun, out: Path, plots: bool = True) -> dict:
 
 def _write_table(out: Path, rows, note: str) -> None:
     """table.csv (one row per solver) and table.md (thesis Table 5.2 layout)."""
-    with open(out / "table.csv", "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
+    write_csv(out / "table.csv", rows)
     lines = [f"Source: {note}", "", "| solver | path | metric | K | N_metric | C_final | time [ms] |",
              "|---|---|---|---|---|---|---|"]
     for r in rows:
@@ -72,4 +66,4 @@ def _write_table(out: Path, rows, note: str) -> None:
             tail = (f"{r['cost']:.4f}", f"{r['time_ms']:.4f}") if i == 0 else ("", "")
             n_txt = "—" if math.isnan(n) else f"{n:.3f}"
             lines.append(f"| {head[0]} | {head[1]} | {m} | {r[f'K_{m}']:.3g} | {n_txt} | {tail[0]} | {tail[1]} |")
-    (out / "table.md").write_text("\n".join(lines) + "\n")
+    write_atomic(out / "table.md", "\n".join(lines) + "\n")

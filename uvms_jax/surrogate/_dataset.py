@@ -50,6 +50,7 @@ from flax import struct
 from jax import Array
 
 from uvms_jax import kin
+from uvms_jax.files import atomic_path, write_atomic
 from uvms_jax.surrogate._form import IndexForm, index_fn, index_of
 
 INDEX_NAMES = ("w", "kci")
@@ -273,10 +274,11 @@ def save_dataset(path, ds: Dataset, **meta) -> tuple[Path, Path]:
     path = Path(path).with_suffix("")
     path.parent.mkdir(parents=True, exist_ok=True)
     npz, js = path.with_suffix(".npz"), path.with_suffix(".json")
-    np.savez(npz, q=np.asarray(ds.q), x=np.asarray(ds.x), y=np.asarray(ds.y))
+    with atomic_path(npz) as tmp, tmp.open("wb") as f:
+        np.savez(f, q=np.asarray(ds.q), x=np.asarray(ds.x), y=np.asarray(ds.y))
     config = {"index": ds.index, "inputs": list(ds.inputs), "n": len(ds), "dtype": str(ds.y.dtype),
               "sampling": ds.sampling.to_dict(), "form": ds.form.to_dict(), **meta}
-    js.write_text(json.dumps(config, indent=2))
+    write_atomic(js, json.dumps(config, indent=2))
     return npz, js
 
 

@@ -91,6 +91,26 @@ def _check_pair(train: Dataset, test: Dataset) -> None:
         raise ValueError(f"train ({train.index}, {train.inputs}) and test ({test.index}, {test.inputs}) sets differ")
 
 
+def _size_keys(key: Array, n: int) -> list[Array]:
+    """One key per network size, split as a one-by-one loop over the sizes splits it."""
+    keys = []
+    for _ in range(n):
+        key, sub = jax.random.split(key)
+        keys.append(sub)
+    return keys
+
+
+def _train_group(nets: list, train: Dataset, width: int, trainer: str, lm: dict, adam: dict) -> list[tuple]:
+    """Train FFBNs side by side, padded to ``width`` hidden units, by Levenberg–Marquardt
+    (``lm``: keyword arguments of :func:`train_ffbns_lm`) or Adam (``adam``: of
+    :func:`train_ffbns_adam`). Returns ``(net, train mse, epochs, mse history)`` per network."""
+    if trainer == "lm":
+        return [(net, float(state.mse), int(state.epoch), history) for net, state, history in
+                train_ffbns_lm(nets, train, pad_to=width, **lm)]
+    return [(net, float(history[-1]), adam["steps"], history) for net, history in
+            train_ffbns_adam(nets, train, pad_to=width, **adam)]
+
+
 def design_ffbn(
     key: Array,
     train: Dataset,
@@ -138,23 +158,16 @@ def design_ffbn(
     steps: list[DesignStep] = []
     best = None
     sizes = list(range(hidden_start, max_hidden + 1, hidden_step))
-    keys = []
-    for _ in sizes:  # one key per size, split as a one-by-one loop splits it
-        key, sub = jax.random.split(key)
-        keys.append(sub)
+    keys = _size_keys(key, len(sizes))
     # The loop stops at the first size that meets the target: the bar's total is the most it can take.
     with progress.bar(total=len(sizes), desc="FFBN design", unit="size") as bar:
         for group in _groups(sizes, together):
             t0 = time.perf_counter()
             nets = init_ffbns([keys[i] for i in group], [sizes[i] for i in group], train)
             width = padded_width(sizes[group[-1]])
-            if trainer == "lm":
-                trained = [(net, float(state.mse), int(state.epoch), history) for net, state, history in
-                           train_ffbns_lm(nets, train, max_epochs=max_epochs, target_mse=target_mse, hyper=lm_hyper,
-                                          pad_to=width)]
-            else:
-                trained = [(net, float(history[-1]), adam_steps, history) for net, history in
-                           train_ffbns_adam(nets, train, steps=adam_steps, learning_rate=adam_learning_rate, pad_to=width)]
+            trained = _train_group(nets, train, width, trainer, dict(max_epochs=max_epochs, target_mse=target_mse,
+                                                                     hyper=lm_hyper),
+                                   dict(steps=adam_steps, learning_rate=adam_learning_rate))
             # One compiled call per width: FFBN.predict would compile once per size.
             predictions = predict_side_by_side([net for net, *_ in trained], test.x)
             errors = [float(max_relative_error(test.y, p)) for p in predictions]

@@ -12,6 +12,7 @@ import jax.numpy as jnp
 import numpy as np
 from flax import traverse_util
 
+from uvms_jax.files import atomic_path, write_atomic
 from uvms_jax.surrogate._ffbn import FFBN
 from uvms_jax.surrogate._rbfn import RBFN
 from uvms_jax.surrogate._scaler import Scaler
@@ -42,10 +43,11 @@ def save_network(path, net: FFBN | RBFN, **meta) -> tuple[Path, Path]:
     else:
         kind, size = "rbfn", {"n_centres": net.n_centres, "spread": float(net.spread)}
         arrays.update({k: np.asarray(getattr(net, k)) for k in ("centres", "weights", "bias", "spread")})
-    np.savez(path.with_suffix(".npz"), **arrays)
+    with atomic_path(path.with_suffix(".npz")) as tmp, tmp.open("wb") as f:
+        np.savez(f, **arrays)
     info = {"format_version": FORMAT_VERSION, "kind": kind, "index": net.index, "inputs": list(net.inputs),
             "n_joints": net.n_joints, "operation_count": net.operation_count, **size, **meta}
-    path.with_suffix(".json").write_text(json.dumps(info, indent=2))
+    write_atomic(path.with_suffix(".json"), json.dumps(info, indent=2))
     return path.with_suffix(".npz"), path.with_suffix(".json")
 
 

@@ -7,7 +7,7 @@ from typing import Mapping
 
 import numpy as np
 
-from uvms_jax.plotting import pyplot
+from uvms_jax.plotting import pyplot, save_figure
 from uvms_jax.surrogate._design import Design
 
 
@@ -21,8 +21,7 @@ def _design_error_axes(name: str, x: list, design: Design, error_goal: float, xl
 
 
 def _save(fig, path: Path) -> None:
-    fig.savefig(path, dpi=120)
-    pyplot().close(fig)
+    save_figure(fig, path, dpi=120)
 
 
 def plot_ffbn_design(name: str, design: Design, error_goal: float, path: Path) -> None:
@@ -59,5 +58,4 @@ def plot_training(designs: Mapping[str, Design], path: Path) -> None:
     ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     ax.set(xlabel="epoch / added unit", ylabel="training mse [index units²]", title="Training of the selected networks")
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    save_figure(fig, path, dpi=120)

@@ -42,7 +42,7 @@ ACCEPTANCE_BATCH = "100000"
 
 @dataclasses.dataclass(frozen=True)
 class SurrogateRun:
-    """Result of :func:`run_surrogates`; ``report`` is the content of report.json.
+    """Result of :func:`run_surrogates`; ``report`` is the content of results.json.
 
     Attributes:
       settings: the settings of the run.
@@ -73,7 +73,7 @@ class SurrogateRun:
 
     @property
     def report(self) -> dict:
-        """report.json as a dict (same keys and order as written)."""
+        """results.json as a dict (same keys and order as written)."""
         return {
             "device": dict(self.device), "error_metric": ERROR_METRIC, "timing_note": TIMING_NOTE,
             "datasets": dict(self.datasets), "analytic": dict(self.analytic), "networks": dict(self.networks),

@@ -1,10 +1,11 @@
-"""Files of a surrogate run: report.json, design and training figures, datasets and networks."""
+"""Files of a surrogate run: results.json, design and training figures, datasets and networks."""
 
 from __future__ import annotations
 
 import json
 from pathlib import Path
 
+from uvms_jax.files import write_atomic
 from uvms_jax.surrogate._dataset import save_dataset
 from uvms_jax.surrogate._io import save_network
 from uvms_jax.surrogate._plots import plot_ffbn_design, plot_rbfn_design, plot_training
@@ -17,7 +18,7 @@ def write_surrogates(run: SurrogateRun, out: Path) -> Path:
 
     Files::
 
-      report.json                  ``run.report``
+      results.json                  ``run.report``
       data/d1_{train,test}.npz/json    KCI datasets; data/d2_*: w datasets (with seed and chain)
       networks/<name>.npz/json     each network (with design seconds and whether it met the goal)
       ffbn_<index>_design.png      test error vs hidden neurons (Figs. 10/14)
@@ -37,6 +38,5 @@ def write_surrogates(run: SurrogateRun, out: Path) -> Path:
         plot, goal = plots[split_network_name(name)[0]]
         plot(name, d, goal, out / f"{name}_design.png")
     plot_training(run.designs, out / "training.png")
-    path = out / "report.json"
-    path.write_text(json.dumps(run.report, indent=2))
-    return path
+    path = out / "results.json"
+    return write_atomic(path, json.dumps(run.report, indent=2))
