@@ -1,0 +1,87 @@
+"""Report blocks of the hovering vehicle: MJX batch, robustness, trim, levelling."""
+
+from __future__ import annotations
+
+from uvms_jax.text import md_table
+from blocks._format import _load, _rate
+
+__all__ = ["hover_mjx", "hover_robustness", "hover_vehicle", "hover_levelling"]
+
+
+def hover_mjx() -> str:
+    rows = []
+    for name in ("hover_mjx_cpu.json", "hover_mjx_h100.json"):
+        d = _load(name)
+        where = "2-core CPU" if d["device"]["platform"] == "cpu" else d["device"]["device_kind"]
+        cpu = d["cpu_mujoco_hoversim"]["steps_per_s"]
+        for r in d["mjx"]:
+            rows.append([where, str(r["batch"]), f"{r['compile_s']:.1f}", f"{r['run_s']:.3f}", _rate(r["env_steps_per_s"]),
+                         _rate(r["scenarios_per_s"]), f"{r['env_steps_per_s'] / cpu:.0f}×"])
+    gpu, cpu_file = _load("hover_mjx_h100.json"), _load("hover_mjx_cpu.json")
+    return (f"`{cpu_file['command']}` (2-core CPU, jax {cpu_file['versions']['jax']}) and `{gpu['command']}` "
+            f"({gpu['device']['device_kind']}, jax {gpu['versions']['jax']}); {gpu['physics_steps_per_scenario']} "
+            f"physics steps of {gpu['model']['physics_dt_s'] * 1e3:g} ms per scenario on the GPU "
+            f"({gpu['simulated_s']:g} s simulated), float32. CPU MuJoCo (`HoverSim`, one thread, the same model and "
+            f"motion): {_rate(cpu_file['cpu_mujoco_hoversim']['steps_per_s'])} steps/s here, "
+            f"{_rate(gpu['cpu_mujoco_hoversim']['steps_per_s'])} on the GPU machine's CPU (MuJoCo's C step alone, "
+            f"without our buoyancy and control: {_rate(cpu_file['cpu_mujoco_mj_step_only']['steps_per_s'])} and "
+            f"{_rate(gpu['cpu_mujoco_mj_step_only']['steps_per_s'])}); the last column is the batch against `HoverSim` "
+            "on the same machine.\n\n"
+            + md_table(["device", "scenarios", "compile [s]", "run [s]", "env-steps/s", "scenarios/s", "vs CPU MuJoCo"],
+                     rows) + "\n")
+
+
+def hover_robustness() -> str:
+    d = _load("hover_robustness_cpu.json")
+    poses = d["per_pose"]
+    names = ["docked pose" if p["docked"] else f"candidate {k}" for k, p in enumerate(poses)]
+    listing = "; ".join(f"{n}: ({', '.join(f'{v:.3f}' for v in p['pose'])}), fitness {p['fitness']:.3f}"
+                        for n, p in zip(names, poses))
+    rows = [[f"{r['speed_m_s']:.1f}"] + [f"{p['per_speed'][i]['gate_share_worst']:.2f} / "
+                                         f"{1e3 * p['per_speed'][i]['max_tool_error_m']:.0f}" for p in poses]
+            for i, r in enumerate(poses[0]["per_speed"])]
+    left = "".join(f" Left out: ({', '.join(f'{v:.3f}' for v in p['pose'])}), fitness {p['fitness']:.3f}: from there "
+                   f"the tool follows {p['path_share_followed']:.0%} of the path continuously." for p in d["left_out"])
+    return (f"`{d['command']}` (the run of `benchmarks/results/demo_cpu.json`; 2-core CPU, jax {d['jax']}): "
+            f"{len(poses)} poses × {d['currents']} currents = {d['scenarios']} scenarios, {d['simulated_s']:.0f} s "
+            f"each, {d['gates']} gates, in one MJX call ({d['compile_s']:.1f} s compile, {d['run_s']:.1f} s run). "
+            f"Poses [x, y, z, ψ]: {listing}.{left}\n\n"
+            + md_table(["current [m/s]"] + [f"{n}: gates reached (worst direction) / worst tool error [mm]" for n in names],
+                     rows) + "\n")
+
+
+def hover_vehicle() -> str:
+    """The hovering vehicle's derived figures (docs/hover.md), from ``benchmarks/hover_vehicle.py``."""
+    d = _load("hover_vehicle.json")
+    e, v, p = d["largest_effort"], d["steady_speed_m_s"], d["poles_rad_s"]
+
+    def poles(roots):
+        out = []
+        for re_, im in roots:
+            if im < 0:
+                continue
+            out.append(f"{re_:.2g} ± {im:.2g}j" if im > 0 else f"{re_:.2g}")
+        return ", ".join(out).replace("-", "−")
+
+    limits = sorted(set(d["thrust_limit_n"]))
+    return (f"`{d['command']}` (`benchmarks/results/hover_vehicle.json`):\n\n"
+            + md_table(["figure", "value"], [
+                ["thrust configuration matrix", f"rank {d['thrust_matrix_rank']}, {d['thrusters']} thrusters of "
+                                                f"±{'/'.join(f'{x:g}' for x in limits)} N"],
+                ["largest pure effort", f"surge {e['surge']:.0f} N, sway {e['sway']:.0f} N, heave {e['heave']:.0f} N, "
+                                        f"yaw {e['yaw']:.0f} N·m"],
+                ["steady speed at that effort against the hull's own drag",
+                 f"surge {v['surge']:.2f} m/s, sway {v['sway']:.2f} m/s, heave {v['heave']:.2f} m/s"],
+                ["hydrostatic restoring moment of the hull", f"{d['restoring_moment_nm_per_rad']:.0f} N·m per radian of roll or pitch"],
+                [f"rigid vehicle, the {d['arm'].replace('bravo7', 'Bravo 7')} held at mid-range",
+                 f"{d['mass_kg']:.1f} kg, {d['yaw_inertia_kg_m2']:.1f} kg·m² about z"],
+                ["station-keeping poles, no drag", f"{poles(p['translation'])} rad/s in each translation; "
+                                                   f"{poles(p['yaw'])} rad/s in yaw"]]) + "\n")
+
+
+def hover_levelling() -> str:
+    """The demo's hover stage: the largest tilt with levelling on (docs/hover.md)."""
+    runs = _load("demo_cpu.json")["hover"]["runs"]
+    tilt = max(r["max_tilt_deg"] for r in runs.values())
+    return (f"Held level by the vertical thrusters, the tilt stays within {tilt:.1f}° in each of the demo's "
+            f"{len(runs)} hover runs (the `hover` stage of `benchmarks/results/demo_cpu.json`).\n")
