@@ -7,8 +7,8 @@ as ``make demo`` keeps them). That process listens to JAX's compile events
 (``jax.monitoring``: tracing to a jaxpr, lowering to MLIR, XLA's backend compile, each with its
 start and end) and marks each stage's start and end. Per stage it reports the wall time, the
 time spent compiling (the union of the compile events' spans, so nested traces count once) and
-the rest (running), the XLA programs compiled and their distinct function names; the slowest
-compiles by name; and the run's outcome (docked pose, edges planned, the runs' results), so a
+the rest (running), the XLA programs compiled, their distinct function names and the slowest
+of them; the slowest compiles of the whole run by name; and the run's outcome (docked pose, edges planned, the runs' results), so a
 faster configuration can be checked to do the same work.
 
 Run (the demo; ~7 min cold on 2 CPU cores, so on a quiet machine only):
@@ -41,6 +41,7 @@ TRACE, LOWER, BACKEND = ("/jax/core/compile/jaxpr_trace_duration", "/jax/core/co
                          "/jax/core/compile/backend_compile_duration")
 CACHE_HIT = "/jax/compilation_cache/cache_hits"
 SLOWEST = 15  # compiles listed by name
+SLOWEST_PER_STAGE = 5  # and per stage
 
 
 # -- the pipeline's process -----------------------------------------------------------------------
@@ -111,21 +112,26 @@ def _part(spans: list, hits: list[float], t0: float, t1: float) -> dict:
             "distinct_names": len({name for *_, name in backend})}
 
 
-def report(rec: dict, process_wall_s: float) -> dict:
-    spans, hits = rec["spans"], rec["hits"]
-    stages = {name: _part(spans, hits, t0, t1) for name, t0, t1 in rec["stages"]}
-    first = min((t0 for _, t0, _ in rec["stages"]), default=rec["ended"])
-    backend = [s for s in spans if s[0] == BACKEND]
+def _slowest(spans: list, count: int) -> list[dict]:
+    """The ``count`` names of the longest XLA compiles in total, with their programs."""
     by_name = collections.defaultdict(lambda: [0, 0.0])
-    for _, a, b, name in backend:
+    for _, a, b, name in (s for s in spans if s[0] == BACKEND):
         by_name[name][0] += 1
         by_name[name][1] += b - a
-    slowest = sorted(by_name.items(), key=lambda kv: -kv[1][1])[:SLOWEST]
+    slowest = sorted(by_name.items(), key=lambda kv: -kv[1][1])[:count]
+    return [{"name": n, "programs": c, "xla_compile_s": round(s, 2)} for n, (c, s) in slowest]
+
+
+def report(rec: dict, process_wall_s: float) -> dict:
+    spans, hits = rec["spans"], rec["hits"]
+    stages = {name: {**_part(spans, hits, t0, t1), "slowest_compiles": _slowest(_within(spans, t0, t1), SLOWEST_PER_STAGE)}
+              for name, t0, t1 in rec["stages"]}
+    first = min((t0 for _, t0, _ in rec["stages"]), default=rec["ended"])
     return {"process_wall_s": round(process_wall_s, 2),
             "before_first_stage_s": round(first - rec["started"], 2),
             "whole_run": _part(spans, hits, rec["started"], rec["ended"] + 1e-9),
             "stages": stages,
-            "slowest_compiles": [{"name": n, "programs": c, "xla_compile_s": round(s, 2)} for n, (c, s) in slowest]}
+            "slowest_compiles": _slowest(spans, SLOWEST)}
 
 
 def _outcome(run_dir: Path) -> dict:

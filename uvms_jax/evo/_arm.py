@@ -273,11 +273,14 @@ def evaluate_arm_traced(problem: ArmDockingProblem, pose: Array) -> DockingEval:
 _evaluate_arm_jit = jax.jit(evaluate_arm_traced)
 
 
-def _check_poses(problem: ArmDockingProblem, pose) -> Array:
-    pose = jnp.asarray(pose, dtype=problem.pose_low.dtype)
+def _check_poses(problem: ArmDockingProblem, pose) -> Array | np.ndarray:
+    """``pose`` in the problem's dtype, checked; a NumPy array stays on the host (no compiled
+    conversion or NaN test per shape)."""
+    xp = np if isinstance(pose, np.ndarray) else jnp
+    pose = xp.asarray(pose, dtype=problem.pose_low.dtype)
     if pose.ndim == 0 or pose.shape[-1] != 4:
         raise ValueError(f"pose must have shape (..., 4) = [x, y, z, psi], got {pose.shape}")
-    if bool(jnp.isnan(pose).any()):
+    if bool(xp.isnan(pose).any()):
         raise ValueError("pose contains NaN")
     return pose
 
@@ -316,8 +319,22 @@ def _report(problem: ArmDockingProblem, pose: Array) -> ArmReport:
     return ArmReport(arm_terms(problem, pose, w), jnp.where(ok[..., None], q_best, jnp.nan), ok, jnp.max(w, axis=-1))
 
 
+# arm_report evaluates its poses in calls of this many (the last call padded with its first
+# pose): reports of 1, 4 or 16 poses (a docking run's optima, a map's candidates, a refinement
+# step) then share one compiled program, where each batch shape would compile the whole IK and
+# collision test anew (seconds on a CPU); a padded pose costs milliseconds.
+REPORT_CHUNK = 4
+
+
 def arm_report(problem: ArmDockingProblem, pose) -> ArmReport:
     """:func:`evaluate_arm` plus the best valid IK solution of every demanded tool pose, for
-    vehicle poses ``(..., 4)`` [m, rad], in one compiled call (arrays are NumPy)."""
-    out = _report(problem, _check_poses(problem, pose))
-    return jax.tree_util.tree_map(np.asarray, out)
+    vehicle poses ``(..., 4)`` [m, rad], in calls of :data:`REPORT_CHUNK` poses of one compiled
+    program (arrays are NumPy)."""
+    pose = _check_poses(problem, np.asarray(pose))
+    flat = pose.reshape(-1, 4)
+    n = flat.shape[0]
+    if n == 0:
+        raise ValueError(f"arm_report needs at least one pose, got shape {pose.shape}")
+    padded = np.concatenate([flat, np.broadcast_to(flat[:1], (-n % REPORT_CHUNK, 4))])
+    parts = [_report(problem, padded[i:i + REPORT_CHUNK]) for i in range(0, len(padded), REPORT_CHUNK)]
+    return jax.tree_util.tree_map(lambda *a: np.concatenate(a)[:n].reshape(pose.shape[:-1] + a[0].shape[1:]), *parts)

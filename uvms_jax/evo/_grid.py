@@ -1,8 +1,16 @@
 """Dense grid search: the brute-force reference optimum of the docking problem.
 
-The grid is never materialised: candidates are decoded from their flat index inside a
-jitted ``lax.fori_loop`` over chunks of ``chunk_size`` candidates, so memory is bounded by
-one chunk whatever the grid size (1e6 on a laptop CPU, 1e8+ on a GPU).
+The grid is never materialised: candidates are decoded from their flat index chunk by chunk
+(``chunk_size`` candidates each), so memory is bounded by one chunk whatever the grid size (1e6
+on a laptop CPU, 1e8+ on a GPU).
+
+The grid search and the zoom stages evaluate the fitness through one compiled program,
+:func:`_fitness_of` on ``(chunk_size, m)`` points, called chunk by chunk from Python (the calls
+are queued asynchronously; nothing waits for the device between them). A fitness such as the
+arm's docking fitness (numerical IK and a collision world) takes seconds to compile on a CPU:
+the two searches share that compile, where a loop inside each search's own jitted program would
+compile the fitness once per search. What surrounds it (decoding a chunk, keeping the best) are
+small programs of their own.
 """
 
 from __future__ import annotations
@@ -54,28 +62,46 @@ def _grid_point(flat: Array, low: Array, step: Array, counts: Array) -> Array:
     return low + idx.astype(low.dtype) * step
 
 
-@partial(jax.jit, static_argnames=("chunk_size", "keep"))
+@jax.jit
+def _fitness_of(problem: Any, x: Array) -> Array:
+    """``(n,)`` fitness of points ``x (n, m)``, NaN as −inf: the one compiled evaluation of a
+    problem (per chunk shape) that the grid search and the zoom stages share."""
+    f = problem.fitness(x)
+    return jnp.where(jnp.isnan(f), -jnp.inf, f)
+
+
+@partial(jax.jit, static_argnames=("chunk_size",))
+def _chunk_points(c: Array, low: Array, step: Array, counts: Array, chunk_size: int) -> Array:
+    """``(chunk_size, m)`` grid points of chunk ``c`` (past the grid's end: its first point)."""
+    flat = c * chunk_size + jnp.arange(chunk_size, dtype=counts.dtype)
+    return _grid_point(jnp.where(flat < jnp.prod(counts), flat, 0), low, step, counts)
+
+
+@partial(jax.jit, static_argnames=("keep",))
+def _keep_best(best: tuple[Array, Array], x: Array, f: Array, c: Array, counts: Array, keep: int):
+    """The ``keep`` best of ``best = (x (keep, m), f (keep,))`` and chunk ``c``'s points ``x (C, m)``
+    with fitness ``f (C,)`` (the points past the grid's end left out); ties keep the earlier."""
+    best_x, best_f = best
+    f = jnp.where(c * f.shape[0] + jnp.arange(f.shape[0], dtype=counts.dtype) < jnp.prod(counts), f, -jnp.inf)
+    if keep == 1:
+        i = jnp.argmax(f)
+        better = f[i] > best_f[0]  # strict: ties keep the lowest flat index
+        return jnp.where(better, x[i], best_x), jnp.where(better, f[i], best_f)
+    # top_k puts the lower index first among equals: the earlier chunks win ties.
+    top_f, i = jax.lax.top_k(jnp.concatenate([best_f, f]), keep)
+    return jnp.concatenate([best_x, x])[i], top_f
+
+
 def _search(problem: Any, low: Array, step: Array, counts: Array, chunk_size: int, keep: int):
-    n = jnp.prod(counts)
-    n_chunks = (n + chunk_size - 1) // chunk_size
-
-    def body(c, best):
-        best_x, best_f = best
-        flat = c * chunk_size + jnp.arange(chunk_size, dtype=counts.dtype)
-        inside = flat < n
-        x = _grid_point(jnp.where(inside, flat, 0), low, step, counts)
-        f = jnp.where(inside, problem.fitness(x), -jnp.inf)
-        f = jnp.where(jnp.isnan(f), -jnp.inf, f)
-        if keep == 1:
-            i = jnp.argmax(f)
-            better = f[i] > best_f[0]  # strict: ties keep the lowest flat index
-            return jnp.where(better, x[i], best_x), jnp.where(better, f[i], best_f)
-        # top_k puts the lower index first among equals: the earlier chunks win ties.
-        top_f, i = jax.lax.top_k(jnp.concatenate([best_f, f]), keep)
-        return jnp.concatenate([best_x, x])[i], top_f
-
-    init = (jnp.broadcast_to(low, (keep,) + low.shape), jnp.full((keep,), -jnp.inf, dtype=low.dtype))
-    return jax.lax.fori_loop(0, n_chunks, body, init)
+    """The grid's ``keep`` best points ``(keep, m)`` and their fitness ``(keep,)``, chunk by chunk."""
+    n_chunks = -(-int(np.prod(np.asarray(counts), dtype=np.int64)) // chunk_size)
+    low_np = np.asarray(low)  # the start made on the host: no compiled program per shape
+    best = (np.broadcast_to(low_np, (keep,) + low_np.shape).copy(), np.full((keep,), -np.inf, dtype=low_np.dtype))
+    for c in range(n_chunks):
+        c = np.int32(c)
+        x = _chunk_points(c, low, step, counts, chunk_size)
+        best = _keep_best(best, x, _fitness_of(problem, x), c, counts, keep)
+    return best
 
 
 def grid_search(
@@ -134,39 +160,43 @@ def grid_search(
 
 
 
-@partial(jax.jit, static_argnames=("counts", "stages", "chunk_size"))
-def _zoom(problem: Any, starts: Array, fitness: Array, width: Array, low: Array, high: Array, periodic: Array,
-          shrink: Array, counts: tuple[int, ...], stages: int, chunk_size: int) -> tuple[Array, Array, Array]:
-    k, m = starts.shape
-    axes = [jnp.linspace(0.0, 1.0, c, dtype=low.dtype) if c > 1 else jnp.full((1,), 0.5, low.dtype) for c in counts]
-    unit = jnp.stack(jnp.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, m)  # (P, m) in [0, 1]
-    n = k * unit.shape[0]
+def _unit_box(counts: tuple[int, ...], dtype) -> np.ndarray:
+    """``(P, m)`` a zoom box's points in ``[0, 1]^m``: ``counts[i]`` per variable, edges included
+    (a single one at the centre), row-major."""
+    axes = [np.linspace(0.0, 1.0, c) if c > 1 else np.full((1,), 0.5) for c in counts]
+    return np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, len(counts)).astype(dtype)
+
+
+@partial(jax.jit, static_argnames=("chunk_size",))
+def _zoom_box(x: Array, s: Array, unit: Array, width: Array, low: Array, high: Array, periodic: Array,
+              shrink: Array, chunk_size: int) -> tuple[Array, tuple[Array, ...]]:
+    """Stage ``s``'s boxes about the best points ``x (k, m)``: their points ``(k, P, m)`` and the
+    same in chunks ``(chunk_size, m)`` (the last padded with the first point)."""
+    half = width * shrink ** (s + 1) / 2
+    # The box around each best point: clipped to the search box, or wrapped along a
+    # periodic variable (ψ over a full turn).
+    lo = jnp.where(periodic, x - half, jnp.maximum(low, x - half))
+    hi = jnp.where(periodic, x + half, jnp.minimum(high, x + half))
+    cand = lo[:, None, :] + unit * (hi - lo)[:, None, :]  # (k, P, m)
+    cand = jnp.where(periodic, low + jnp.mod(cand - low, high - low), cand)
+    flat = cand.reshape(-1, cand.shape[-1])
+    n, m = flat.shape
     n_chunks = -(-n // chunk_size)
+    padded = jnp.concatenate([flat, jnp.broadcast_to(flat[:1], (n_chunks * chunk_size - n, m))])
+    return cand, tuple(padded[i * chunk_size:(i + 1) * chunk_size] for i in range(n_chunks))
 
-    def evaluate(x):  # (n, m) → (n,), chunk by chunk (memory bound), NaN → −inf
-        padded = jnp.concatenate([x, jnp.broadcast_to(x[:1], (n_chunks * chunk_size - n, m))])
-        f = jax.lax.map(problem.fitness, padded.reshape(n_chunks, chunk_size, m)).reshape(-1)[:n]
-        return jnp.where(jnp.isnan(f), -jnp.inf, f)
 
-    def stage(best, s):
-        x, f = best
-        half = width * shrink ** (s + 1) / 2
-        # The box around each best point: clipped to the search box, or wrapped along a
-        # periodic variable (ψ over a full turn).
-        lo = jnp.where(periodic, x - half, jnp.maximum(low, x - half))
-        hi = jnp.where(periodic, x + half, jnp.minimum(high, x + half))
-        cand = lo[:, None, :] + unit * (hi - lo)[:, None, :]  # (k, P, m)
-        cand = jnp.where(periodic, low + jnp.mod(cand - low, high - low), cand)
-        fc = evaluate(cand.reshape(n, m)).reshape(k, -1)
-        i = jnp.argmax(fc, axis=-1)  # the first maximum: ties keep the lowest index
-        f_box = jnp.take_along_axis(fc, i[:, None], axis=-1)[:, 0]
-        better = f_box > f
-        x = jnp.where(better[:, None], jnp.take_along_axis(cand, i[:, None, None], axis=1)[:, 0], x)
-        f = jnp.where(better, f_box, f)
-        return (x, f), (x, f)
-
-    _, history = jax.lax.scan(stage, (starts, fitness), jnp.arange(stages))
-    return history
+@jax.jit
+def _zoom_keep(cand: Array, f_chunks: tuple[Array, ...], x: Array, f: Array) -> tuple[Array, Array]:
+    """The best of each box ``cand (k, P, m)`` (fitness in chunks, padding last) where it beats
+    the box's centre ``x (k, m)`` with fitness ``f (k,)``."""
+    k, P = cand.shape[:2]
+    fc = jnp.concatenate(f_chunks)[:k * P].reshape(k, P)
+    i = jnp.argmax(fc, axis=-1)  # the first maximum: ties keep the lowest index
+    f_box = jnp.take_along_axis(fc, i[:, None], axis=-1)[:, 0]
+    better = f_box > f
+    x = jnp.where(better[:, None], jnp.take_along_axis(cand, i[:, None, None], axis=1)[:, 0], x)
+    return x, jnp.where(better, f_box, f)
 
 
 class ZoomResult(NamedTuple):
@@ -187,8 +217,8 @@ def zoom_from(problem: Any, starts, fitness, low, high, counts: tuple[int, ...],
     Stage s grids a box of ``width · shrink^(s+1)`` (``counts`` points per variable, edges
     included) centred on each start's best point so far, clipped to the search box (wrapped
     along a ``periodic`` variable), and keeps the box's best point when it improves. All K
-    boxes of a stage are one evaluation of ``K · prod(counts)`` points, in chunks; the whole
-    polish is one compiled call. With ``counts = 3`` per variable and ``shrink = 0.5`` a stage
+    boxes of a stage are one evaluation of ``K · prod(counts)`` points, in chunks of the
+    compiled fitness the grid search uses too (module docstring). With ``counts = 3`` per variable and ``shrink = 0.5`` a stage
     tries the 3^m − 1 neighbours at half the previous step, diagonals included: a pattern
     search that follows ridges such as the apex where two targets' w meet.
 
@@ -213,9 +243,16 @@ def zoom_from(problem: Any, starts, fitness, low, high, counts: tuple[int, ...],
     periodic = jnp.zeros(low.shape, bool) if periodic is None else jnp.asarray(periodic, bool)
     fitness = np.atleast_1d(np.asarray(fitness))
     chunk_size = min(int(chunk_size), len(starts) * int(np.prod(counts)))
-    xs, fs = _zoom(problem, jnp.asarray(starts, low.dtype), jnp.asarray(fitness, low.dtype), width, low, high,
-                   periodic, jnp.asarray(shrink, low.dtype), counts, int(stages), chunk_size)
-    xs, fs = np.asarray(xs), np.asarray(fs)
+    unit = _unit_box(counts, low.dtype)
+    x, f, xs, fs = starts.astype(low.dtype), fitness.astype(low.dtype), [], []
+    shrink = np.asarray(shrink, low.dtype)
+    for stage in range(int(stages)):
+        cand, chunks = _zoom_box(x, np.int32(stage), unit, width, low, high, periodic, shrink, chunk_size)
+        x, f = _zoom_keep(cand, tuple(_fitness_of(problem, c) for c in chunks), x, f)
+        xs.append(x)
+        fs.append(f)
+    xs = np.stack([np.asarray(v) for v in xs]) if xs else np.zeros((0,) + starts.shape, low.dtype)
+    fs = np.stack([np.asarray(v) for v in fs]) if fs else np.zeros((0, len(starts)), low.dtype)
     x, f = (xs[-1], fs[-1]) if stages else (starts, fitness)
     return ZoomResult(x, f, xs, fs)
 

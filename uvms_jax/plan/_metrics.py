@@ -28,10 +28,15 @@ EdgeMetrics = NamedTuple("EdgeMetrics", [(name, float) for name in sched.METRICS
 EdgeMetrics.__doc__ = "The five metrics of one edge, fields in ``uvms_jax.sched.METRICS`` order (see above)."
 
 
+# Joint points per call of the compiled load torques: any path runs as calls of this many rows
+# (the last padded with its last point), so one program serves every edge of every stage (each
+# row count compiled the kinematics anew, ~1 s on a CPU).
+ROWS = 64
+
+
 def _pad(q: np.ndarray) -> np.ndarray:
-    """Pad rows to the next power of two (≥ 64) so that jitted FK compiles for few shapes."""
-    n = max(64, 1 << int(np.ceil(np.log2(max(len(q), 1)))))
-    return np.concatenate([q, np.repeat(q[-1:], n - len(q), axis=0)])
+    """Pad rows to a whole number of :data:`ROWS` with the last row."""
+    return np.concatenate([q, np.repeat(q[-1:], -len(q) % ROWS, axis=0)])
 
 
 def _point_loads(robot: robots.Robot, gravity_base, water_density: float, force_base):
@@ -109,10 +114,12 @@ def static_torques(robot: robots.Robot, q, *, gravity_base, water_density: float
 def _torques_and_tool(robot: robots.Robot, q: np.ndarray, gravity_base, water_density: float, force_base):
     """:func:`static_torques` ``(k, n)`` and the tool points ``(k, 3)`` of checked ``q (k, n)``."""
     body, local, force = _point_loads(robot, gravity_base, water_density, force_base)
-    qp = jnp.asarray(_pad(q))
-    dtype = qp.dtype
-    tau, p = _load_torques(robot.chain, qp, jnp.asarray(body), jnp.asarray(local, dtype), jnp.asarray(force, dtype))
-    return np.asarray(tau)[: len(q)], np.asarray(p)[: len(q)]
+    dtype = jax.dtypes.canonicalize_dtype(np.float64)  # float64 where JAX has it enabled; cast on the host
+    qp = _pad(q).astype(dtype)
+    loads = jnp.asarray(body), jnp.asarray(local.astype(dtype)), jnp.asarray(force.astype(dtype))
+    parts = [_load_torques(robot.chain, jnp.asarray(qp[i:i + ROWS]), *loads) for i in range(0, len(qp), ROWS)]
+    tau, p = (np.concatenate([np.asarray(part[j]) for part in parts])[: len(q)] for j in range(2))
+    return tau, p
 
 
 def trajectory_metrics(
