@@ -18,7 +18,8 @@ import numpy as np
 
 from uvms_jax.settings import setting
 
-__all__ = ["ControllerSettings", "CurrentSettings", "DEFAULT_THRUSTERS", "GRAVITY", "Thruster", "VehicleSettings"]
+__all__ = ["ControllerSettings", "CurrentSettings", "DEFAULT_THRUSTERS", "GRAVITY", "Thruster", "VehicleSettings",
+           "WholeBodySettings"]
 
 GRAVITY = 9.81  # [m/s²] the value the arm simulator (uvms_jax.hw) uses too
 _UNIT_TOL = 1e-3  # a thruster direction this far from unit length is a typo, not rounding
@@ -173,6 +174,51 @@ class ControllerSettings:
                 raise ValueError(f"{name} must be 4 finite numbers >= 0 (x, y, z, yaw), got {getattr(self, name)!r}")
         if not (math.isfinite(self.period) and self.period > 0):
             raise ValueError(f"period must be > 0 [s], got {self.period}")
+
+
+@dataclasses.dataclass(frozen=True)
+class WholeBodySettings:
+    """The whole-body controller (:mod:`uvms_jax.hover._wbc`, docs/hover.md): the tool's pose
+    first, station keeping in its null space, model-based feed-forward on the thrusters.
+
+    Attributes:
+      tool_gain: share of the tool's pose error the arm's reference removes per control
+        period (``K₁ = tool_gain / period``), in (0, 1].
+      station_gain: ``K₂`` [1/s], the rate at which the second task asks the vehicle back to
+        the docked pose (``v₂ = −K₂ η``); the thrusters' PID (:class:`ControllerSettings`)
+        tracks that velocity.
+      vehicle_weight: weight of the vehicle's coordinates against the arm's (1) in the first
+        task's weighted pseudo-inverse; small: the arm moves the tool, the vehicle barely.
+      damping: damped least squares of the first task near singularities [m].
+      servo_lead_s: the arm's targets lead its reference by this much of its rate [s]: a
+        position servo ``kp (q* − q) − kv q̇`` lags a ramp by ``kv/kp`` (0.03 s for the hover
+        model's servos).
+      prediction_s: the vehicle's pose is predicted this far ahead from its velocity [s].
+      feed_forward: add the feed-forward wrench (the arm's inverse dynamics along the plan,
+        hydrostatics, the current's drag and added mass) to the thrusters' demand.
+      added_mass: ``(3,)`` the hull's added mass along V's x, y, z [kg] for the feed-forward
+        (0: the hover model has none, docs/hover.md).
+    """
+
+    tool_gain: float = setting(1.0, gt=0, le=1)
+    station_gain: float = setting(0.5, ge=0)
+    vehicle_weight: float = setting(0.01, gt=0)
+    damping: float = setting(1e-3, ge=0)
+    servo_lead_s: float = setting(0.03, ge=0)
+    prediction_s: float = setting(0.02, ge=0)
+    feed_forward: bool = True
+    added_mass: tuple[float, float, float] = setting((0.0, 0.0, 0.0), ge=0)
+
+    def __post_init__(self) -> None:
+        if not 0 < self.tool_gain <= 1:
+            raise ValueError(f"tool_gain must lie in (0, 1], got {self.tool_gain}")
+        for name in ("station_gain", "damping", "servo_lead_s", "prediction_s"):
+            if not (math.isfinite(getattr(self, name)) and getattr(self, name) >= 0):
+                raise ValueError(f"{name} must be finite and >= 0, got {getattr(self, name)}")
+        if not (math.isfinite(self.vehicle_weight) and self.vehicle_weight > 0):
+            raise ValueError(f"vehicle_weight must be > 0, got {self.vehicle_weight}")
+        if np.any(_vector(self.added_mass, 3, "added_mass") < 0):
+            raise ValueError(f"added_mass must be >= 0 [kg], got {self.added_mass!r}")
 
 
 @dataclasses.dataclass(frozen=True)

@@ -1,0 +1,190 @@
+"""The whole-body controller of one plan at one docked pose: its constants, the plan's data per
+control period, and one control period's commands (:class:`WholeBody`).
+
+The formulas are the pure functions of :mod:`uvms_jax.hover._wbc`; this module computes what
+they need once per plan (the tool's planned poses, the arm's inverse dynamics along the plan,
+the bodies' poses for the drag) and, each period, the vehicle's displacement from a navigation
+estimate and the kinematics of :func:`uvms_jax.kin.uvms` at it.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import mujoco
+import numpy as np
+
+from uvms_jax import frames, kin
+from uvms_jax.robot import Robot
+
+from ._control import allocate_thrust, level_attitude, station_keeping, thrust_layout, wrap_angle
+from ._hydro import fluid_bodies
+from ._model import VEHICLE_BODY
+from ._settings import ControllerSettings, VehicleSettings, WholeBodySettings
+from ._wbc import (ArmParts, arm_momentum_rate, drag_wrench, hydrostatic_wrench, limited_rates, pose_error)
+
+__all__ = ["WholeBody", "WholeBodyCommand", "arm_parts", "euler_xyz"]
+
+_VEHICLE = 6  # the vehicle's coordinates in ζ = (η, q)
+
+
+def arm_parts(robot: Robot) -> ArmParts:
+    """The arm's mass properties (``robot.inertials``) as arrays (:class:`ArmParts`)."""
+    parts = [p for p in robot.inertials if p.mass > 0]
+    inertia = [np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]]) for xx, yy, zz, xy, xz, yz in
+               (p.inertia for p in parts)]
+    return ArmParts(body=np.array([p.body for p in parts], dtype=int), mass=np.array([p.mass for p in parts]),
+                    com=np.array([p.com for p in parts], dtype=float).reshape(-1, 3),
+                    inertia=np.array(inertia).reshape(-1, 3, 3), volume=np.array([p.volume for p in parts]),
+                    cob=np.array([p.cob if p.volume > 0 else p.com for p in parts], dtype=float).reshape(-1, 3))
+
+
+def euler_xyz(R, xp=np):
+    """``(3,)`` XYZ Euler angles [rad] of ``R = Rx(a) Ry(b) Rz(c)`` (|b| < π/2)."""
+    return xp.stack([xp.arctan2(-R[1, 2], R[2, 2]), xp.arcsin(xp.clip(R[0, 2], -1.0, 1.0)),
+                     xp.arctan2(-R[0, 1], R[0, 0])])
+
+
+class WholeBodyCommand(NamedTuple):
+    """One control period's commands.
+
+    Attributes:
+      target: ``(n,)`` the arm's joint targets [rad], within the joint limits.
+      reference: ``(n,)`` the arm's reference at the period's end [rad] (the next state).
+      thrust: ``(n_thrusters,)`` [N], within the thrusters' limits; demand: ``(6,)`` the wrench
+        asked for in V [N, N·m]; integral: ``(4,)`` the station keeping's next state.
+      joint_limited, thrust_limited: a joint rate bound was active; the allocation scaled the
+        demand down to the thrusters' limits.
+    """
+
+    target: np.ndarray
+    reference: np.ndarray
+    thrust: np.ndarray
+    demand: np.ndarray
+    integral: np.ndarray
+    joint_limited: bool
+    thrust_limited: bool
+
+
+class WholeBody:
+    """The whole-body controller for ``q_plan`` at the docked ``pose``.
+
+    Args:
+      robot: the arm; vehicle: the vehicle as ballasted (its hull's mass, volume and centre of
+        buoyancy are the hydrostatics' feed-forward), its mount the docking problem's.
+      controller: the thrusters' PID, levelling and period; settings: the whole-body controller.
+      pose: ``(4,)`` the docked pose ``[x, y, z, ψ]`` [m, rad].
+      q_plan: ``(K, n)`` the plan's joint angles at every control period [rad]: the tool's path
+        is the docked arm's forward kinematics along it.
+      model: the hovering vehicle's MuJoCo model (the bodies' equivalent boxes for the drag).
+    """
+
+    def __init__(self, robot: Robot, vehicle: VehicleSettings, controller: ControllerSettings,
+                 settings: WholeBodySettings, pose, q_plan: np.ndarray, model: mujoco.MjModel) -> None:
+        self.robot, self.vehicle, self.controller, self.settings = robot, vehicle, controller, settings
+        pose = np.asarray(pose, dtype=float)
+        self.pose, self.dt = pose, controller.period
+        self.T_dock = frames.pose(frames.rot_z(pose[3]), pose[:3])
+        self.T_base = frames.rpy_pose(vehicle.mount_xyz, vehicle.mount_rpy)
+        self.chain = kin.uvms(robot.chain, mount=self.T_base)
+        self.parts = arm_parts(robot)
+        _, self.B_pinv, self.thrust_limits = thrust_layout(vehicle)
+        n = robot.n_joints
+        self.arm = np.arange(_VEHICLE, _VEHICLE + n)
+        self.w_inv_sqrt = np.sqrt(np.concatenate([np.full(_VEHICLE, settings.vehicle_weight), np.ones(n)]))
+        self.J2 = np.concatenate([np.eye(_VEHICLE), np.zeros((_VEHICLE, n))], axis=1)
+        self.lower, self.upper = np.asarray(robot.lower, float), np.asarray(robot.upper, float)
+        self.rate_limit = np.asarray(robot.chain.velocity_limits, dtype=float)
+        self.gains = [np.asarray(g, dtype=float) for g in (controller.kp, controller.kd, controller.ki,
+                                                           controller.integral_limit, controller.integral_band)]
+        self._plan(np.asarray(q_plan, dtype=float), model)
+
+    def _plan(self, q: np.ndarray, model: mujoco.MjModel) -> None:
+        """The plan's data per period, the vehicle at the docked pose: the tool's poses in V₀
+        and their rate, the arm's momentum rate, its links' frames, the bodies' poses in V."""
+        dt, n = self.dt, q.shape[1]
+        padded = np.concatenate([q[:1], q, q[-1:]])
+        q_dot, q_ddot = (padded[2:] - padded[:-2]) / (2 * dt), (padded[2:] - 2 * q + padded[:-2]) / dt ** 2
+        zeta = np.concatenate([np.zeros((len(q), _VEHICLE)), q], axis=1)
+        k = kin.kinematics(self.chain, zeta)
+        self.T_tool = np.asarray(k.T_base_tool, dtype=float)
+        self.T_link = np.asarray(k.T_base_joint, dtype=float)[:, _VEHICLE:]
+        twists = np.asarray(k.twists, dtype=float)[:, _VEHICLE:]
+        ahead = np.concatenate([self.T_tool[1:], self.T_tool[-1:]])
+        self.tool_rate = pose_error(ahead, self.T_tool) / dt
+        self.momentum_rate = np.array([arm_momentum_rate(self.T_base, T, tw, qd, qdd, self.parts)
+                                       for T, tw, qd, qdd in zip(self.T_link, twists, q_dot, q_ddot)])
+        # The bodies' centres of mass and inertia frames in V (the vehicle at V's origin, level).
+        ids, self.box = fluid_bodies(model)
+        data = mujoco.MjData(model)
+        qadr = np.array([model.jnt_qposadr[model.joint(j).id] for j in self.robot.joint_names])
+        free = model.jnt_qposadr[model.body(VEHICLE_BODY).jntadr[0]]
+        com, frame = [], []
+        for row in q:
+            data.qpos[free:free + 7] = (0, 0, 0, 1, 0, 0, 0)
+            data.qpos[qadr] = row
+            mujoco.mj_kinematics(model, data)
+            com.append(data.xipos[ids].copy())
+            frame.append(data.ximat[ids].reshape(-1, 3, 3).copy())
+        self.body_com, self.body_frame = np.array(com), np.array(frame)
+
+    def feed_forward(self, k: int, R_world_vehicle, current, current_rate) -> np.ndarray:
+        """``(6,)`` the wrench in V that holds the hull still at period ``k`` of the plan
+        [N, N·m]: ``ṗ_arm − w_hydrostatic − w_drag − w_added_mass`` (module docstring of
+        :mod:`uvms_jax.hover._wbc`), with the water at ``current`` [m/s] changing at
+        ``current_rate`` [m/s²] (world frame)."""
+        v = self.vehicle
+        hydro = hydrostatic_wrench(R_world_vehicle, self.T_base, self.T_link[k], self.parts, v.mass, v.volume,
+                                   v.cob, v.water_density, v.gravity)
+        drag = drag_wrench(R_world_vehicle, self.body_com[k], self.body_frame[k], self.box, np.zeros(3), current,
+                           v.water_density, v.viscosity)
+        added = np.concatenate([np.asarray(self.settings.added_mass) * (R_world_vehicle.T @ current_rate), np.zeros(3)])
+        return self.momentum_rate[k] - hydro - drag - added
+
+    def displacement(self, position, R_world_vehicle) -> np.ndarray:
+        """``(6,)`` η: the vehicle's displacement from the docked pose, in V₀ (translation [m],
+        XYZ Euler angles [rad]), from its position [m] and orientation in the world."""
+        R_rel = self.T_dock[:3, :3].T @ R_world_vehicle
+        return np.concatenate([self.T_dock[:3, :3].T @ (position - self.T_dock[:3, 3]), euler_xyz(R_rel)])
+
+    def step(self, k: int, position, R_world_vehicle, velocity, angular_velocity, q_ref, integral, current,
+             current_rate) -> WholeBodyCommand:
+        """The commands of control period ``k`` from the navigation estimate.
+
+        Args:
+          position, R_world_vehicle: V's origin [m] and orientation in the world; velocity:
+            ``(3,)`` its linear velocity in the world [m/s]; angular_velocity: ``(3,)`` in V
+            [rad/s].
+          q_ref: ``(n,)`` the arm's reference [rad] (within the limits); integral: ``(4,)``.
+          current, current_rate: the water's velocity [m/s] and its rate [m/s²] as measured.
+        """
+        s, dt, R = self.settings, self.dt, R_world_vehicle
+        R_dock = self.T_dock[:3, :3]
+        eta = self.displacement(position, R)
+        # η̇: the translations along V₀; the Euler rates taken as V₀'s angular velocity (the
+        # vehicle stays within a few degrees of level and of the docked heading).
+        eta_dot = np.concatenate([R_dock.T @ velocity, R_dock.T @ (R @ angular_velocity)])
+        zeta = np.concatenate([eta + s.prediction_s * eta_dot, q_ref])
+        T, J = np.asarray(kin.fk(self.chain, zeta), dtype=float), np.asarray(kin.jacobian(self.chain, zeta), dtype=float)
+        k_next = min(k, len(self.T_tool) - 1)
+        v1 = self.tool_rate[k_next] + s.tool_gain / dt * pose_error(self.T_tool[k_next], T)
+        lead = dt + s.servo_lead_s
+        lo = np.maximum(-self.rate_limit, (self.lower - q_ref) / lead)
+        hi = np.minimum(self.rate_limit, (self.upper - q_ref) / lead)
+        rates, joint_limited = limited_rates(J, v1, self.J2, -s.station_gain * eta, self.w_inv_sqrt, s.damping,
+                                             self.arm, lo, hi)
+        q_dot = rates[self.arm]
+        # The thrusters: the PID holds the docked pose tracking the vehicle's share of the rates.
+        error = np.concatenate([self.pose[:3] - position, [wrap_angle(self.pose[3] - np.arctan2(R[1, 0], R[0, 0]))]])
+        yaw_rate = (R @ angular_velocity)[2]
+        demand, integral = station_keeping(error, velocity - R_dock @ rates[:3], yaw_rate - rates[5], integral, R,
+                                           *self.gains, dt)
+        demand = demand + np.concatenate([np.zeros(3), level_attitude(R, angular_velocity, self.controller.level_kp,
+                                                                      self.controller.level_kd)])
+        if s.feed_forward:
+            demand = demand + self.feed_forward(k_next, R, current, current_rate)
+        thrust = allocate_thrust(demand, self.B_pinv, self.thrust_limits)
+        saturated = bool(np.max(np.abs(self.B_pinv @ demand) / self.thrust_limits) > 1.0)
+        return WholeBodyCommand(target=q_ref + lead * q_dot, reference=q_ref + dt * q_dot, thrust=thrust,
+                                demand=demand, integral=integral, joint_limited=bool(joint_limited),
+                                thrust_limited=saturated)
