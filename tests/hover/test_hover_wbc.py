@@ -23,9 +23,9 @@ from uvms_jax import frames, kin
 from uvms_jax.hover import VehicleSettings, hover_model, trimmed
 from uvms_jax.hover._hydro import buoyancy_xfrc
 from uvms_jax.hover._model import VEHICLE_BODY, buoyancy_bodies
-from uvms_jax.hover._settings import ControllerSettings, WholeBodySettings
+from uvms_jax.hover._settings import ControllerSettings, CurrentSettings, NavigationSettings, WholeBodySettings
 from uvms_jax.hover._wbc import limited_rates, pose_error, task_priority
-from uvms_jax.hover._wholebody import WholeBody
+from uvms_jax.hover._wholebody import NavigationEstimate, WholeBody
 from uvms_jax.robot import load_arm
 
 ARM = load_arm("bravo7")
@@ -145,3 +145,38 @@ def test_the_same_code_runs_under_jit():
     want = limited_rates(J, 5 * v1, J2, v2, w, 1e-3, arm, lo, hi)
     np.testing.assert_allclose(np.asarray(got[0]), want[0], atol=1e-9)
     assert bool(got[1]) == want[1]
+
+
+def test_navigation_fixes_arrive_late_and_are_carried_forward():
+    """10 fixes a second, 50 ms late, no noise, the vehicle moving at a constant velocity and
+    turning at a constant rate: each fix is the pose at its instant carried forward, so the
+    estimate is the true pose; which fix is used is written out by hand."""
+    v, w, dt = np.array([0.1, -0.05, 0.02]), np.array([0.0, 0.0, 0.3]), 0.02
+    true_pose = lambda t: (np.array([1.0, 2.0, 3.0]) + v * t, frames.rot_z(0.3 * t))  # noqa: E731
+    nav = NavigationEstimate(NavigationSettings(rate_hz=10.0, latency_s=0.05, position_noise_m=0.0,
+                                                angle_noise_deg=0.0), *true_pose(0.0))
+    for k in range(20):
+        t = k * dt
+        p, R = nav.estimate(t, *true_pose(t), v, w)
+        np.testing.assert_allclose(p, true_pose(t)[0], atol=1e-12)
+        np.testing.assert_allclose(R, true_pose(t)[1], atol=1e-12)
+    # at t = 0.38 s the newest fix that has arrived is the one of 0.3 s (0.35 s ≤ 0.38 s < 0.45 s)
+    assert nav._fix[0] == pytest.approx(0.3)
+
+
+def test_navigation_noise_has_its_standard_deviation():
+    s = NavigationSettings(rate_hz=50.0, latency_s=0.0, position_noise_m=0.005, angle_noise_deg=0.2, seed=3)
+    nav = NavigationEstimate(s, np.zeros(3), np.eye(3))
+    got = np.array([nav.estimate(0.02 * k, np.zeros(3), np.eye(3), np.zeros(3), np.zeros(3))[0] for k in range(4000)])
+    assert np.std(got) == pytest.approx(0.005, rel=0.05)  # 12 000 samples: the estimate's spread is ~1 %
+
+
+def test_a_gusty_current_varies_about_its_mean():
+    c = CurrentSettings.gusty((0.3, 0.0, 0.0), 0.1, 2.0, 600.0, seed=1)
+    t, v = c.profile()
+    np.testing.assert_allclose(np.diff(t), 2.0)
+    assert t[-1] >= 600.0 and np.all(v[:, 2] == 0.0)
+    gusts = v[:, :2] - (0.3, 0.0)  # 602 knots: the sample mean within ~3σ/sqrt(600), the spread within 10 %
+    assert np.abs(gusts.mean(axis=0)).max() < 0.015 and np.std(gusts) == pytest.approx(0.1, rel=0.1)
+    with pytest.raises(ValueError, match="gusty current"):
+        CurrentSettings.gusty((0.3, 0.0, 0.0), -0.1, 2.0, 10.0)

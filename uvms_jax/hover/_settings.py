@@ -19,7 +19,7 @@ import numpy as np
 from uvms_jax.settings import setting
 
 __all__ = ["ControllerSettings", "CurrentSettings", "DEFAULT_THRUSTERS", "GRAVITY", "Thruster", "VehicleSettings",
-           "WholeBodySettings"]
+           "NavigationSettings", "WholeBodySettings"]
 
 GRAVITY = 9.81  # [m/s²] the value the arm simulator (uvms_jax.hw) uses too
 _UNIT_TOL = 1e-3  # a thruster direction this far from unit length is a typo, not rounding
@@ -222,6 +222,33 @@ class WholeBodySettings:
 
 
 @dataclasses.dataclass(frozen=True)
+class NavigationSettings:
+    """The vehicle's pose as its navigation gives it: fixes at a rate, late and noisy, like a
+    vision-based relative fix; between fixes the last one is carried forward with the vehicle's
+    velocity (as a DVL and a gyro give it, taken as exact here).
+
+    Attributes:
+      rate_hz: fixes per second [Hz].
+      latency_s: a fix arrives this long after the instant it describes [s].
+      position_noise_m: standard deviation of a fix's position on each axis [m].
+      angle_noise_deg: standard deviation of a fix's orientation about each axis [°].
+      seed: the noise's random seed.
+    """
+
+    rate_hz: float = setting(30.0, gt=0)
+    latency_s: float = setting(0.05, ge=0)
+    position_noise_m: float = setting(0.005, ge=0)
+    angle_noise_deg: float = setting(0.2, ge=0)
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        for name in ("rate_hz", "latency_s", "position_noise_m", "angle_noise_deg"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0) or (name == "rate_hz" and not value > 0):
+                raise ValueError(f"{name} must be finite and {'> 0' if name == 'rate_hz' else '>= 0'}, got {value}")
+
+
+@dataclasses.dataclass(frozen=True)
 class CurrentSettings:
     """The water's velocity in the world frame: constant, or piecewise linear in time.
 
@@ -248,6 +275,21 @@ class CurrentSettings:
                 raise ValueError(f"current times must be finite and strictly increasing, got {self.times!r}")
             for k, row in enumerate(self.velocities):
                 _vector(row, 3, f"current velocities[{k}]")
+
+    @classmethod
+    def gusty(cls, mean, gust_m_s: float, gust_s: float, duration_s: float, seed: int = 0) -> "CurrentSettings":
+        """A steady ``mean`` ``(3,)`` current [m/s] with gusts: a profile whose knots, every
+        ``gust_s`` [s] from 0 to past ``duration_s`` [s], add to the mean a horizontal velocity of
+        Gaussian components with standard deviation ``gust_m_s`` [m/s] (seeded: repeatable); linear
+        in between. ``gust_m_s = 0`` gives the steady current as a profile."""
+        if not (math.isfinite(gust_m_s) and gust_m_s >= 0 and gust_s > 0 and duration_s >= 0):
+            raise ValueError(f"gusty current: gust_m_s >= 0, gust_s > 0 and duration_s >= 0 needed, got "
+                             f"{gust_m_s}, {gust_s}, {duration_s}")
+        times = gust_s * np.arange(int(np.ceil(duration_s / gust_s)) + 2)
+        rng = np.random.default_rng(seed)
+        gusts = np.concatenate([rng.normal(0.0, gust_m_s, (len(times), 2)), np.zeros((len(times), 1))], axis=1)
+        velocities = _vector(mean, 3, "current mean") + gusts
+        return cls(times=tuple(map(float, times)), velocities=tuple(tuple(map(float, v)) for v in velocities))
 
     def profile(self) -> tuple[np.ndarray, np.ndarray]:
         """``(times (k,) [s], velocities (k, 3) [m/s])``: the current as a piecewise-linear

@@ -126,6 +126,8 @@ def limited_rates(J1, v1, J2, v2, w_inv_sqrt, damping, arm, lo, hi, xp=np):
         out = ~fixed & ((q_dot < lo) | (q_dot > hi))
         fixed_rate = xp.where(out, xp.clip(q_dot, lo, hi), fixed_rate)
         fixed = fixed | out
+        if xp is np and not out.any():  # the passes left would repeat this one (jit: a fixed count)
+            break
     q_dot = rates[arm]
     above, below = q_dot > hi, q_dot < lo  # q̇ > hi ≥ 0 or q̇ < lo ≤ 0: q̇ ≠ 0 there
     factor = xp.where(above, hi / xp.where(above, q_dot, 1.0), xp.where(below, lo / xp.where(below, q_dot, 1.0), 1.0))

@@ -13,6 +13,7 @@ from typing import NamedTuple
 
 import mujoco
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from uvms_jax import frames, kin
 from uvms_jax.robot import Robot
@@ -20,10 +21,10 @@ from uvms_jax.robot import Robot
 from ._control import allocate_thrust, level_attitude, station_keeping, thrust_layout, wrap_angle
 from ._hydro import fluid_bodies
 from ._model import VEHICLE_BODY
-from ._settings import ControllerSettings, VehicleSettings, WholeBodySettings
+from ._settings import ControllerSettings, NavigationSettings, VehicleSettings, WholeBodySettings
 from ._wbc import (ArmParts, arm_momentum_rate, drag_wrench, hydrostatic_wrench, limited_rates, pose_error)
 
-__all__ = ["WholeBody", "WholeBodyCommand", "arm_parts", "euler_xyz"]
+__all__ = ["NavigationEstimate", "WholeBody", "WholeBodyCommand", "arm_parts", "euler_xyz"]
 
 _VEHICLE = 6  # the vehicle's coordinates in ζ = (η, q)
 
@@ -188,3 +189,42 @@ class WholeBody:
         return WholeBodyCommand(target=q_ref + lead * q_dot, reference=q_ref + dt * q_dot, thrust=thrust,
                                 demand=demand, integral=integral, joint_limited=bool(joint_limited),
                                 thrust_limited=saturated)
+
+
+def _rotation(rotvec) -> np.ndarray:
+    """``(3, 3)`` the rotation by the rotation vector ``rotvec`` (axis × angle [rad])."""
+    return Rotation.from_rotvec(rotvec).as_matrix()
+
+
+class NavigationEstimate:
+    """The vehicle's pose as a navigation with :class:`NavigationSettings` reports it.
+
+    A fix describes the true pose at its instant (fixes every ``1 / rate_hz`` s; the pose
+    recorded last at or before that instant, a control period's), with Gaussian noise on the position and
+    a rotation of Gaussian angles about V's axes, and arrives ``latency_s`` later. The estimate
+    at a time is the newest fix that has arrived, carried forward to that time with the
+    vehicle's present velocity and angular velocity. Before the first fix arrives, the true
+    starting pose stands in (the vehicle starts docked, where it knows its pose).
+    """
+
+    def __init__(self, settings: NavigationSettings, position, R_world_vehicle) -> None:
+        self.settings = settings
+        self._rng = np.random.default_rng(settings.seed)
+        self._truth: list[tuple[float, np.ndarray, np.ndarray]] = []
+        self._fix = (0.0, np.asarray(position, dtype=float), np.asarray(R_world_vehicle, dtype=float))
+        self._next = 0  # the next fix's number
+
+    def estimate(self, t: float, position, R_world_vehicle, velocity, angular_velocity) -> tuple[np.ndarray, np.ndarray]:
+        """``(position (3,) [m], R (3, 3))`` at time ``t`` [s], given the true state now (recorded
+        for the fixes to come) and the velocities [m/s, world; rad/s, in V]."""
+        s = self.settings
+        self._truth.append((t, np.asarray(position, dtype=float), np.asarray(R_world_vehicle, dtype=float)))
+        while self._next / s.rate_hz + s.latency_s <= t + 1e-12:
+            t_fix = self._next / s.rate_hz
+            t_pose, p, R = next(row for row in reversed(self._truth) if row[0] <= t_fix + 1e-12)
+            noise = self._rng.normal(0.0, np.radians(s.angle_noise_deg), 3)
+            self._fix = (t_pose, p + self._rng.normal(0.0, s.position_noise_m, 3), R @ _rotation(noise))
+            self._next += 1
+        t_fix, p, R = self._fix
+        age = t - t_fix
+        return p + age * np.asarray(velocity), R @ _rotation(age * np.asarray(angular_velocity))
