@@ -190,6 +190,10 @@ class WholeBodySettings:
       vehicle_weight: weight of the vehicle's coordinates against the arm's (1) in the first
         task's weighted pseudo-inverse; small: the arm moves the tool, the vehicle barely.
       damping: damped least squares of the first task near singularities [m].
+      orientation_length: the length [m] a radian of the tool's orientation weighs against a
+        metre of its position in the first task: where the arm's free joints cannot do the
+        whole 6-D task (joints at their bounds), the least squares keeps the position first.
+        Where they can, the weighting changes nothing (and nothing of the null space).
       servo_lead_s: the arm's targets lead its reference by this much of its rate [s]: a
         position servo ``kp (q* − q) − kv q̇`` lags a ramp by ``kv/kp`` (0.03 s for the hover
         model's servos).
@@ -204,6 +208,7 @@ class WholeBodySettings:
     station_gain: float = setting(0.5, ge=0)
     vehicle_weight: float = setting(0.01, gt=0)
     damping: float = setting(1e-3, ge=0)
+    orientation_length: float = setting(0.1, gt=0)
     servo_lead_s: float = setting(0.03, ge=0)
     prediction_s: float = setting(0.02, ge=0)
     feed_forward: bool = True
@@ -215,8 +220,9 @@ class WholeBodySettings:
         for name in ("station_gain", "damping", "servo_lead_s", "prediction_s"):
             if not (math.isfinite(getattr(self, name)) and getattr(self, name) >= 0):
                 raise ValueError(f"{name} must be finite and >= 0, got {getattr(self, name)}")
-        if not (math.isfinite(self.vehicle_weight) and self.vehicle_weight > 0):
-            raise ValueError(f"vehicle_weight must be > 0, got {self.vehicle_weight}")
+        for name in ("vehicle_weight", "orientation_length"):
+            if not (math.isfinite(getattr(self, name)) and getattr(self, name) > 0):
+                raise ValueError(f"{name} must be > 0, got {getattr(self, name)}")
         if np.any(_vector(self.added_mass, 3, "added_mass") < 0):
             raise ValueError(f"added_mass must be >= 0 [kg], got {self.added_mass!r}")
 

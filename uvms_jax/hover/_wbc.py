@@ -221,19 +221,21 @@ def hydrostatic_wrench(R_world_vehicle, T_base, T_link, parts: ArmParts, hull_ma
     return xp.concatenate([forces.sum(axis=0), xp.cross(points, forces).sum(axis=0)])
 
 
-def drag_wrench(R_world_vehicle, body_com, body_frame, box, velocity, current, density, viscosity, xp=np):
-    """``(6,)`` MuJoCo's inertia-box drag on every body moving with V at ``velocity`` (no turning)
-    through water moving at ``current``, in V about V's origin [N, N·m]
+def drag_wrench(R_world_vehicle, body_com, body_frame, box, body_cvel, root_com, current, density, viscosity, xp=np):
+    """``(6,)`` MuJoCo's inertia-box drag on every body, the hull held still and the arm moving,
+    in water moving at ``current``, in V about V's origin [N, N·m]
     (:func:`~uvms_jax.hover.fluid_xfrc`).
 
     Args:
-      R_world_vehicle: ``(3, 3)`` V's orientation; body_com ``(k, 3)`` [m] and body_frame
-        ``(k, 3, 3)``: the bodies' centres of mass and inertia frames in V; box: ``(k, 3)`` their
-        equivalent boxes [m] (:func:`~uvms_jax.hover.fluid_bodies`).
-      velocity, current: ``(3,)`` V's velocity and the water's, world frame [m/s].
+      R_world_vehicle: ``(3, 3)`` V's orientation (turns the current into V).
+      body_com ``(k, 3)`` [m] and body_frame ``(k, 3, 3)``: the bodies' centres of mass and
+        inertia frames in V; box: ``(k, 3)`` their equivalent boxes [m]
+        (:func:`~uvms_jax.hover.fluid_bodies`).
+      body_cvel: ``(k, 6)`` their com-based velocities ``(ω, v)`` in V (``MjData.cvel``; zeros
+        for bodies at rest) and root_com ``(k, 3)`` the point v is taken at [m, rad/s, m].
+      current: ``(3,)`` the water's velocity in the world [m/s].
       density, viscosity: the water's [kg/m³], [Pa·s].
     """
-    cvel = xp.concatenate([xp.zeros(3, dtype=body_com.dtype), R_world_vehicle.T @ velocity])
-    cvel = xp.broadcast_to(cvel, body_com.shape[:-1] + (6,))
-    rows = fluid_xfrc(body_com, body_frame, cvel, body_com, box, density, viscosity, R_world_vehicle.T @ current, xp=xp)
+    rows = fluid_xfrc(body_com, body_frame, body_cvel, root_com, box, density, viscosity, R_world_vehicle.T @ current,
+                      xp=xp)
     return xp.concatenate([rows[:, :3].sum(axis=0), (rows[:, 3:] + xp.cross(body_com, rows[:, :3])).sum(axis=0)])

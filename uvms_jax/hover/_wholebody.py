@@ -102,7 +102,8 @@ class WholeBody:
 
     def _plan(self, q: np.ndarray, model: mujoco.MjModel) -> None:
         """The plan's data per period, the vehicle at the docked pose: the tool's poses in V₀
-        and their rate, the arm's momentum rate, its links' frames, the bodies' poses in V."""
+        and their rate, the arm's momentum rate, its links' frames, the bodies' poses and
+        velocities in V."""
         dt, n = self.dt, q.shape[1]
         padded = np.concatenate([q[:1], q, q[-1:]])
         q_dot, q_ddot = (padded[2:] - padded[:-2]) / (2 * dt), (padded[2:] - 2 * q + padded[:-2]) / dt ** 2
@@ -115,19 +116,23 @@ class WholeBody:
         self.tool_rate = pose_error(ahead, self.T_tool) / dt
         self.momentum_rate = np.array([arm_momentum_rate(self.T_base, T, tw, qd, qdd, self.parts)
                                        for T, tw, qd, qdd in zip(self.T_link, twists, q_dot, q_ddot)])
-        # The bodies' centres of mass and inertia frames in V (the vehicle at V's origin, level).
+        # The bodies' centres of mass, inertia frames and velocities in V (the vehicle held still at
+        # V's origin, level), as MuJoCo's kinematics give them: what the drag acts on.
         ids, self.box = fluid_bodies(model)
         data = mujoco.MjData(model)
-        qadr = np.array([model.jnt_qposadr[model.joint(j).id] for j in self.robot.joint_names])
+        joints = [model.joint(j) for j in self.robot.joint_names]
+        qadr, dadr = [model.jnt_qposadr[j.id] for j in joints], [model.jnt_dofadr[j.id] for j in joints]
         free = model.jnt_qposadr[model.body(VEHICLE_BODY).jntadr[0]]
-        com, frame = [], []
-        for row in q:
+        rows = []
+        for row, rate in zip(q, q_dot):
             data.qpos[free:free + 7] = (0, 0, 0, 1, 0, 0, 0)
-            data.qpos[qadr] = row
+            data.qpos[qadr], data.qvel[:], data.qvel[dadr] = row, 0.0, rate
             mujoco.mj_kinematics(model, data)
-            com.append(data.xipos[ids].copy())
-            frame.append(data.ximat[ids].reshape(-1, 3, 3).copy())
-        self.body_com, self.body_frame = np.array(com), np.array(frame)
+            mujoco.mj_comPos(model, data)
+            mujoco.mj_comVel(model, data)
+            rows.append((data.xipos[ids].copy(), data.ximat[ids].reshape(-1, 3, 3).copy(), data.cvel[ids].copy(),
+                         data.subtree_com[model.body_rootid[ids]].copy()))
+        self.body_com, self.body_frame, self.body_cvel, self.root_com = map(np.array, zip(*rows))
 
     def feed_forward(self, k: int, R_world_vehicle, current, current_rate) -> np.ndarray:
         """``(6,)`` the wrench in V that holds the hull still at period ``k`` of the plan
@@ -137,8 +142,8 @@ class WholeBody:
         v = self.vehicle
         hydro = hydrostatic_wrench(R_world_vehicle, self.T_base, self.T_link[k], self.parts, v.mass, v.volume,
                                    v.cob, v.water_density, v.gravity)
-        drag = drag_wrench(R_world_vehicle, self.body_com[k], self.body_frame[k], self.box, np.zeros(3), current,
-                           v.water_density, v.viscosity)
+        drag = drag_wrench(R_world_vehicle, self.body_com[k], self.body_frame[k], self.box, self.body_cvel[k],
+                           self.root_com[k], current, v.water_density, v.viscosity)
         added = np.concatenate([np.asarray(self.settings.added_mass) * (R_world_vehicle.T @ current_rate), np.zeros(3)])
         return self.momentum_rate[k] - hydro - drag - added
 
@@ -172,8 +177,9 @@ class WholeBody:
         lead = dt + s.servo_lead_s
         lo = np.maximum(-self.rate_limit, (self.lower - q_ref) / lead)
         hi = np.minimum(self.rate_limit, (self.upper - q_ref) / lead)
-        rates, joint_limited = limited_rates(J, v1, self.J2, -s.station_gain * eta, self.w_inv_sqrt, s.damping,
-                                             self.arm, lo, hi)
+        S = np.r_[np.ones(3), np.full(3, s.orientation_length)][:, None]  # rows in [m/s]: position first
+        rates, joint_limited = limited_rates(S * J, S[:, 0] * v1, self.J2, -s.station_gain * eta, self.w_inv_sqrt,
+                                             s.damping, self.arm, lo, hi)
         q_dot = rates[self.arm]
         # The thrusters: the PID holds the docked pose tracking the vehicle's share of the rates.
         error = np.concatenate([self.pose[:3] - position, [wrap_angle(self.pose[3] - np.arctan2(R[1, 0], R[0, 0]))]])
