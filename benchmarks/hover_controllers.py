@@ -9,7 +9,7 @@ one JSON object.
 
 The run folder is a `make demo` run's (its `schedule/plan.json` and `docking/best_pose.json`).
 ``--navigation`` gives the whole-body controller the navigation estimate's defaults (30 Hz,
-50 ms, 5 mm, 0.2°); ``--gust`` adds gusts of that standard deviation [m/s] every 2 s.
+50 ms, 5 mm, 0.2°, fused with dead reckoning at ``--fix-gain``); ``--gust`` adds gusts of that standard deviation [m/s] every 2 s.
 """
 
 from __future__ import annotations
@@ -49,6 +49,7 @@ def main() -> None:
     ap.add_argument("--directions", type=float, nargs="+", default=[0.0, 120.0, 240.0], help="[deg from the world's x]")
     ap.add_argument("--controls", nargs="+", default=["pid", "whole_body"])
     ap.add_argument("--navigation", action="store_true", help="the whole-body controller sees a navigation estimate")
+    ap.add_argument("--fix-gain", type=float, default=None, help="the navigation's fix_gain (default: its setting's)")
     ap.add_argument("--gust", type=float, default=0.0, help="gusts' standard deviation [m/s]")
     ap.add_argument("--arm", default="bravo7")
     args = ap.parse_args()
@@ -57,7 +58,9 @@ def main() -> None:
     pose = [best["x"], best["y"], best["z"], best["psi"]]
     arm = load_arm(args.arm)
     duration = hover.plan_targets(plan, 0.5, 1.0)[2]
-    navigation = hover.NavigationSettings() if args.navigation else None
+    navigation = None
+    if args.navigation:
+        navigation = hover.NavigationSettings(**({} if args.fix_gain is None else {"fix_gain": args.fix_gain}))
     rows = []
     for speed in args.speeds:
         for angle in args.directions if speed > 0 else [0.0]:

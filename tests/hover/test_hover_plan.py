@@ -68,6 +68,9 @@ def test_still_water_reaches_every_gate_and_a_current_drifts_more(runs):
     assert 0.0 < still["max_drift_m"] < current["max_drift_m"]
     assert current["max_tool_error_m"] > still["max_tool_error_m"]
     assert current["peak_thrust_N"] > still["peak_thrust_N"]
+    assert still["joint_limited_periods"] is None  # the arm replays its targets: no bounds of its own
+    saturated = int(np.sum(np.abs(runs[0.4].log.thrust[1:]).max(axis=-1) >= 40.0 - 1e-9))  # one 40 N limit for all
+    assert current["thrust_limited_periods"] == saturated
     if current["status"] != "completed":  # held at a gate, and says why
         assert current["reason"].startswith("gate ")
 

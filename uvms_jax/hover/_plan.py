@@ -102,8 +102,9 @@ class HoverRun:
         the plan's joint angles on purpose: gates judged by the tool alone, position and angle).
       gate_tool_angle: ``(g,)`` the tool's angle from its docked orientation at each gate [rad]
         (None: not measured); tool_tolerance_rad: a gate's tolerance on it.
-      thrust_limited_periods, joint_limited_periods: control periods in which the thrust
-        allocation met a thruster's limit, and in which an arm joint's rate bound was active.
+      thrust_limited_periods, joint_limited_periods: control periods in which a thruster was
+        at its limit (the allocation scaled the demand down), and in which one of the arm's
+        rate bounds was active (None: the arm followed the plan's targets, no bounds of its own).
       world: the executed run's vehicle and its model (e.g. for :meth:`HoverWorld.write_video`).
       planned_gates: the plan's gates (an executed run: the executor's count, gripper steps
         included).
@@ -129,7 +130,7 @@ class HoverRun:
     gate_tool_angle: np.ndarray | None = None
     tool_tolerance_rad: float = np.inf
     thrust_limited_periods: int = 0
-    joint_limited_periods: int = 0
+    joint_limited_periods: int | None = None
 
     @property
     def _angles_checked(self) -> np.ndarray:
@@ -238,11 +239,12 @@ def run_plan_hovering(robot: Robot, plan: Plan, pose, vehicle: VehicleSettings =
     times = period * np.arange(round(duration / period) + 2)
     q_plan = np.array([targets(t) for t in times])
     p_docked = docked_tool(robot, vehicle, pose, q_plan)
-    angle, limited = None, (0, 0)
+    angle = None
     if control == "whole_body":
         log, angle, limited = _run_whole_body(sim, robot, controller, whole_body, pose, q_plan, navigation)
     else:
         log = sim.run(times[-1], arm_trajectory=lambda t: q_plan[round(t / period)])
+        limited = (_saturated_periods(log, sim.world.limits), None)
     tool_error = np.linalg.norm(log.tool - p_docked[: len(log.time)], axis=-1)
     rows = np.searchsorted(log.time, gate_times - 1e-9).clip(max=len(log.time) - 1)
     joint_error = np.abs(log.q[rows] - np.array([targets(t) for t in gate_times])).max(axis=-1) \
@@ -254,6 +256,12 @@ def run_plan_hovering(robot: Robot, plan: Plan, pose, vehicle: VehicleSettings =
                     gate_tool_angle=None if angle is None else angle[rows],
                     tool_tolerance_rad=float(np.radians(tool_tolerance_deg)), thrust_limited_periods=limited[0],
                     joint_limited_periods=limited[1])
+
+
+def _saturated_periods(log: HoverLog, limits: np.ndarray) -> int:
+    """Control periods in ``log`` whose thrusts put a thruster at its limit ``limits (n,)`` [N]
+    (the scaled allocation puts one exactly there; 1e-9 N of rounding allowed)."""
+    return int(np.sum(np.any(np.abs(log.thrust[1:]) >= limits - 1e-9, axis=-1)))
 
 
 def _run_whole_body(sim: HoverSim, robot: Robot, controller: ControllerSettings, settings: WholeBodySettings,
@@ -335,7 +343,8 @@ def execute_plan_hovering(robot: Robot, plan: Plan, pose, vehicle: VehicleSettin
                     gate_joint_error=np.array([g.error_rad for g in run.result.gates]), tool_error=tool_error,
                     drift=np.linalg.norm(log.position - pose[:3], axis=-1), tool_tolerance_m=float(tool_tolerance_m),
                     joint_tolerance_rad=config.gate_threshold_rad, current=world.current_velocity(0.0),
-                    executed=run, planned_gates=int(planned), world=world)
+                    executed=run, planned_gates=int(planned), world=world,
+                    thrust_limited_periods=_saturated_periods(log, world.limits))
 
 
 def follow_tool_path(robot: Robot, vehicle: VehicleSettings, q_docked, docked_pose, pose, *, key=None,

@@ -230,14 +230,16 @@ class WholeBodySettings:
 @dataclasses.dataclass(frozen=True)
 class NavigationSettings:
     """The vehicle's pose as its navigation gives it: fixes at a rate, late and noisy, like a
-    vision-based relative fix; between fixes the last one is carried forward with the vehicle's
-    velocity (as a DVL and a gyro give it, taken as exact here).
+    vision-based relative fix, fused with dead reckoning on the vehicle's velocity (as a DVL and
+    a gyro give it, taken as exact here).
 
     Attributes:
       rate_hz: fixes per second [Hz].
       latency_s: a fix arrives this long after the instant it describes [s].
       position_noise_m: standard deviation of a fix's position on each axis [m].
       angle_noise_deg: standard deviation of a fix's orientation about each axis [°].
+      fix_gain: the share of a fix's innovation the estimate takes, in (0, 1]
+        (:class:`~uvms_jax.hover.NavigationEstimate`; 1: the newest fix carried forward).
       seed: the noise's random seed.
     """
 
@@ -245,6 +247,7 @@ class NavigationSettings:
     latency_s: float = setting(0.05, ge=0)
     position_noise_m: float = setting(0.005, ge=0)
     angle_noise_deg: float = setting(0.2, ge=0)
+    fix_gain: float = setting(0.1, gt=0, le=1)
     seed: int = 0
 
     def __post_init__(self) -> None:
@@ -252,6 +255,8 @@ class NavigationSettings:
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0) or (name == "rate_hz" and not value > 0):
                 raise ValueError(f"{name} must be finite and {'> 0' if name == 'rate_hz' else '>= 0'}, got {value}")
+        if not 0 < self.fix_gain <= 1:
+            raise ValueError(f"fix_gain must lie in (0, 1], got {self.fix_gain}")
 
 
 @dataclasses.dataclass(frozen=True)

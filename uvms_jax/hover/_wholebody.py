@@ -203,34 +203,46 @@ def _rotation(rotvec) -> np.ndarray:
 
 
 class NavigationEstimate:
-    """The vehicle's pose as a navigation with :class:`NavigationSettings` reports it.
+    """The vehicle's pose as a navigation with :class:`NavigationSettings` estimates it.
 
     A fix describes the true pose at its instant (fixes every ``1 / rate_hz`` s; the pose
-    recorded last at or before that instant, a control period's), with Gaussian noise on the position and
-    a rotation of Gaussian angles about V's axes, and arrives ``latency_s`` later. The estimate
-    at a time is the newest fix that has arrived, carried forward to that time with the
-    vehicle's present velocity and angular velocity. Before the first fix arrives, the true
-    starting pose stands in (the vehicle starts docked, where it knows its pose).
+    recorded last at or before that instant, a control period's), with Gaussian noise on the
+    position and a rotation of Gaussian angles about V's axes, and arrives ``latency_s`` later.
+    The estimate is carried forward from call to call with the vehicle's velocity and angular
+    velocity (dead reckoning, as a DVL and a gyro give them); each fix that arrives corrects it
+    by ``fix_gain`` of its innovation (the fix less the estimate of the fix's instant), a
+    complementary filter: with exact velocities its error is the fixes' noise averaged, of
+    standard deviation ``sqrt(g / (2 − g))`` times theirs for gain g (1: the newest fix carried
+    forward). It starts at the true starting pose (the vehicle starts docked, where it knows
+    its pose).
     """
 
     def __init__(self, settings: NavigationSettings, position, R_world_vehicle) -> None:
         self.settings = settings
         self._rng = np.random.default_rng(settings.seed)
         self._truth: list[tuple[float, np.ndarray, np.ndarray]] = []
-        self._fix = (0.0, np.asarray(position, dtype=float), np.asarray(R_world_vehicle, dtype=float))
+        self._estimates: list[tuple[float, np.ndarray, np.ndarray]] = []
+        self._state = (0.0, np.asarray(position, dtype=float), np.asarray(R_world_vehicle, dtype=float))
         self._next = 0  # the next fix's number
 
     def estimate(self, t: float, position, R_world_vehicle, velocity, angular_velocity) -> tuple[np.ndarray, np.ndarray]:
         """``(position (3,) [m], R (3, 3))`` at time ``t`` [s], given the true state now (recorded
-        for the fixes to come) and the velocities [m/s, world; rad/s, in V]."""
+        for the fixes to come) and the velocities [m/s, world; rad/s, in V] (held since the last
+        call for the dead reckoning)."""
         s = self.settings
+        t_last, p, R = self._state
+        p, R = p + (t - t_last) * np.asarray(velocity), R @ _rotation((t - t_last) * np.asarray(angular_velocity))
         self._truth.append((t, np.asarray(position, dtype=float), np.asarray(R_world_vehicle, dtype=float)))
+        self._estimates.append((t, p, R))
         while self._next / s.rate_hz + s.latency_s <= t + 1e-12:
             t_fix = self._next / s.rate_hz
-            t_pose, p, R = next(row for row in reversed(self._truth) if row[0] <= t_fix + 1e-12)
-            noise = self._rng.normal(0.0, np.radians(s.angle_noise_deg), 3)
-            self._fix = (t_pose, p + self._rng.normal(0.0, s.position_noise_m, 3), R @ _rotation(noise))
+            row = next(i for i in range(len(self._truth) - 1, -1, -1) if self._truth[i][0] <= t_fix + 1e-12)
+            _, p_true, R_true = self._truth[row]
+            p_fix = p_true + self._rng.normal(0.0, s.position_noise_m, 3)
+            R_fix = R_true @ _rotation(self._rng.normal(0.0, np.radians(s.angle_noise_deg), 3))
+            _, p_then, R_then = self._estimates[row]
+            p = p + s.fix_gain * (p_fix - p_then)
+            R = R @ _rotation(s.fix_gain * Rotation.from_matrix(R_then.T @ R_fix).as_rotvec())
             self._next += 1
-        t_fix, p, R = self._fix
-        age = t - t_fix
-        return p + age * np.asarray(velocity), R @ _rotation(age * np.asarray(angular_velocity))
+        self._state = (t, p, R)
+        return p, R
