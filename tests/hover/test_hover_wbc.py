@@ -132,16 +132,16 @@ def test_the_same_code_runs_under_jit():
 
 
 def test_navigation_fixes_arrive_late_and_are_carried_forward():
-    """10 fixes a second, 50 ms late, no noise, the vehicle moving at a constant velocity and
-    turning at a constant rate: dead reckoning and every fix agree with the truth, so the
-    estimate is the true pose; how many fixes have arrived is written out by hand."""
-    v, w, dt = np.array([0.1, -0.05, 0.02]), np.array([0.0, 0.0, 0.3]), 0.02
+    """10 fixes a second, 50 ms late, no noise, the vehicle moving and turning: dead reckoning
+    and every fix agree with the truth, so the estimate is the true pose; how many fixes have
+    arrived is written out by hand."""
+    v, dt = np.array([0.1, -0.05, 0.02]), 0.02
     true_pose = lambda t: (np.array([1.0, 2.0, 3.0]) + v * t, frames.rot_z(0.3 * t))  # noqa: E731
     nav = NavigationEstimate(NavigationSettings(rate_hz=10.0, latency_s=0.05, position_noise_m=0.0,
                                                 angle_noise_deg=0.0, fix_gain=0.5), *true_pose(0.0))
     for k in range(20):
         t = k * dt
-        p, R = nav.estimate(t, *true_pose(t), v, w)
+        p, R = nav.estimate(t, *true_pose(t))
         np.testing.assert_allclose(p, true_pose(t)[0], atol=1e-12)
         np.testing.assert_allclose(R, true_pose(t)[1], atol=1e-12)
     assert nav._next == 4  # fixes of 0, 0.1, 0.2 and 0.3 s have arrived by 0.38 s (0.35 s ≤ 0.38 s < 0.45 s)
@@ -155,7 +155,7 @@ def test_navigation_noise_is_the_fixes_averaged(gain):
     s = NavigationSettings(rate_hz=50.0, latency_s=0.0, position_noise_m=0.005, angle_noise_deg=0.2, fix_gain=gain,
                            seed=3)
     nav = NavigationEstimate(s, np.zeros(3), np.eye(3))
-    got = np.array([nav.estimate(0.02 * k, np.zeros(3), np.eye(3), np.zeros(3), np.zeros(3))[0] for k in range(6000)])
+    got = np.array([nav.estimate(0.02 * k, np.zeros(3), np.eye(3))[0] for k in range(6000)])
     # 18 000 correlated samples (correlation time 1/g periods): the spread within 5 % (gain 1) and 10 %
     assert np.std(got[100:]) == pytest.approx(0.005 * np.sqrt(gain / (2 - gain)), rel=0.05 if gain == 1 else 0.1)
 

@@ -296,7 +296,7 @@ def _run_whole_body(sim: HoverSim, robot: Robot, controller: ControllerSettings,
         position, R, velocity, omega = d.qpos[:3].copy(), d.xmat[hull].reshape(3, 3).copy(), d.qvel[:3].copy(), \
             d.qvel[3:6].copy()
         if nav is not None:
-            position, R = nav.estimate(t, position, R, velocity, omega)
+            position, R = nav.estimate(t, position, R)
         cmd = wb.step(k, position, R, velocity, omega, q_ref, integral, current, rate)
         q_ref, integral = cmd.reference, cmd.integral
         counts += (cmd.thrust_limited, cmd.joint_limited)

@@ -208,10 +208,12 @@ class NavigationEstimate:
     A fix describes the true pose at its instant (fixes every ``1 / rate_hz`` s; the pose
     recorded last at or before that instant, a control period's), with Gaussian noise on the
     position and a rotation of Gaussian angles about V's axes, and arrives ``latency_s`` later.
-    The estimate is carried forward from call to call with the vehicle's velocity and angular
-    velocity (dead reckoning, as a DVL and a gyro give them); each fix that arrives corrects it
+    The estimate is carried forward from call to call by the vehicle's own motion (dead
+    reckoning: the change of pose since the last call, as a DVL and a gyro integrated at their
+    own high rate give it, taken as exact here; sampling their velocities once per control
+    period would alias the hull's vibration into drift); each fix that arrives corrects it
     by ``fix_gain`` of its innovation (the fix less the estimate of the fix's instant), a
-    complementary filter: with exact velocities its error is the fixes' noise averaged, of
+    complementary filter: with exact dead reckoning its error is the fixes' noise averaged, of
     standard deviation ``sqrt(g / (2 − g))`` times theirs for gain g (1: the newest fix carried
     forward). It starts at the true starting pose (the vehicle starts docked, where it knows
     its pose).
@@ -222,17 +224,19 @@ class NavigationEstimate:
         self._rng = np.random.default_rng(settings.seed)
         self._truth: list[tuple[float, np.ndarray, np.ndarray]] = []
         self._estimates: list[tuple[float, np.ndarray, np.ndarray]] = []
-        self._state = (0.0, np.asarray(position, dtype=float), np.asarray(R_world_vehicle, dtype=float))
+        start = (np.asarray(position, dtype=float), np.asarray(R_world_vehicle, dtype=float))
+        self._state, self._last_truth = start, start
         self._next = 0  # the next fix's number
 
-    def estimate(self, t: float, position, R_world_vehicle, velocity, angular_velocity) -> tuple[np.ndarray, np.ndarray]:
-        """``(position (3,) [m], R (3, 3))`` at time ``t`` [s], given the true state now (recorded
-        for the fixes to come) and the velocities [m/s, world; rad/s, in V] (held since the last
-        call for the dead reckoning)."""
+    def estimate(self, t: float, position, R_world_vehicle) -> tuple[np.ndarray, np.ndarray]:
+        """``(position (3,) [m], R (3, 3))`` at time ``t`` [s], given the true pose now (its
+        change since the last call is the dead reckoning; recorded for the fixes to come)."""
         s = self.settings
-        t_last, p, R = self._state
-        p, R = p + (t - t_last) * np.asarray(velocity), R @ _rotation((t - t_last) * np.asarray(angular_velocity))
-        self._truth.append((t, np.asarray(position, dtype=float), np.asarray(R_world_vehicle, dtype=float)))
+        position, R_true = np.asarray(position, dtype=float), np.asarray(R_world_vehicle, dtype=float)
+        (p, R), (p_last, R_last) = self._state, self._last_truth
+        p, R = p + (position - p_last), R @ (R_last.T @ R_true)  # the move in the world, the turn in V
+        self._last_truth = (position, R_true)
+        self._truth.append((t, position, R_true))
         self._estimates.append((t, p, R))
         while self._next / s.rate_hz + s.latency_s <= t + 1e-12:
             t_fix = self._next / s.rate_hz
@@ -244,5 +248,5 @@ class NavigationEstimate:
             p = p + s.fix_gain * (p_fix - p_then)
             R = R @ _rotation(s.fix_gain * Rotation.from_matrix(R_then.T @ R_fix).as_rotvec())
             self._next += 1
-        self._state = (t, p, R)
+        self._state = (p, R)
         return p, R
