@@ -118,6 +118,17 @@ def test_a_current_beyond_the_thrusters_holds_the_run_within_the_limits():
     assert np.all((run.log.q_target >= ARM.lower - 1e-9) & (run.log.q_target <= ARM.upper + 1e-9))
 
 
+def test_the_feed_forward_alone_keeps_the_vehicle_nearer(runs):
+    """The PID with the feed-forward (the arm replaying its waypoints) drifts less than the PID
+    alone in the same current, and its gates are judged as the PID's (joints and tool)."""
+    ff = run_plan_hovering(ARM, _plan(), POSE, VehicleSettings(), current=CurrentSettings(velocity=(0.4, 0.0, 0.0)),
+                           control="feed_forward")
+    plain, fed = runs[0.4].summary(), ff.summary()
+    assert not fed["coordinated"] and fed["joint_limited_periods"] is None and "gate_tool_angle_deg" not in fed
+    assert fed["max_drift_m"] < 0.5 * plain["max_drift_m"]
+    np.testing.assert_allclose(ff.log.q_target[1:], runs[0.4].log.q_target[1:], atol=1e-12)  # the same replay
+
+
 def test_an_unknown_control_is_refused():
     with pytest.raises(ValueError, match="control must be"):
         run_plan_hovering(ARM, _plan(), POSE, control="replay")

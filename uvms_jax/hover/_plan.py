@@ -1,12 +1,13 @@
 """A scheduled plan's motion on the hovering vehicle: how good is a docking pose if the vehicle
 only hovers there?
 
-:func:`run_plan_hovering` replays a ``plan.json`` (:class:`uvms_jax.planfile.Plan`) on
-:class:`~uvms_jax.hover.HoverSim`: the arm's servos follow the plan's timed waypoints, dwelling
-at the end of every segment (where the executor waits for its gate) and during every gripper
-step, while the vehicle holds the docked pose on its thrusters in the given current. At each
-gate it compares the tool with where the docked arm puts it at the same joint angles: the
-vehicle's motion, seen at the tool.
+:func:`run_plan_hovering` runs a ``plan.json`` (:class:`uvms_jax.planfile.Plan`) on
+:class:`~uvms_jax.hover.HoverSim`, dwelling at the end of every segment (where the executor
+waits for its gate) and during every gripper step, in the given current: either the arm's
+servos replay the plan's timed waypoints while the station keeping's PID holds the docked pose,
+or the whole-body controller (:class:`~uvms_jax.hover.WholeBody`) drives the arm and the
+thrusters so that the tool follows the docked arm's path. At each gate it compares the tool
+with where the docked arm puts it on the plan: the vehicle's motion, seen at the tool.
 """
 
 from __future__ import annotations
@@ -214,6 +215,8 @@ def run_plan_hovering(robot: Robot, plan: Plan, pose, vehicle: VehicleSettings =
 
     - ``"pid"``: the arm's servos replay the plan's timed waypoints and the station keeping's
       PID holds the docked pose; a gate is judged on the joints and on the tool's position.
+    - ``"feed_forward"``: the same replay, the PID's thrusts with the whole-body controller's
+      feed-forward wrench added (:meth:`~uvms_jax.hover.WholeBody.thrust`); gates as ``"pid"``.
     - ``"whole_body"``: the whole-body controller (:class:`~uvms_jax.hover._wholebody.WholeBody`,
       ``whole_body``) drives the arm's servos and the thrusters so that the tool follows the
       plan's docked path; the arm leaves the plan's joint angles on purpose, and a gate is judged
@@ -227,8 +230,8 @@ def run_plan_hovering(robot: Robot, plan: Plan, pose, vehicle: VehicleSettings =
     """
     if tuple(plan.joint_names) != tuple(robot.joint_names):
         raise ValueError(f"the plan moves {plan.joint_names}, the arm has {robot.joint_names}")
-    if control not in ("pid", "whole_body"):
-        raise ValueError(f"control must be 'pid' or 'whole_body', got {control!r}")
+    if control not in _CONTROLS:
+        raise ValueError(f"control must be one of {_CONTROLS}, got {control!r}")
     pose = np.asarray(pose, dtype=float)
     targets, gate_times, duration = plan_targets(plan, dwell_s, gripper_s)
     q0 = targets(0.0)
@@ -242,6 +245,9 @@ def run_plan_hovering(robot: Robot, plan: Plan, pose, vehicle: VehicleSettings =
     angle = None
     if control == "whole_body":
         log, angle, limited = _run_whole_body(sim, robot, controller, whole_body, pose, q_plan, navigation)
+    elif control == "feed_forward":
+        log, _, limited = _run_whole_body(sim, robot, controller, dataclasses.replace(whole_body, feed_forward=True),
+                                          pose, q_plan, navigation, replay=True)
     else:
         log = sim.run(times[-1], arm_trajectory=lambda t: q_plan[round(t / period)])
         limited = (_saturated_periods(log, sim.world.limits), None)
@@ -258,6 +264,9 @@ def run_plan_hovering(robot: Robot, plan: Plan, pose, vehicle: VehicleSettings =
                     joint_limited_periods=limited[1])
 
 
+_CONTROLS = ("pid", "feed_forward", "whole_body")
+
+
 def _saturated_periods(log: HoverLog, limits: np.ndarray) -> int:
     """Control periods in ``log`` whose thrusts put a thruster at its limit ``limits (n,)`` [N]
     (the scaled allocation puts one exactly there; 1e-9 N of rounding allowed)."""
@@ -265,15 +274,16 @@ def _saturated_periods(log: HoverLog, limits: np.ndarray) -> int:
 
 
 def _run_whole_body(sim: HoverSim, robot: Robot, controller: ControllerSettings, settings: WholeBodySettings,
-                    pose: np.ndarray, q_plan: np.ndarray,
-                    navigation: NavigationSettings | None) -> tuple[HoverLog, np.ndarray, tuple[int, int]]:
+                    pose: np.ndarray, q_plan: np.ndarray, navigation: NavigationSettings | None,
+                    replay: bool = False) -> tuple[HoverLog, np.ndarray, tuple[int, int | None]]:
     """``sim`` driven by the whole-body controller along ``q_plan`` ``(K, n)`` (one row per
     control period) for ``K − 1`` periods, seeing the vehicle's pose through ``navigation``
-    (None: exactly).
+    (None: exactly); ``replay``: the arm's servos follow ``q_plan`` and the controller sets the
+    thrusts alone.
 
     Returns:
-      ``(log, tool_angle (K,) [rad], (thrust-limited periods, joint-limited periods))``: the
-      tool's angle from its docked orientation on the plan at every logged row.
+      ``(log, tool_angle (K,) [rad], (thrust-limited periods, joint-limited periods or None))``:
+      the tool's angle from its docked orientation on the plan at every logged row.
     """
     m, d, w = sim.model, sim.data, sim.world
     wb = WholeBody(robot, sim.vehicle, controller, settings, pose, q_plan, m)
@@ -297,13 +307,18 @@ def _run_whole_body(sim: HoverSim, robot: Robot, controller: ControllerSettings,
             d.qvel[3:6].copy()
         if nav is not None:
             position, R = nav.estimate(t, position, R)
-        cmd = wb.step(k, position, R, velocity, omega, q_ref, integral, current, rate)
-        q_ref, integral = cmd.reference, cmd.integral
-        counts += (cmd.thrust_limited, cmd.joint_limited)
-        sim.step(cmd.target, thrust=cmd.thrust, demand=cmd.demand)
-        w.record(m, d, cmd.target)
+        if replay:
+            thrust, demand, integral, limited = wb.thrust(k, position, R, velocity, omega, integral, current, rate)
+            target = q_plan[k]  # as the PID's replay: the plan's angles of the period's start
+            counts[0] += limited
+        else:
+            cmd = wb.step(k, position, R, velocity, omega, q_ref, integral, current, rate)
+            q_ref, integral, target, thrust, demand = cmd.reference, cmd.integral, cmd.target, cmd.thrust, cmd.demand
+            counts += (cmd.thrust_limited, cmd.joint_limited)
+        sim.step(target, thrust=thrust, demand=demand)
+        w.record(m, d, target)
         angles.append(angle(k + 1))
-    return w.log(), np.array(angles), (int(counts[0]), int(counts[1]))
+    return w.log(), np.array(angles), (int(counts[0]), None if replay else int(counts[1]))
 
 
 def execute_plan_hovering(robot: Robot, plan: Plan, pose, vehicle: VehicleSettings = VehicleSettings(),

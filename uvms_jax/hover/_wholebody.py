@@ -181,20 +181,34 @@ class WholeBody:
         rates, joint_limited = limited_rates(S * J, S[:, 0] * v1, self.J2, -s.station_gain * eta, self.w_inv_sqrt,
                                              s.damping, self.arm, lo, hi)
         q_dot = rates[self.arm]
-        # The thrusters: the PID holds the docked pose tracking the vehicle's share of the rates.
-        error = np.concatenate([self.pose[:3] - position, [wrap_angle(self.pose[3] - np.arctan2(R[1, 0], R[0, 0]))]])
-        yaw_rate = (R @ angular_velocity)[2]
-        demand, integral = station_keeping(error, velocity - R_dock @ rates[:3], yaw_rate - rates[5], integral, R,
-                                           *self.gains, dt)
-        demand = demand + np.concatenate([np.zeros(3), level_attitude(R, angular_velocity, self.controller.level_kp,
-                                                                      self.controller.level_kd)])
-        if s.feed_forward:
-            demand = demand + self.feed_forward(k_next, R, current, current_rate)
-        thrust = allocate_thrust(demand, self.B_pinv, self.thrust_limits)
-        saturated = bool(np.max(np.abs(self.B_pinv @ demand) / self.thrust_limits) > 1.0)
+        thrust, demand, integral, saturated = self.thrust(k, position, R, velocity, angular_velocity, integral,
+                                                          current, current_rate, rates[:_VEHICLE])
         return WholeBodyCommand(target=q_ref + lead * q_dot, reference=q_ref + dt * q_dot, thrust=thrust,
                                 demand=demand, integral=integral, joint_limited=bool(joint_limited),
                                 thrust_limited=saturated)
+
+    def thrust(self, k: int, position, R_world_vehicle, velocity, angular_velocity, integral, current, current_rate,
+               vehicle_rates=None) -> tuple[np.ndarray, np.ndarray, np.ndarray, bool]:
+        """The thrusters' part of period ``k`` (arguments as :meth:`step`): the PID holding the
+        docked pose while tracking ``vehicle_rates`` ``(6,)`` (the vehicle's share of the tasks'
+        rates, η̇ in V₀; None: at rest), the levelling and, with ``settings.feed_forward``, the
+        feed-forward wrench, allocated.
+
+        Returns:
+          ``(thrust (n_thrusters,) [N], demand (6,) [N, N·m] in V, integral (4,), limited)``.
+        """
+        R, R_dock = R_world_vehicle, self.T_dock[:3, :3]
+        rates = np.zeros(_VEHICLE) if vehicle_rates is None else np.asarray(vehicle_rates, dtype=float)
+        error = np.concatenate([self.pose[:3] - position, [wrap_angle(self.pose[3] - np.arctan2(R[1, 0], R[0, 0]))]])
+        yaw_rate = (R @ angular_velocity)[2]
+        demand, integral = station_keeping(error, velocity - R_dock @ rates[:3], yaw_rate - rates[5], integral, R,
+                                           *self.gains, self.dt)
+        demand = demand + np.concatenate([np.zeros(3), level_attitude(R, angular_velocity, self.controller.level_kp,
+                                                                      self.controller.level_kd)])
+        if self.settings.feed_forward:
+            demand = demand + self.feed_forward(min(k, len(self.T_tool) - 1), R, current, current_rate)
+        saturated = bool(np.max(np.abs(self.B_pinv @ demand) / self.thrust_limits) > 1.0)
+        return allocate_thrust(demand, self.B_pinv, self.thrust_limits), demand, integral, saturated
 
 
 def _rotation(rotvec) -> np.ndarray:
