@@ -1,5 +1,6 @@
 """The tool's error on the hovering vehicle: the station keeping's PID with the arm replaying its
-waypoints against the whole-body controller (the tool's pose first, station keeping in its null
+waypoints (``pid``; ``feed_forward``: with the model-based feed-forward on the thrusters) against
+the whole-body controller (``whole_body``: the tool's pose first, station keeping in its null
 space, feed-forward on the thrusters), on the CPU (:func:`uvms_jax.hover.run_plan_hovering`,
 MuJoCo's C engine), for a demo run's scheduled plan at its docked pose in a few currents. Prints
 one JSON object.
