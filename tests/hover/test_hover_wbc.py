@@ -169,3 +169,18 @@ def test_a_gusty_current_varies_about_its_mean():
     assert np.abs(gusts.mean(axis=0)).max() < 0.015 and np.std(gusts) == pytest.approx(0.1, rel=0.1)
     with pytest.raises(ValueError, match="gusty current"):
         CurrentSettings.gusty((0.3, 0.0, 0.0), -0.1, 2.0, 10.0)
+
+
+def test_a_control_period_is_the_same_under_jit():
+    """:meth:`WholeBody.step` with ``jax.numpy`` under ``jit`` (the period a traced index, as a
+    batch would run it) gives the NumPy commands, on a drifted, tilted vehicle in a current."""
+    vehicle = trimmed(VehicleSettings(), ARM, Q_A)
+    q = _plan()
+    wb = WholeBody(ARM, vehicle, ControllerSettings(), WholeBodySettings(), POSE, q, hover_model(ARM, vehicle))
+    R = frames.rpy_matrix([0.02, -0.03, POSE[3] + 0.05])
+    state = (POSE[:3] + [0.02, -0.01, 0.005], R, np.array([0.05, 0.02, -0.01]), np.array([0.01, -0.02, 0.03]),
+             q[2] + 0.01, np.array([0.01, 0.0, -0.02, 0.01]), np.array([0.3, -0.2, 0.0]), np.array([0.01, 0.0, 0.0]))
+    want = wb.step(2, *state)
+    got = jax.jit(functools.partial(wb.step, xp=jnp))(jnp.asarray(2), *map(jnp.asarray, state))
+    for name, a, b in zip(want._fields, want, got):
+        np.testing.assert_allclose(np.asarray(b), a, atol=1e-9, err_msg=name)

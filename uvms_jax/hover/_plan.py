@@ -310,11 +310,11 @@ def _run_whole_body(sim: HoverSim, robot: Robot, controller: ControllerSettings,
         if replay:
             thrust, demand, integral, limited = wb.thrust(k, position, R, velocity, omega, integral, current, rate)
             target = q_plan[k]  # as the PID's replay: the plan's angles of the period's start
-            counts[0] += limited
+            counts[0] += bool(limited)
         else:
             cmd = wb.step(k, position, R, velocity, omega, q_ref, integral, current, rate)
             q_ref, integral, target, thrust, demand = cmd.reference, cmd.integral, cmd.target, cmd.thrust, cmd.demand
-            counts += (cmd.thrust_limited, cmd.joint_limited)
+            counts += (bool(cmd.thrust_limited), bool(cmd.joint_limited))
         sim.step(target, thrust=thrust, demand=demand)
         w.record(m, d, target)
         angles.append(angle(k + 1))

@@ -114,7 +114,7 @@ def limited_rates(J1, v1, J2, v2, w_inv_sqrt, damping, arm, lo, hi, xp=np):
       ``(ζ̇ (m,), limited)``: the rates, the arm's within ``[lo, hi]``, and whether a bound was
       active (a bool scalar).
     """
-    m = J1.shape[1]
+    m, w_inv_sqrt = J1.shape[1], xp.asarray(w_inv_sqrt)
     fixed = xp.zeros(arm.shape[0], dtype=bool)
     fixed_rate = xp.zeros(arm.shape[0], dtype=J1.dtype)
     for _ in range(arm.shape[0] + 1):

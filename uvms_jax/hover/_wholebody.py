@@ -9,6 +9,7 @@ estimate and the kinematics of :func:`uvms_jax.kin.uvms` at it.
 
 from __future__ import annotations
 
+import functools
 from typing import NamedTuple
 
 import mujoco
@@ -54,8 +55,8 @@ class WholeBodyCommand(NamedTuple):
       reference: ``(n,)`` the arm's reference at the period's end [rad] (the next state).
       thrust: ``(n_thrusters,)`` [N], within the thrusters' limits; demand: ``(6,)`` the wrench
         asked for in V [N, N·m]; integral: ``(4,)`` the station keeping's next state.
-      joint_limited, thrust_limited: a joint rate bound was active; the allocation scaled the
-        demand down to the thrusters' limits.
+      joint_limited, thrust_limited: (bool scalars) a joint rate bound was active; the
+        allocation scaled the demand down to the thrusters' limits.
     """
 
     target: np.ndarray
@@ -63,8 +64,8 @@ class WholeBodyCommand(NamedTuple):
     thrust: np.ndarray
     demand: np.ndarray
     integral: np.ndarray
-    joint_limited: bool
-    thrust_limited: bool
+    joint_limited: np.ndarray
+    thrust_limited: np.ndarray
 
 
 class WholeBody:
@@ -134,28 +135,34 @@ class WholeBody:
                          data.subtree_com[model.body_rootid[ids]].copy()))
         self.body_com, self.body_frame, self.body_cvel, self.root_com = map(np.array, zip(*rows))
 
-    def feed_forward(self, k: int, R_world_vehicle, current, current_rate) -> np.ndarray:
+    def _at(self, table: np.ndarray, k, xp):
+        """Row ``k`` (clamped to the plan's last) of a per-period table, a traced index under ``jit``."""
+        return xp.asarray(table)[xp.minimum(k, len(table) - 1)]
+
+    def feed_forward(self, k, R_world_vehicle, current, current_rate, xp=np):
         """``(6,)`` the wrench in V that holds the hull still at period ``k`` of the plan
         [N, N·m]: ``ṗ_arm − w_hydrostatic − w_drag − w_added_mass`` (module docstring of
         :mod:`uvms_jax.hover._wbc`), with the water at ``current`` [m/s] changing at
         ``current_rate`` [m/s²] (world frame)."""
-        v = self.vehicle
-        hydro = hydrostatic_wrench(R_world_vehicle, self.T_base, self.T_link[k], self.parts, v.mass, v.volume,
-                                   v.cob, v.water_density, v.gravity)
-        drag = drag_wrench(R_world_vehicle, self.body_com[k], self.body_frame[k], self.box, self.body_cvel[k],
-                           self.root_com[k], current, v.water_density, v.viscosity)
-        added = np.concatenate([np.asarray(self.settings.added_mass) * (R_world_vehicle.T @ current_rate), np.zeros(3)])
-        return self.momentum_rate[k] - hydro - drag - added
+        v, at = self.vehicle, functools.partial(self._at, k=k, xp=xp)
+        hydro = hydrostatic_wrench(R_world_vehicle, self.T_base, at(self.T_link), self.parts, v.mass, v.volume,
+                                   v.cob, v.water_density, v.gravity, xp=xp)
+        drag = drag_wrench(R_world_vehicle, at(self.body_com), at(self.body_frame), self.box, at(self.body_cvel),
+                           at(self.root_com), current, v.water_density, v.viscosity, xp=xp)
+        added = xp.concatenate([xp.asarray(self.settings.added_mass) * (R_world_vehicle.T @ current_rate),
+                                xp.zeros(3)])
+        return at(self.momentum_rate) - hydro - drag - added
 
-    def displacement(self, position, R_world_vehicle) -> np.ndarray:
+    def displacement(self, position, R_world_vehicle, xp=np):
         """``(6,)`` η: the vehicle's displacement from the docked pose, in V₀ (translation [m],
         XYZ Euler angles [rad]), from its position [m] and orientation in the world."""
-        R_rel = self.T_dock[:3, :3].T @ R_world_vehicle
-        return np.concatenate([self.T_dock[:3, :3].T @ (position - self.T_dock[:3, 3]), euler_xyz(R_rel)])
+        R_dock = xp.asarray(self.T_dock[:3, :3])
+        return xp.concatenate([R_dock.T @ (position - self.T_dock[:3, 3]), euler_xyz(R_dock.T @ R_world_vehicle, xp=xp)])
 
-    def step(self, k: int, position, R_world_vehicle, velocity, angular_velocity, q_ref, integral, current,
-             current_rate) -> WholeBodyCommand:
-        """The commands of control period ``k`` from the navigation estimate.
+    def step(self, k, position, R_world_vehicle, velocity, angular_velocity, q_ref, integral, current, current_rate,
+             xp=np) -> WholeBodyCommand:
+        """The commands of control period ``k`` from the navigation estimate (``xp``: ``numpy``, or
+        ``jax.numpy`` under ``jit`` with ``k`` traced too).
 
         Args:
           position, R_world_vehicle: V's origin [m] and orientation in the world; velocity:
@@ -165,50 +172,51 @@ class WholeBody:
           current, current_rate: the water's velocity [m/s] and its rate [m/s²] as measured.
         """
         s, dt, R = self.settings, self.dt, R_world_vehicle
-        R_dock = self.T_dock[:3, :3]
-        eta = self.displacement(position, R)
+        R_dock = xp.asarray(self.T_dock[:3, :3])
+        eta = self.displacement(position, R, xp=xp)
         # η̇: the translations along V₀; the Euler rates taken as V₀'s angular velocity (the
         # vehicle stays within a few degrees of level and of the docked heading).
-        eta_dot = np.concatenate([R_dock.T @ velocity, R_dock.T @ (R @ angular_velocity)])
-        zeta = np.concatenate([eta + s.prediction_s * eta_dot, q_ref])
-        T, J = np.asarray(kin.fk(self.chain, zeta), dtype=float), np.asarray(kin.jacobian(self.chain, zeta), dtype=float)
-        k_next = min(k, len(self.T_tool) - 1)
-        v1 = self.tool_rate[k_next] + s.tool_gain / dt * pose_error(self.T_tool[k_next], T)
+        eta_dot = xp.concatenate([R_dock.T @ velocity, R_dock.T @ (R @ angular_velocity)])
+        zeta = xp.concatenate([eta + s.prediction_s * eta_dot, q_ref])
+        T, J = xp.asarray(kin.fk(self.chain, zeta)), xp.asarray(kin.jacobian(self.chain, zeta))
+        v1 = self._at(self.tool_rate, k, xp) + s.tool_gain / dt * pose_error(self._at(self.T_tool, k, xp), T, xp=xp)
         lead = dt + s.servo_lead_s
-        lo = np.maximum(-self.rate_limit, (self.lower - q_ref) / lead)
-        hi = np.minimum(self.rate_limit, (self.upper - q_ref) / lead)
-        S = np.r_[np.ones(3), np.full(3, s.orientation_length)][:, None]  # rows in [m/s]: position first
-        rates, joint_limited = limited_rates(S * J, S[:, 0] * v1, self.J2, -s.station_gain * eta, self.w_inv_sqrt,
-                                             s.damping, self.arm, lo, hi)
+        lo = xp.maximum(-self.rate_limit, (self.lower - q_ref) / lead)
+        hi = xp.minimum(self.rate_limit, (self.upper - q_ref) / lead)
+        S = xp.asarray([1.0, 1.0, 1.0] + [s.orientation_length] * 3)  # rows in [m/s]: position first
+        rates, joint_limited = limited_rates(S[:, None] * J, S * v1, self.J2, -s.station_gain * eta, self.w_inv_sqrt,
+                                             s.damping, self.arm, lo, hi, xp=xp)
         q_dot = rates[self.arm]
         thrust, demand, integral, saturated = self.thrust(k, position, R, velocity, angular_velocity, integral,
-                                                          current, current_rate, rates[:_VEHICLE])
+                                                          current, current_rate, rates[:_VEHICLE], xp=xp)
         return WholeBodyCommand(target=q_ref + lead * q_dot, reference=q_ref + dt * q_dot, thrust=thrust,
-                                demand=demand, integral=integral, joint_limited=bool(joint_limited),
+                                demand=demand, integral=integral, joint_limited=joint_limited,
                                 thrust_limited=saturated)
 
-    def thrust(self, k: int, position, R_world_vehicle, velocity, angular_velocity, integral, current, current_rate,
-               vehicle_rates=None) -> tuple[np.ndarray, np.ndarray, np.ndarray, bool]:
+    def thrust(self, k, position, R_world_vehicle, velocity, angular_velocity, integral, current, current_rate,
+               vehicle_rates=None, xp=np) -> tuple:
         """The thrusters' part of period ``k`` (arguments as :meth:`step`): the PID holding the
         docked pose while tracking ``vehicle_rates`` ``(6,)`` (the vehicle's share of the tasks'
         rates, η̇ in V₀; None: at rest), the levelling and, with ``settings.feed_forward``, the
         feed-forward wrench, allocated.
 
         Returns:
-          ``(thrust (n_thrusters,) [N], demand (6,) [N, N·m] in V, integral (4,), limited)``.
+          ``(thrust (n_thrusters,) [N], demand (6,) [N, N·m] in V, integral (4,), limited)``:
+          limited (a bool scalar) when the allocation scaled the demand down to the limits.
         """
-        R, R_dock = R_world_vehicle, self.T_dock[:3, :3]
-        rates = np.zeros(_VEHICLE) if vehicle_rates is None else np.asarray(vehicle_rates, dtype=float)
-        error = np.concatenate([self.pose[:3] - position, [wrap_angle(self.pose[3] - np.arctan2(R[1, 0], R[0, 0]))]])
+        R, R_dock = R_world_vehicle, xp.asarray(self.T_dock[:3, :3])
+        rates = xp.zeros(_VEHICLE) if vehicle_rates is None else vehicle_rates
+        yaw_error = wrap_angle(self.pose[3] - xp.arctan2(R[1, 0], R[0, 0]))
+        error = xp.concatenate([self.pose[:3] - position, xp.reshape(yaw_error, (1,))])
         yaw_rate = (R @ angular_velocity)[2]
         demand, integral = station_keeping(error, velocity - R_dock @ rates[:3], yaw_rate - rates[5], integral, R,
-                                           *self.gains, self.dt)
-        demand = demand + np.concatenate([np.zeros(3), level_attitude(R, angular_velocity, self.controller.level_kp,
-                                                                      self.controller.level_kd)])
+                                           *self.gains, self.dt, xp=xp)
+        demand = demand + xp.concatenate([xp.zeros(3), level_attitude(R, angular_velocity, self.controller.level_kp,
+                                                                      self.controller.level_kd, xp=xp)])
         if self.settings.feed_forward:
-            demand = demand + self.feed_forward(min(k, len(self.T_tool) - 1), R, current, current_rate)
-        saturated = bool(np.max(np.abs(self.B_pinv @ demand) / self.thrust_limits) > 1.0)
-        return allocate_thrust(demand, self.B_pinv, self.thrust_limits), demand, integral, saturated
+            demand = demand + self.feed_forward(k, R, current, current_rate, xp=xp)
+        saturated = xp.max(xp.abs(self.B_pinv @ demand) / self.thrust_limits) > 1.0
+        return allocate_thrust(demand, self.B_pinv, self.thrust_limits, xp=xp), demand, integral, saturated
 
 
 def _rotation(rotvec) -> np.ndarray:
