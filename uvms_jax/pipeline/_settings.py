@@ -51,6 +51,8 @@ class HoverStageSettings:
         simulator's position servos, since the executor streams the plan unchanged; its gates
         are judged on the tool's world pose, within ``tool_tolerance_m`` and
         ``tool_tolerance_deg`` [°].
+      navigation: the whole-body controller sees the vehicle's pose through this navigation
+        (rate, latency, noise; :class:`uvms_jax.hover.NavigationSettings`), or exactly (None).
       dwell_s, gripper_s, joint_tolerance_rad: that run's dwell at each gate and gripper
         step [s], and a replay's gate on the joints [rad].
     """
@@ -64,6 +66,7 @@ class HoverStageSettings:
     joint_tolerance_rad: float = setting(0.01, gt=0)
     coordinate: bool = True
     whole_body: hover.WholeBodySettings = hover.WholeBodySettings()
+    navigation: hover.NavigationSettings | None = None
     tool_tolerance_deg: float = setting(2.0, gt=0)
 
 

@@ -373,7 +373,7 @@ def hovering(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
                 flow.robot, flow.plan, flow.pose, vehicle, hs.controller, current, dwell_s=hs.dwell_s,
                 gripper_s=hs.gripper_s, tool_tolerance_m=hs.tool_tolerance_m,
                 joint_tolerance_rad=hs.joint_tolerance_rad, control="whole_body", whole_body=hs.whole_body,
-                tool_tolerance_deg=hs.tool_tolerance_deg)
+                tool_tolerance_deg=hs.tool_tolerance_deg, navigation=hs.navigation)
         else:  # the hw stage's executor and gates; its simulated arm on the hovering vehicle
             runs[label] = hover.execute_plan_hovering(
                 flow.robot, flow.plan, flow.pose, vehicle, hs.controller, current, config=s.hw.executor,
