@@ -68,6 +68,9 @@ def test_still_water_reaches_every_gate_and_a_current_drifts_more(runs):
     assert 0.0 < still["max_drift_m"] < current["max_drift_m"]
     assert current["max_tool_error_m"] > still["max_tool_error_m"]
     assert current["peak_thrust_N"] > still["peak_thrust_N"]
+    assert still["joint_limited_periods"] is None  # the arm replays its targets: no bounds of its own
+    saturated = int(np.sum(np.abs(runs[0.4].log.thrust[1:]).max(axis=-1) >= 40.0 - 1e-9))  # one 40 N limit for all
+    assert current["thrust_limited_periods"] == saturated
     if current["status"] != "completed":  # held at a gate, and says why
         assert current["reason"].startswith("gate ")
 
@@ -84,13 +87,48 @@ def test_levelling_keeps_the_vehicle_flatter_than_the_hydrostatics_alone(runs):
     assert runs[0.0].summary()["max_tool_error_m"] < free.summary()["max_tool_error_m"]
 
 
-def test_coordination_removes_most_of_the_tool_error(runs):
-    """The arm correcting for the vehicle's motion through its Jacobian keeps the tool nearer the
-    docked path than the arm that only follows its waypoints, in the same current, within limits."""
-    coord = run_plan_hovering(ARM, _plan(), POSE, VehicleSettings(), current=CurrentSettings(velocity=(0.4, 0.0, 0.0)),
-                              coordinate=True)
-    plain, fixed = runs[0.4].summary(), coord.summary()
-    assert fixed["coordinated"] and not plain["coordinated"]
-    assert fixed["max_gate_tool_error_m"] < 0.5 * plain["max_gate_tool_error_m"]
-    assert fixed["gates_reached"] >= plain["gates_reached"]
-    assert np.all((coord.log.q_target >= ARM.lower - 1e-9) & (coord.log.q_target <= ARM.upper + 1e-9))
+def test_the_whole_body_controller_keeps_the_tool_on_its_path(runs):
+    """The whole-body controller keeps the tool nearer the docked path than the PID with the arm
+    replaying its waypoints, in the same current: every gate within 10 mm and the stated angle,
+    the arm's targets within the joint limits, thrusts within theirs (the rates' bounds: test_hover_wbc)."""
+    run = run_plan_hovering(ARM, _plan(), POSE, VehicleSettings(), current=CurrentSettings(velocity=(0.4, 0.0, 0.0)),
+                            control="whole_body")
+    plain, wbc = runs[0.4].summary(), run.summary()
+    assert wbc["coordinated"] and not plain["coordinated"] and wbc["driver"] == "whole-body controller"
+    assert wbc["status"] == "completed" and wbc["gates_reached"] == wbc["gates"] == 2
+    assert wbc["max_gate_tool_error_m"] < min(0.01, 0.5 * plain["max_gate_tool_error_m"])
+    assert max(wbc["gate_tool_angle_deg"]) < wbc["tool_tolerance_deg"] == 2.0
+    assert len(wbc["gate_tool_error_m"]) == 2
+    log = run.log
+    assert np.all((log.q_target >= ARM.lower - 1e-9) & (log.q_target <= ARM.upper + 1e-9))
+    assert np.all(np.abs(log.thrust) <= 40.0 + 1e-9)
+
+
+def test_a_current_beyond_the_thrusters_holds_the_run_within_the_limits():
+    """1.2 m/s across the hull needs about 3 × the thrust the layout has: the thrusters sit at their
+    limit, never beyond, the arm's targets stay within the joint limits, and the run is held at
+    its first gate with the reason."""
+    run = run_plan_hovering(ARM, _plan(), POSE, VehicleSettings(), current=CurrentSettings(velocity=(0.0, 1.2, 0.0)),
+                            control="whole_body")
+    status, reason = run.status
+    assert status == "held" and reason.startswith("gate 1 of 2") and "thrusters were at their limit" in reason
+    assert run.thrust_limited_periods > 0 and run.joint_limited_periods > 0
+    assert np.all(np.abs(run.log.thrust) <= 40.0 + 1e-9)
+    assert np.abs(run.log.thrust).max() == pytest.approx(40.0)
+    assert np.all((run.log.q_target >= ARM.lower - 1e-9) & (run.log.q_target <= ARM.upper + 1e-9))
+
+
+def test_the_feed_forward_alone_keeps_the_vehicle_nearer(runs):
+    """The PID with the feed-forward (the arm replaying its waypoints) drifts less than the PID
+    alone in the same current, and its gates are judged as the PID's (joints and tool)."""
+    ff = run_plan_hovering(ARM, _plan(), POSE, VehicleSettings(), current=CurrentSettings(velocity=(0.4, 0.0, 0.0)),
+                           control="feed_forward")
+    plain, fed = runs[0.4].summary(), ff.summary()
+    assert not fed["coordinated"] and fed["joint_limited_periods"] is None and "gate_tool_angle_deg" not in fed
+    assert fed["max_drift_m"] < 0.5 * plain["max_drift_m"]
+    np.testing.assert_allclose(ff.log.q_target[1:], runs[0.4].log.q_target[1:], atol=1e-12)  # the same replay
+
+
+def test_an_unknown_control_is_refused():
+    with pytest.raises(ValueError, match="control must be"):
+        run_plan_hovering(ARM, _plan(), POSE, control="replay")

@@ -8,10 +8,11 @@ on :func:`buoyancy_bodies`, set into ``MjData`` by :func:`apply_buoyancy`), thru
 (:class:`Thruster`; the default eight-thruster vectored layout :data:`DEFAULT_THRUSTERS`),
 station keeping on (x, y, z, ψ) (:func:`station_keeping`) and thrust allocation by the scaled
 pseudo-inverse of the thrust configuration matrix (:func:`thrust_matrix`,
-:func:`allocate_thrust`). :class:`HoverSim` steps it all on the CPU and records a
-:class:`HoverLog`; :func:`write_hover_video` films a run in its planning scene. Settings:
-:class:`VehicleSettings` (trimmed to neutral and level for an arm and pose by :func:`trimmed`),
-:class:`ControllerSettings`, :class:`CurrentSettings`.
+:func:`allocate_thrust`); a whole-body controller (:class:`WholeBody`, :class:`WholeBodySettings`)
+that keeps the tool on its planned path with the vehicle's station keeping in its null space.
+:class:`HoverSim` steps it all on the CPU and records a
+:class:`HoverLog`; :func:`write_hover_video` films a run in its planning scene. Settings: :class:`VehicleSettings` (trimmed to neutral and level for an arm
+and pose by :func:`trimmed`), :class:`ControllerSettings`, :class:`CurrentSettings`.
 
 The formulas are pure functions of arrays that take ``xp`` (``numpy`` or ``jax.numpy``), so a
 batched MJX simulator can reuse them. Frames, units and the tests' oracles: docs/hover.md.
@@ -64,7 +65,9 @@ from uvms_jax.hover._settings import GRAVITY
 from uvms_jax.hover._settings import ControllerSettings
 from uvms_jax.hover._settings import CurrentSettings
 from uvms_jax.hover._settings import Thruster
+from uvms_jax.hover._settings import NavigationSettings
 from uvms_jax.hover._settings import VehicleSettings
+from uvms_jax.hover._settings import WholeBodySettings
 from uvms_jax.hover._sim import HoverLog
 from uvms_jax.hover._sim import HoverSim
 from uvms_jax.hover._sim import HoverWorld
@@ -72,15 +75,19 @@ from uvms_jax.hover._sim import arm_motion
 from uvms_jax.hover._video import HoverFilm
 from uvms_jax.hover._video import hover_frame
 from uvms_jax.hover._video import write_hover_video
+from uvms_jax.hover._wholebody import NavigationEstimate
+from uvms_jax.hover._wholebody import WholeBody
+from uvms_jax.hover._wholebody import WholeBodyCommand
 
 __all__ = ["allocate_thrust", "apply_buoyancy", "arm_motion", "batch_candidates", "batch_plan",
            "batch_scenarios", "BatchResult", "buoyancy_bodies", "buoyancy_xfrc", "control_steps",
            "ControllerSettings", "current_at", "currents_grid", "CurrentSettings", "DEFAULT_THRUSTERS",
            "docked_tool", "execute_plan_hovering", "fluid_bodies", "fluid_xfrc", "follow_tool_path",
-           "GRAVITY", "hold_pose", "HoverFilm", "hover_frame", "hover_mjcf", "hover_mjx", "hover_model",
-           "HoverLog", "HoverMJX",
-           "HoverRun", "HoverSim", "HoverState", "HoverWorld", "HULL_GEOM", "level_attitude", "PeriodRecord",
+           "GRAVITY", "hold_pose", "hover_mjcf", "hover_mjx", "hover_model", "HoverFilm", "hover_frame", "HoverLog", "HoverMJX",
+           "HoverRun", "HoverSim", "HoverState", "HoverWorld", "HULL_GEOM", "level_attitude", "NavigationEstimate",
+           "NavigationSettings", "PeriodRecord",
            "plan_targets", "plot_robustness", "run_plan_hovering", "SERVO_KP", "SERVO_KV", "servo_name",
            "station_keeping", "thrust_layout", "thrust_matrix", "Thruster", "thruster_name", "trimmed",
-           "vehicle_arm_chain", "VEHICLE_BODY", "vehicle_displacement", "VehicleSettings", "wrap_angle",
-           "write_hover_video", "yaw_of_quat"]
+           "vehicle_arm_chain", "VEHICLE_BODY", "vehicle_displacement", "VehicleSettings", "WholeBody",
+           "WholeBodyCommand", "WholeBodySettings", "wrap_angle", "write_hover_video",
+           "yaw_of_quat"]

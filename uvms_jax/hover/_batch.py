@@ -57,7 +57,7 @@ import numpy as np
 from uvms_jax.robot import TOOL_SITE, Robot
 
 from ._control import LIMIT_SLACK, control_steps, hold_pose, thrust_layout
-from ._hydro import buoyancy_xfrc
+from ._hydro import buoyancy_xfrc, fluid_bodies, fluid_xfrc
 from ._model import VEHICLE_BODY, buoyancy_bodies, hover_model, servo_name, thruster_name, trimmed
 from ._plan import docked_tool, follow_tool_path, plan_targets
 from ._settings import ControllerSettings, VehicleSettings
@@ -68,66 +68,6 @@ with contextlib.redirect_stdout(io.StringIO()):  # mujoco.mjx prints "Failed to 
 __all__ = ["BatchResult", "HoverMJX", "HoverState", "PeriodRecord", "batch_candidates", "batch_plan", "batch_scenarios", "currents_grid",
            "fluid_bodies", "fluid_xfrc", "hover_mjx", "plot_robustness"]
 
-_MIN_MASS = 1e-15  # MuJoCo's mjMINVAL: lighter bodies get no fluid force
-
-
-# -- the fluid force, as MuJoCo computes it --------------------------------------------------------
-def fluid_bodies(model: mujoco.MjModel) -> tuple[np.ndarray, np.ndarray]:
-    """The bodies MuJoCo's inertia-box fluid model acts on, and their equivalent boxes.
-
-    Each body of mass ``m`` and principal inertia ``(I_x, I_y, I_z)`` moves through the fluid as
-    the uniform box with the same mass and inertia: edge ``b_x = sqrt(6 (I_y + I_z − I_x) / m)``
-    and so on (MuJoCo's ``mj_inertiaBoxFluidModel``).
-
-    Returns:
-      ``(ids (k,), box (k, 3) [m])``: bodies of positive mass and their boxes' full edges.
-    """
-    ids = np.array([b for b in range(1, model.nbody) if model.body_mass[b] > _MIN_MASS], dtype=int)
-    inertia, mass = model.body_inertia[ids], model.body_mass[ids]
-    signs = np.ones((3, 3)) - 2.0 * np.eye(3)  # row i: −I_i + I_j + I_k
-    box = np.sqrt(6.0 * np.maximum(inertia @ signs.T, 1e-12) / mass[:, None])
-    return ids, box.reshape(-1, 3)
-
-
-def fluid_xfrc(xipos, ximat, cvel, root_com, box, density, viscosity, wind, xp=np):
-    """MuJoCo's inertia-box drag of bodies in a moving fluid, as ``xfrc_applied`` rows.
-
-    The formula of ``mj_inertiaBoxFluidModel`` (docs/hover.md): in each body's inertia frame,
-    with ``(ω, v)`` its angular velocity and the velocity of its centre of mass relative to the
-    fluid, the force is ``−3π d β v − ½ ρ (b_y b_z, b_x b_z, b_x b_y) |v| v`` and the torque
-    ``−π d³ β ω − ρ (b_x (b_y⁴ + b_z⁴), …) |ω| ω / 64`` (d the boxes' mean edge, β the
-    viscosity); both act at the centre of mass.
-
-    Args:
-      xipos: ``(..., k, 3)`` the bodies' centres of mass [m] (``MjData.xipos`` rows).
-      ximat: ``(..., k, 3, 3)`` or ``(..., k, 9)`` their inertia frames (``MjData.ximat``).
-      cvel: ``(..., k, 6)`` their com-based velocities ``(ω, v)`` (``MjData.cvel``: angular,
-        then the linear velocity of the point at the root's subtree com), world frame.
-      root_com: ``(..., k, 3)`` the centre of mass of each body's root subtree
-        (``MjData.subtree_com[body_rootid]``) [m].
-      box: ``(k, 3)`` the equivalent boxes' edges [m] (:func:`fluid_bodies`).
-      density, viscosity: the fluid's [kg/m³], [Pa·s].
-      wind: ``(..., 3)`` the fluid's velocity in the world [m/s] (the current).
-      xp: ``numpy`` or ``jax.numpy``.
-
-    Returns:
-      ``(..., k, 6)``: force [N] then torque about the centre of mass [N·m], world frame.
-    """
-    R = xp.reshape(ximat, ximat.shape[:-2] + (3, 3) if ximat.shape[-1] == 3 else ximat.shape[:-1] + (3, 3))
-    ang, lin = cvel[..., :3], cvel[..., 3:]
-    lin = lin - xp.cross(xipos - root_com, ang)  # the velocity of the centre of mass
-    w_local = xp.einsum("...kji,...kj->...ki", R, ang)
-    v_local = xp.einsum("...kji,...kj->...ki", R, lin - xp.asarray(wind)[..., None, :])
-    bx, by, bz = box[:, 0], box[:, 1], box[:, 2]
-    diam = (bx + by + bz) / 3.0
-    area = xp.stack([by * bz, bx * bz, bx * by], axis=-1)
-    lever = xp.stack([bx * (by ** 4 + bz ** 4), by * (bx ** 4 + bz ** 4), bz * (bx ** 4 + by ** 4)], axis=-1)
-    f_local = -3.0 * np.pi * diam[:, None] * viscosity * v_local - 0.5 * density * area * xp.abs(v_local) * v_local
-    t_local = (-np.pi * diam[:, None] ** 3 * viscosity * w_local
-               - density * lever * xp.abs(w_local) * w_local / 64.0)
-    force = xp.einsum("...kij,...kj->...ki", R, f_local)
-    torque = xp.einsum("...kij,...kj->...ki", R, t_local)
-    return xp.concatenate([force, torque], axis=-1)
 
 
 # -- one scenario ---------------------------------------------------------------------------------

@@ -1,12 +1,13 @@
 """A scheduled plan's motion on the hovering vehicle: how good is a docking pose if the vehicle
 only hovers there?
 
-:func:`run_plan_hovering` replays a ``plan.json`` (:class:`uvms_jax.planfile.Plan`) on
-:class:`~uvms_jax.hover.HoverSim`: the arm's servos follow the plan's timed waypoints, dwelling
-at the end of every segment (where the executor waits for its gate) and during every gripper
-step, while the vehicle holds the docked pose on its thrusters in the given current. At each
-gate it compares the tool with where the docked arm puts it at the same joint angles: the
-vehicle's motion, seen at the tool.
+:func:`run_plan_hovering` runs a ``plan.json`` (:class:`uvms_jax.planfile.Plan`) on
+:class:`~uvms_jax.hover.HoverSim`, dwelling at the end of every segment (where the executor
+waits for its gate) and during every gripper step, in the given current: either the arm's
+servos replay the plan's timed waypoints while the station keeping's PID holds the docked pose,
+or the whole-body controller (:class:`~uvms_jax.hover.WholeBody`) drives the arm and the
+thrusters so that the tool follows the docked arm's path. At each gate it compares the tool
+with where the docked arm puts it on the plan: the vehicle's motion, seen at the tool.
 """
 
 from __future__ import annotations
@@ -24,9 +25,10 @@ from uvms_jax.hw import HwConfig, HwRun, SimConfig, run_plan
 from uvms_jax.planfile import Plan
 from uvms_jax.robot import TOOL_SITE, Robot
 
-from ._model import trimmed
-from ._settings import ControllerSettings, CurrentSettings, VehicleSettings
+from ._model import VEHICLE_BODY, trimmed
+from ._settings import ControllerSettings, CurrentSettings, NavigationSettings, VehicleSettings, WholeBodySettings
 from ._sim import HoverLog, HoverSim, HoverWorld
+from ._wholebody import NavigationEstimate, WholeBody
 
 __all__ = ["HoverRun", "docked_tool", "execute_plan_hovering", "follow_tool_path", "plan_targets", "run_plan_hovering", "vehicle_arm_chain",
            "vehicle_displacement"]
@@ -98,7 +100,13 @@ class HoverRun:
       drift: ``(k,)`` the vehicle's distance from the docked pose [m].
       tool_tolerance_m, joint_tolerance_rad: a gate is reached within both.
       current: ``(3,)`` the water's velocity at the start [m/s].
-      coordinated: the arm corrected for the vehicle's motion (gates judged by the tool alone).
+      coordinated: the whole-body controller drove the arm and the thrusters (the arm leaves
+        the plan's joint angles on purpose: gates judged by the tool alone, position and angle).
+      gate_tool_angle: ``(g,)`` the tool's angle from its docked orientation at each gate [rad]
+        (None: not measured); tool_tolerance_rad: a gate's tolerance on it.
+      thrust_limited_periods, joint_limited_periods: control periods in which a thruster was
+        at its limit (the allocation scaled the demand down), and in which one of the arm's
+        rate bounds was active (None: the arm followed the plan's targets, no bounds of its own).
       world: the run's vehicle and its model (e.g. for :func:`write_hover_video`).
       planned_gates: the plan's gates (an executed run: the executor's count, gripper steps
         included).
@@ -122,6 +130,16 @@ class HoverRun:
     executed: HwRun | None = None
     planned_gates: int = 0
     world: HoverWorld | None = None
+    gate_tool_angle: np.ndarray | None = None
+    tool_tolerance_rad: float = np.inf
+    thrust_limited_periods: int = 0
+    joint_limited_periods: int | None = None
+
+    @property
+    def _angles_checked(self) -> np.ndarray:
+        if self.gate_tool_angle is None:
+            return np.ones(len(self.gate_times), dtype=bool)
+        return self.gate_tool_angle <= self.tool_tolerance_rad
 
     @property
     def _joints_checked(self) -> np.ndarray:
@@ -132,7 +150,8 @@ class HoverRun:
         """Gates passed: the executor's, or in a replay those within both tolerances."""
         if self.executed is not None:
             return len(self.gate_times)
-        return int(np.sum((self.gate_tool_error <= self.tool_tolerance_m) & self._joints_checked))
+        return int(np.sum((self.gate_tool_error <= self.tool_tolerance_m) & self._angles_checked
+                          & self._joints_checked))
 
     @property
     def status(self) -> tuple[str, str]:
@@ -142,10 +161,16 @@ class HoverRun:
         if self.executed is not None:
             r = self.executed.result
             return self.executed.status, "" if r.ok else r.reason
-        for i, (e_tool, e_joint) in enumerate(zip(self.gate_tool_error, self.gate_joint_error)):
+        limits = (f"; the thrusters were at their limit in {self.thrust_limited_periods} control periods"
+                  if self.thrust_limited_periods else "")
+        for i, (e_tool, e_joint, ok) in enumerate(zip(self.gate_tool_error, self.gate_joint_error, self._angles_checked)):
             if e_tool > self.tool_tolerance_m:
                 return "held", (f"gate {i + 1} of {len(self.gate_times)}: the tool is {1e3 * e_tool:.1f} mm from its "
-                                f"docked position (tolerance {1e3 * self.tool_tolerance_m:.0f} mm)")
+                                f"docked position (tolerance {1e3 * self.tool_tolerance_m:.0f} mm){limits}")
+            if not ok:
+                return "held", (f"gate {i + 1} of {len(self.gate_times)}: the tool is turned "
+                                f"{np.degrees(self.gate_tool_angle[i]):.2f}° from its docked orientation (tolerance "
+                                f"{np.degrees(self.tool_tolerance_rad):.2f}°){limits}")
             if e_joint > self.joint_tolerance_rad and not self.coordinated:
                 return "held", (f"gate {i + 1} of {len(self.gate_times)}: a joint is {e_joint:.4f} rad from its "
                                 f"waypoint (tolerance {self.joint_tolerance_rad} rad)")
@@ -156,7 +181,8 @@ class HoverRun:
         status, reason = self.status
         rpy = self.log.rpy
         gates = len(self.gate_times) if self.executed is None else self.planned_gates
-        return {"driver": "replay" if self.executed is None else "BPL executor",
+        driver = "whole-body controller" if self.coordinated else "replay"
+        return {"driver": driver if self.executed is None else "BPL executor",
                 "current_m_s": self.current.tolist(), "coordinated": self.coordinated, "status": status, "reason": reason,
                 "gates": gates, "gates_reached": self.gates_reached,
                 "gates_tool_within_tolerance": int(np.sum(self.gate_tool_error <= self.tool_tolerance_m)),
@@ -164,28 +190,50 @@ class HoverRun:
                 "max_gate_tool_error_m": float(self.gate_tool_error.max(initial=0.0)),
                 "max_tilt_deg": float(np.degrees(np.abs(rpy[:, :2]).max())),
                 "peak_thrust_N": float(np.abs(self.log.thrust).max()),
-                "simulated_s": float(self.log.time[-1])}
+                "simulated_s": float(self.log.time[-1]),
+                "gate_tool_error_m": self.gate_tool_error.tolist(),
+                **({} if self.gate_tool_angle is None else {
+                    "gate_tool_angle_deg": np.degrees(self.gate_tool_angle).tolist(),
+                    "tool_tolerance_deg": float(np.degrees(self.tool_tolerance_rad))}),
+                "thrust_limited_periods": self.thrust_limited_periods,
+                "joint_limited_periods": self.joint_limited_periods}
 
 
 def run_plan_hovering(robot: Robot, plan: Plan, pose, vehicle: VehicleSettings = VehicleSettings(),
                       controller: ControllerSettings = ControllerSettings(),
                       current: CurrentSettings = CurrentSettings(), *, dwell_s: float = 0.5,
                       gripper_s: float = 1.0, tool_tolerance_m: float = 0.01,
-                      joint_tolerance_rad: float = 0.01, coordinate: bool = False) -> HoverRun:
-    """Replay ``plan`` with the vehicle hovering at the docked ``pose`` ``(4,) = [x, y, z, ψ]``
+                      joint_tolerance_rad: float = 0.01, control: str = "pid",
+                      whole_body: WholeBodySettings = WholeBodySettings(), tool_tolerance_deg: float = 2.0,
+                      navigation: NavigationSettings | None = None) -> HoverRun:
+    """Run ``plan`` with the vehicle hovering at the docked ``pose`` ``(4,) = [x, y, z, ψ]``
     [m, rad] instead of fixed there.
 
     The vehicle is ballasted for the arm at the plan's first waypoint (:func:`trimmed`: neutral
-    and level), starts at rest at ``pose`` and holds it by station keeping. ``vehicle``'s mount
-    must be the docking problem's, so that the docked base is where the plan was made for.
-    With ``coordinate`` the arm corrects for the vehicle's motion (:func:`_coordinated`): it then
-    leaves the plan's joint angles on purpose, and a gate is judged by the tool alone.
+    and level) and starts at rest at ``pose``. ``vehicle``'s mount must be the docking
+    problem's, so that the docked base is where the plan was made for.
+
+    ``control``:
+
+    - ``"pid"``: the arm's servos replay the plan's timed waypoints and the station keeping's
+      PID holds the docked pose; a gate is judged on the joints and on the tool's position.
+    - ``"feed_forward"``: the same replay, the PID's thrusts with the whole-body controller's
+      feed-forward wrench added (:meth:`~uvms_jax.hover.WholeBody.thrust`); gates as ``"pid"``.
+    - ``"whole_body"``: the whole-body controller (:class:`~uvms_jax.hover._wholebody.WholeBody`,
+      ``whole_body``) drives the arm's servos and the thrusters so that the tool follows the
+      plan's docked path; the arm leaves the plan's joint angles on purpose, and a gate is judged
+      on the tool's world pose alone: within ``tool_tolerance_m`` [m] and
+      ``tool_tolerance_deg`` [°] of its docked pose. It sees the vehicle's pose through
+      ``navigation`` (:class:`~uvms_jax.hover._wholebody.NavigationEstimate`; None: exactly).
 
     Raises:
-      ValueError: a plan for other joints than the robot's, or a waypoint outside its limits.
+      ValueError: a plan for other joints than the robot's, a waypoint outside its limits, or
+        an unknown ``control``.
     """
     if tuple(plan.joint_names) != tuple(robot.joint_names):
         raise ValueError(f"the plan moves {plan.joint_names}, the arm has {robot.joint_names}")
+    if control not in _CONTROLS:
+        raise ValueError(f"control must be one of {_CONTROLS}, got {control!r}")
     pose = np.asarray(pose, dtype=float)
     targets, gate_times, duration = plan_targets(plan, dwell_s, gripper_s)
     q0 = targets(0.0)
@@ -196,8 +244,15 @@ def run_plan_hovering(robot: Robot, plan: Plan, pose, vehicle: VehicleSettings =
     times = period * np.arange(round(duration / period) + 2)
     q_plan = np.array([targets(t) for t in times])
     p_docked = docked_tool(robot, vehicle, pose, q_plan)
-    arm = _coordinated(sim, robot, vehicle, pose, q_plan, p_docked, period) if coordinate else (lambda t: q_plan[round(t / period)])
-    log = sim.run(times[-1], arm_trajectory=arm)
+    angle = None
+    if control == "whole_body":
+        log, angle, limited = _run_whole_body(sim, robot, controller, whole_body, pose, q_plan, navigation)
+    elif control == "feed_forward":
+        log, _, limited = _run_whole_body(sim, robot, controller, dataclasses.replace(whole_body, feed_forward=True),
+                                          pose, q_plan, navigation, replay=True)
+    else:
+        log = sim.run(times[-1], arm_trajectory=lambda t: q_plan[round(t / period)])
+        limited = (_saturated_periods(log, sim.world.limits), None)
     tool_target = p_docked[: len(log.time)]
     tool_error = np.linalg.norm(log.tool - tool_target, axis=-1)
     rows = np.searchsorted(log.time, gate_times - 1e-9).clip(max=len(log.time) - 1)
@@ -206,8 +261,67 @@ def run_plan_hovering(robot: Robot, plan: Plan, pose, vehicle: VehicleSettings =
     return HoverRun(log=log, gate_times=gate_times, gate_tool_error=tool_error[rows], gate_joint_error=joint_error,
                     tool_error=tool_error, drift=np.linalg.norm(log.position - pose[:3], axis=-1),
                     tool_tolerance_m=float(tool_tolerance_m), joint_tolerance_rad=float(joint_tolerance_rad),
-                    current=sim.current_velocity(0.0), tool_target=tool_target, coordinated=coordinate,
-                    world=sim.world)
+                    current=sim.current_velocity(0.0), tool_target=tool_target, coordinated=control == "whole_body",
+                    gate_tool_angle=None if angle is None else angle[rows],
+                    tool_tolerance_rad=float(np.radians(tool_tolerance_deg)), thrust_limited_periods=limited[0],
+                    joint_limited_periods=limited[1])
+
+
+_CONTROLS = ("pid", "feed_forward", "whole_body")
+
+
+def _saturated_periods(log: HoverLog, limits: np.ndarray) -> int:
+    """Control periods in ``log`` whose thrusts put a thruster at its limit ``limits (n,)`` [N]
+    (the scaled allocation puts one exactly there; 1e-9 N of rounding allowed)."""
+    return int(np.sum(np.any(np.abs(log.thrust[1:]) >= limits - 1e-9, axis=-1)))
+
+
+def _run_whole_body(sim: HoverSim, robot: Robot, controller: ControllerSettings, settings: WholeBodySettings,
+                    pose: np.ndarray, q_plan: np.ndarray, navigation: NavigationSettings | None,
+                    replay: bool = False) -> tuple[HoverLog, np.ndarray, tuple[int, int | None]]:
+    """``sim`` driven by the whole-body controller along ``q_plan`` ``(K, n)`` (one row per
+    control period) for ``K − 1`` periods, seeing the vehicle's pose through ``navigation``
+    (None: exactly); ``replay``: the arm's servos follow ``q_plan`` and the controller sets the
+    thrusts alone.
+
+    Returns:
+      ``(log, tool_angle (K,) [rad], (thrust-limited periods, joint-limited periods or None))``:
+      the tool's angle from its docked orientation on the plan at every logged row.
+    """
+    m, d, w = sim.model, sim.data, sim.world
+    wb = WholeBody(robot, sim.vehicle, controller, settings, pose, q_plan, m)
+    site, hull = m.site(TOOL_SITE).id, m.body(VEHICLE_BODY).id
+    R_docked = wb.T_dock[:3, :3] @ wb.T_tool[:, :3, :3]  # (K, 3, 3) the tool's planned orientation in the world
+    q_ref, integral = q_plan[0].copy(), np.zeros(4)
+    period, counts, angles = controller.period, np.zeros(2, dtype=int), []
+
+    def angle(k: int) -> float:
+        R = R_docked[k].T @ d.site_xmat[site].reshape(3, 3)
+        return float(np.arccos(np.clip((np.trace(R) - 1.0) / 2.0, -1.0, 1.0)))
+
+    w.start_log(m, d, q_ref)
+    angles.append(angle(0))
+    nav = None if navigation is None else NavigationEstimate(navigation, d.qpos[:3], d.xmat[hull].reshape(3, 3))
+    for k in range(len(q_plan) - 1):
+        t = sim.time
+        current = sim.current_velocity(t)
+        rate = (sim.current_velocity(t + period) - current) / period
+        position, R, velocity, omega = d.qpos[:3].copy(), d.xmat[hull].reshape(3, 3).copy(), d.qvel[:3].copy(), \
+            d.qvel[3:6].copy()
+        if nav is not None:
+            position, R = nav.estimate(t, position, R)
+        if replay:
+            thrust, demand, integral, limited = wb.thrust(k, position, R, velocity, omega, integral, current, rate)
+            target = q_plan[k]  # as the PID's replay: the plan's angles of the period's start
+            counts[0] += bool(limited)
+        else:
+            cmd = wb.step(k, position, R, velocity, omega, q_ref, integral, current, rate)
+            q_ref, integral, target, thrust, demand = cmd.reference, cmd.integral, cmd.target, cmd.thrust, cmd.demand
+            counts += (bool(cmd.thrust_limited), bool(cmd.joint_limited))
+        sim.step(target, thrust=thrust, demand=demand)
+        w.record(m, d, target)
+        angles.append(angle(k + 1))
+    return w.log(), np.array(angles), (int(counts[0]), None if replay else int(counts[1]))
 
 
 def execute_plan_hovering(robot: Robot, plan: Plan, pose, vehicle: VehicleSettings = VehicleSettings(),
@@ -248,7 +362,8 @@ def execute_plan_hovering(robot: Robot, plan: Plan, pose, vehicle: VehicleSettin
                     gate_joint_error=np.array([g.error_rad for g in run.result.gates]), tool_error=tool_error,
                     drift=np.linalg.norm(log.position - pose[:3], axis=-1), tool_tolerance_m=float(tool_tolerance_m),
                     joint_tolerance_rad=config.gate_threshold_rad, current=world.current_velocity(0.0),
-                    tool_target=tool_target, executed=run, planned_gates=int(planned), world=world)
+                    tool_target=tool_target, executed=run, planned_gates=int(planned), world=world,
+                    thrust_limited_periods=_saturated_periods(log, world.limits))
 
 
 def follow_tool_path(robot: Robot, vehicle: VehicleSettings, q_docked, docked_pose, pose, *, key=None,
@@ -316,37 +431,3 @@ def vehicle_displacement(T_dock: np.ndarray, free_qpos: np.ndarray) -> np.ndarra
     the docked vehicle frame."""
     T_rel = np.linalg.solve(T_dock, frames.pose(frames.quat_matrix(free_qpos[3:7]), free_qpos[:3]))
     return np.concatenate([T_rel[:3, 3], frames.matrix_euler_xyz(T_rel[:3, :3])])
-
-
-@jax.jit
-def _arm_position_columns(chain: kin.Chain, q):
-    """``(3, n_arm)`` the tool position's rows of the geometric Jacobian, the arm's columns."""
-    return kin.jacobian(chain, q)[:3, 6:]
-
-
-def _coordinated(sim: HoverSim, robot: Robot, vehicle: VehicleSettings, pose: np.ndarray, q_plan: np.ndarray,
-                 p_docked: np.ndarray, period: float, gain: float = 0.5, damping: float = 0.02):
-    """Arm targets that correct for the vehicle's motion: each tick, the tool's offset from
-    where the docked arm holds it on the plan, mapped to joint corrections through the arm's
-    columns of the vehicle–arm Jacobian (:func:`uvms_jax.kin.uvms` on the docked vehicle frame,
-    at the vehicle's measured displacement from the docked pose and the arm's measured joints;
-    damped least squares, damping [m]), accumulated with ``gain`` and kept within the joint
-    limits."""
-    chain = vehicle_arm_chain(robot, vehicle)
-    T_dock = _vehicle_pose(pose)
-    m, d = sim.model, sim.data
-    site = m.site(TOOL_SITE).id
-    qadr = np.array([m.jnt_qposadr[m.joint(j).id] for j in robot.joint_names])
-    correction = np.zeros(robot.n_joints)
-
-    def targets(t: float) -> np.ndarray:
-        nonlocal correction
-        k = round(t / period)
-        q = np.concatenate([vehicle_displacement(T_dock, d.qpos[:7]), d.qpos[qadr]])
-        J = T_dock[:3, :3] @ np.asarray(_arm_position_columns(chain, q), dtype=float)  # in the world
-        error = p_docked[k] - d.site_xpos[site]
-        step = J.T @ np.linalg.solve(J @ J.T + damping**2 * np.eye(3), error)
-        correction = np.clip(q_plan[k] + correction + gain * step, robot.lower, robot.upper) - q_plan[k]
-        return q_plan[k] + correction
-
-    return targets

@@ -18,7 +18,8 @@ import numpy as np
 
 from uvms_jax.settings import setting
 
-__all__ = ["ControllerSettings", "CurrentSettings", "DEFAULT_THRUSTERS", "GRAVITY", "Thruster", "VehicleSettings"]
+__all__ = ["ControllerSettings", "CurrentSettings", "DEFAULT_THRUSTERS", "GRAVITY", "Thruster", "VehicleSettings",
+           "NavigationSettings", "WholeBodySettings"]
 
 GRAVITY = 9.81  # [m/s²] the value the arm simulator (uvms_jax.hw) uses too
 _UNIT_TOL = 1e-3  # a thruster direction this far from unit length is a typo, not rounding
@@ -176,6 +177,89 @@ class ControllerSettings:
 
 
 @dataclasses.dataclass(frozen=True)
+class WholeBodySettings:
+    """The whole-body controller (:mod:`uvms_jax.hover._wbc`, docs/hover.md): the tool's pose
+    first, station keeping in its null space, model-based feed-forward on the thrusters.
+
+    Attributes:
+      tool_gain: share of the tool's pose error the arm's reference removes per control
+        period (``K₁ = tool_gain / period``), in (0, 1].
+      station_gain: ``K₂`` [1/s], the rate at which the second task asks the vehicle back to
+        the docked pose (``v₂ = −K₂ η``); the thrusters' PID (:class:`ControllerSettings`)
+        tracks that velocity.
+      vehicle_weight: weight of the vehicle's coordinates against the arm's (1) in the first
+        task's weighted pseudo-inverse; small: the arm moves the tool, the vehicle barely.
+      damping: damped least squares of the first task near singularities [m].
+      orientation_length: the length [m] a radian of the tool's orientation weighs against a
+        metre of its position in the first task: where the arm's free joints cannot do the
+        whole 6-D task (joints at their bounds), the least squares keeps the position first.
+        Where they can, the weighting changes nothing (and nothing of the null space).
+      servo_lead_s: the arm's targets lead its reference by this much of its rate [s]: a
+        position servo ``kp (q* − q) − kv q̇`` lags a ramp by ``kv/kp`` (0.03 s for the hover
+        model's servos).
+      prediction_s: the vehicle's pose is predicted this far ahead from its velocity [s].
+      feed_forward: add the feed-forward wrench (the arm's inverse dynamics along the plan,
+        hydrostatics, the current's drag and added mass) to the thrusters' demand.
+      added_mass: ``(3,)`` the hull's added mass along V's x, y, z [kg] for the feed-forward
+        (0: the hover model has none, docs/hover.md).
+    """
+
+    tool_gain: float = setting(1.0, gt=0, le=1)
+    station_gain: float = setting(0.5, ge=0)
+    vehicle_weight: float = setting(0.01, gt=0)
+    damping: float = setting(1e-3, ge=0)
+    orientation_length: float = setting(0.1, gt=0)
+    servo_lead_s: float = setting(0.03, ge=0)
+    prediction_s: float = setting(0.02, ge=0)
+    feed_forward: bool = True
+    added_mass: tuple[float, float, float] = setting((0.0, 0.0, 0.0), ge=0)
+
+    def __post_init__(self) -> None:
+        if not 0 < self.tool_gain <= 1:
+            raise ValueError(f"tool_gain must lie in (0, 1], got {self.tool_gain}")
+        for name in ("station_gain", "damping", "servo_lead_s", "prediction_s"):
+            if not (math.isfinite(getattr(self, name)) and getattr(self, name) >= 0):
+                raise ValueError(f"{name} must be finite and >= 0, got {getattr(self, name)}")
+        for name in ("vehicle_weight", "orientation_length"):
+            if not (math.isfinite(getattr(self, name)) and getattr(self, name) > 0):
+                raise ValueError(f"{name} must be > 0, got {getattr(self, name)}")
+        if np.any(_vector(self.added_mass, 3, "added_mass") < 0):
+            raise ValueError(f"added_mass must be >= 0 [kg], got {self.added_mass!r}")
+
+
+@dataclasses.dataclass(frozen=True)
+class NavigationSettings:
+    """The vehicle's pose as its navigation gives it: fixes at a rate, late and noisy, like a
+    vision-based relative fix, fused with dead reckoning on the vehicle's velocity (as a DVL and
+    a gyro give it, taken as exact here).
+
+    Attributes:
+      rate_hz: fixes per second [Hz].
+      latency_s: a fix arrives this long after the instant it describes [s].
+      position_noise_m: standard deviation of a fix's position on each axis [m].
+      angle_noise_deg: standard deviation of a fix's orientation about each axis [°].
+      fix_gain: the share of a fix's innovation the estimate takes, in (0, 1]
+        (:class:`~uvms_jax.hover.NavigationEstimate`; 1: the newest fix carried forward).
+      seed: the noise's random seed.
+    """
+
+    rate_hz: float = setting(30.0, gt=0)
+    latency_s: float = setting(0.05, ge=0)
+    position_noise_m: float = setting(0.005, ge=0)
+    angle_noise_deg: float = setting(0.2, ge=0)
+    fix_gain: float = setting(0.1, gt=0, le=1)
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        for name in ("rate_hz", "latency_s", "position_noise_m", "angle_noise_deg"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0) or (name == "rate_hz" and not value > 0):
+                raise ValueError(f"{name} must be finite and {'> 0' if name == 'rate_hz' else '>= 0'}, got {value}")
+        if not 0 < self.fix_gain <= 1:
+            raise ValueError(f"fix_gain must lie in (0, 1], got {self.fix_gain}")
+
+
+@dataclasses.dataclass(frozen=True)
 class CurrentSettings:
     """The water's velocity in the world frame: constant, or piecewise linear in time.
 
@@ -202,6 +286,21 @@ class CurrentSettings:
                 raise ValueError(f"current times must be finite and strictly increasing, got {self.times!r}")
             for k, row in enumerate(self.velocities):
                 _vector(row, 3, f"current velocities[{k}]")
+
+    @classmethod
+    def gusty(cls, mean, gust_m_s: float, gust_s: float, duration_s: float, seed: int = 0) -> "CurrentSettings":
+        """A steady ``mean`` ``(3,)`` current [m/s] with gusts: a profile whose knots, every
+        ``gust_s`` [s] from 0 to past ``duration_s`` [s], add to the mean a horizontal velocity of
+        Gaussian components with standard deviation ``gust_m_s`` [m/s] (seeded: repeatable); linear
+        in between. ``gust_m_s = 0`` gives the steady current as a profile."""
+        if not (math.isfinite(gust_m_s) and gust_m_s >= 0 and gust_s > 0 and duration_s >= 0):
+            raise ValueError(f"gusty current: gust_m_s >= 0, gust_s > 0 and duration_s >= 0 needed, got "
+                             f"{gust_m_s}, {gust_s}, {duration_s}")
+        times = gust_s * np.arange(int(np.ceil(duration_s / gust_s)) + 2)
+        rng = np.random.default_rng(seed)
+        gusts = np.concatenate([rng.normal(0.0, gust_m_s, (len(times), 2)), np.zeros((len(times), 1))], axis=1)
+        velocities = _vector(mean, 3, "current mean") + gusts
+        return cls(times=tuple(map(float, times)), velocities=tuple(tuple(map(float, v)) for v in velocities))
 
     def profile(self) -> tuple[np.ndarray, np.ndarray]:
         """``(times (k,) [s], velocities (k, 3) [m/s])``: the current as a piecewise-linear

@@ -181,10 +181,11 @@ class HoverWorld:
             d.qvel[:3].copy(), d.qvel[3:6].copy(), self.integral, self.controller, self.B_pinv, self.limits)
         return u
 
-    def command(self, data: mujoco.MjData, thrust: np.ndarray | None) -> None:
+    def command(self, data: mujoco.MjData, thrust: np.ndarray | None, demand: np.ndarray | None = None) -> None:
         """Set the thrusts for the next period: ``thrust`` [N] open loop (beyond a thruster's
-        limit raises), or the station keeping's (None; zeros when it is off)."""
-        self._last_demand = np.zeros(6)
+        limit raises; ``demand``: the wrench in V they were allocated for, for the log), or the
+        station keeping's (None; zeros when it is off)."""
+        self._last_demand = np.zeros(6) if demand is None else np.asarray(demand, dtype=float).copy()
         if thrust is not None:
             u = np.asarray(thrust, dtype=float)
             if u.shape != self.limits.shape or not np.all(np.abs(u) <= self.limits + LIMIT_SLACK):
@@ -314,7 +315,8 @@ class HoverSim:
             raise ValueError(f"arm target {r.joint_names[k]} = {q[k]} outside [{r.lower[k]}, {r.upper[k]}]")
 
     # -- control -----------------------------------------------------------------------------
-    def step(self, arm_targets: Sequence[float] | None = None, thrust: Sequence[float] | None = None) -> None:
+    def step(self, arm_targets: Sequence[float] | None = None, thrust: Sequence[float] | None = None,
+             demand: Sequence[float] | None = None) -> None:
         """One control period: thrusts and arm targets set, then the physics steps.
 
         Args:
@@ -322,12 +324,13 @@ class HoverSim:
             joint limits raises.
           thrust: ``(n_thrusters,)`` thrusts to command open loop [N] (None: the station
             keeping's, or zeros when it is off); beyond a thruster's limit raises.
+          demand: ``(6,)`` the wrench in V a controller allocated ``thrust`` for, logged.
         """
         if arm_targets is not None:
             q = np.asarray(arm_targets, dtype=float)
             self._check_targets(q)
             self.data.ctrl[self._servo] = q
-        self.world.command(self.data, thrust)
+        self.world.command(self.data, thrust, demand)
         for _ in range(self._steps):
             self.world.physics_step(self.model, self.data)
 

@@ -45,12 +45,16 @@ class HoverStageSettings:
       controller: the station keeping on (x, y, z, ψ).
       tool_tolerance_m: a gate counts as kept by the tool when it is within this of where the
         docked arm holds it [m].
-      coordinate: also run the current with the arm correcting for the vehicle's motion (the
-        tool's offset mapped to joint corrections through the vehicle–arm Jacobian, within
-        limits): a replay of the plan's timed waypoints (:func:`uvms_jax.hover.run_plan_hovering`),
-        since the executor streams the plan unchanged.
-      dwell_s, gripper_s, joint_tolerance_rad: that replay's dwell at each gate and gripper
-        step [s], and its gate on the joints [rad].
+      coordinate: also run the current with the whole-body controller (``whole_body``: the tool
+        on its docked path first, station keeping in that task's null space;
+        :func:`uvms_jax.hover.run_plan_hovering` with ``control="whole_body"``) on the
+        simulator's position servos, since the executor streams the plan unchanged; its gates
+        are judged on the tool's world pose, within ``tool_tolerance_m`` and
+        ``tool_tolerance_deg`` [°].
+      navigation: the whole-body controller sees the vehicle's pose through this navigation
+        (rate, latency, noise; :class:`uvms_jax.hover.NavigationSettings`), or exactly (None).
+      dwell_s, gripper_s, joint_tolerance_rad: that run's dwell at each gate and gripper
+        step [s], and a replay's gate on the joints [rad].
       frame_png: also write the video's frame at the gate of the largest tool error here (with
         ``hw.plot``; relative: to the working directory), e.g. ``docs/img/hover_frame.png``.
     """
@@ -63,6 +67,9 @@ class HoverStageSettings:
     tool_tolerance_m: float = setting(0.01, gt=0)
     joint_tolerance_rad: float = setting(0.01, gt=0)
     coordinate: bool = True
+    whole_body: hover.WholeBodySettings = hover.WholeBodySettings()
+    navigation: hover.NavigationSettings | None = None
+    tool_tolerance_deg: float = setting(2.0, gt=0)
     frame_png: str | None = None
 
 

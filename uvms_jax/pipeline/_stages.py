@@ -373,15 +373,16 @@ def hovering(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
     if any(hs.current):
         cases[flowing] = (tuple(hs.current), False)
         if hs.coordinate:
-            cases[f"{flowing}, arm coordinating"] = (tuple(hs.current), True)
+            cases[f"{flowing}, whole-body controller"] = (tuple(hs.current), True)
     runs = {}
     for label, (v, coordinate) in progress.bar(list(cases.items()), desc="hover", unit="run"):
         current = hover.CurrentSettings(velocity=v)
-        if coordinate:  # the executor streams the plan's waypoints: correcting them is the replay's
+        if coordinate:  # the executor streams the plan's waypoints: the controller runs on HoverSim
             runs[label] = hover.run_plan_hovering(
                 flow.robot, flow.plan, flow.pose, vehicle, hs.controller, current, dwell_s=hs.dwell_s,
                 gripper_s=hs.gripper_s, tool_tolerance_m=hs.tool_tolerance_m,
-                joint_tolerance_rad=hs.joint_tolerance_rad, coordinate=True)
+                joint_tolerance_rad=hs.joint_tolerance_rad, control="whole_body", whole_body=hs.whole_body,
+                tool_tolerance_deg=hs.tool_tolerance_deg, navigation=hs.navigation)
         else:  # the hw stage's executor and gates; its simulated arm on the hovering vehicle
             runs[label] = hover.execute_plan_hovering(
                 flow.robot, flow.plan, flow.pose, vehicle, hs.controller, current, config=s.hw.executor,
@@ -401,8 +402,8 @@ def hovering(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
                       "max tool error at a gate [mm]", "max roll/pitch [°]", "peak thrust [N]"], rows)
     main = flowing if flowing in summaries else "still water"
     res = {**summaries[main], "runs": summaries}
-    if f"{flowing}, arm coordinating" in summaries:
-        plain, coord = summaries[flowing], summaries[f"{flowing}, arm coordinating"]
+    if f"{flowing}, whole-body controller" in summaries:
+        plain, coord = summaries[flowing], summaries[f"{flowing}, whole-body controller"]
         res["coordination_removes"] = {k: 1.0 - coord[k] / plain[k] for k in ("max_tool_error_m", "max_gate_tool_error_m")}
     _plot_hover(runs, out / "hover.png")
     if s.hw.plot:
@@ -415,10 +416,12 @@ def hovering(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
              "move, so it passes them as on a fixed base while the tool is off; the column after them counts the "
              f"gates where the tool was also within {1e3 * hs.tool_tolerance_m:.0f} mm of where the docked arm holds "
              "it at the same joint angles (tool error: the vehicle's motion, seen at the tool). "
-             "Coordinating, the arm corrects its targets for the vehicle's motion through the vehicle–arm "
-             "Jacobian (`kin.uvms`), which the executor, streaming the plan's waypoints, does not do: that run "
-             f"replays the plan's timed waypoints on position servos, dwelling {hs.dwell_s} s at each segment's end "
-             "(its gate), and measures the tool against the plan's docked path (servo lag included). "
+             "The whole-body controller (docs/hover.md) keeps the tool on the plan's docked path through the "
+             "vehicle–arm Jacobian (`kin.uvms`), station keeping in that task's null space, with a model-based "
+             "feed-forward on the thrusters; the executor, streaming the plan's waypoints, does not do this, so that "
+             f"run is on the simulator's position servos, dwelling {hs.dwell_s} s at each segment's end (its gate), "
+             f"and its gates are judged on the tool's world pose (within {1e3 * hs.tool_tolerance_m:.0f} mm and "
+             f"{hs.tool_tolerance_deg:g}°; servo lag included). "
              "`hover/hover.png`: drift and tool error over time."] + ([video_note] if s.hw.plot else [])
     return StageReport("hover", "Hovering instead of docked: the same motion on thrusters (docs/hover.md)", [table],
                        res, notes)
