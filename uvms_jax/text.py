@@ -16,9 +16,6 @@ __all__ = ["cell", "md_table", "numbers"]
 
 #: Significant digits of a float in a Markdown table.
 TABLE_DIGITS = 4
-#: Significant digits of a number in a URDF/MJCF attribute: below any length or angle a
-#: description states (1e-10 m), and short enough to read.
-XML_DIGITS = 10
 
 
 def cell(v: Any, digits: int = TABLE_DIGITS) -> str:
@@ -38,7 +35,9 @@ def md_table(header: Sequence[str], rows: Sequence[Sequence[Any]]) -> str:
     return "\n".join(lines)
 
 
-def numbers(values, digits: int = XML_DIGITS) -> str:
-    """An array's values, flattened, as space-separated numbers of ``digits`` significant
-    digits (an XML attribute: ``"0 0.1 -0.25"``)."""
-    return " ".join(f"{float(v):.{digits}g}" for v in np.ravel(values))
+def numbers(values) -> str:
+    """An array's values, flattened, as space-separated numbers (an XML attribute:
+    ``"0 0.1 -0.25"``), each the shortest text that reads back as the same float64: a model
+    written and read again is the model built, to the last bit (a pose's quaternion rounded to
+    10 digits moved an arm's base by 5e-12 m)."""
+    return " ".join(repr(float(v)) for v in np.ravel(values))
