@@ -196,7 +196,8 @@ def test_the_feed_forwards_plan_is_smoothed_over_its_window():
     model = hover_model(ARM, vehicle)
     raw, smooth = (WholeBody(ARM, vehicle, ControllerSettings(), WholeBodySettings(smoothing_s=w), POSE, q, model)
                    for w in (0.0, 0.06))
-    np.testing.assert_allclose(raw.q_ddot[:, 0][18:23], [0, 0, 0.4 / dt, 0, 0], atol=1e-9)  # (q₂₁ − 2q₂₀ + q₁₉) / dt²
+    # (q₂₁ − 2q₂₀ + q₁₉) / dt²: the whole change of rate in one period
+    np.testing.assert_allclose(raw.q_ddot[:, 0][18:23], [0, 0, 0.4 / dt, 0, 0], atol=1e-9)
     np.testing.assert_allclose(smooth.q_ddot[:, 0].max(), 3 / 9 * 0.4 / dt, rtol=1e-9)  # the middle weight
     np.testing.assert_allclose(smooth.q_ddot[10:30, 0].sum() * dt, 0.4, rtol=1e-9)  # the corner's change of rate
     np.testing.assert_allclose(smooth.q_dot[25:35, 0], 0.4, rtol=1e-9)  # away from both ends

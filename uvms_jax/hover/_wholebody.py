@@ -159,7 +159,8 @@ class WholeBody:
         """``(6,)`` η: the vehicle's displacement from the docked pose, in V₀ (translation [m],
         XYZ Euler angles [rad]), from its position [m] and orientation in the world."""
         R_dock = xp.asarray(self.T_dock[:3, :3])
-        return xp.concatenate([R_dock.T @ (position - self.T_dock[:3, 3]), euler_xyz(R_dock.T @ R_world_vehicle, xp=xp)])
+        return xp.concatenate([R_dock.T @ (position - self.T_dock[:3, 3]),
+                               euler_xyz(R_dock.T @ R_world_vehicle, xp=xp)])
 
     def step(self, k, position, R_world_vehicle, velocity, angular_velocity, q_ref, integral, current, current_rate,
              xp=np) -> WholeBodyCommand:
