@@ -10,7 +10,8 @@ one JSON object.
 
 The run folder is a `make demo` run's (its `schedule/plan.json` and `docking/best_pose.json`).
 ``--navigation`` gives the whole-body controller the navigation estimate's defaults (30 Hz,
-50 ms, 5 mm, 0.2°, fused with dead reckoning at ``--fix-gain``); ``--gust`` adds gusts of that standard deviation [m/s] every 2 s.
+50 ms, 5 mm, 0.2°, fused with dead reckoning at ``--fix-gain``); ``--gust`` adds gusts of that
+standard deviation [m/s] every 2 s.
 """
 
 from __future__ import annotations
@@ -37,7 +38,8 @@ def _run(arm, plan, pose, current, control: str, navigation) -> dict:
     return {"control": control, "status": s["status"], "reason": s["reason"], "gates": s["gates"],
             "gates_reached": s["gates_reached"], "max_gate_tool_error_m": s["max_gate_tool_error_m"],
             "max_tool_error_m": s["max_tool_error_m"], "p95_tool_error_m": float(np.percentile(r.tool_error, 95)),
-            "max_gate_tool_angle_deg": None if r.gate_tool_angle is None else float(np.degrees(r.gate_tool_angle.max())),
+            "max_gate_tool_angle_deg": None if r.gate_tool_angle is None
+            else float(np.degrees(r.gate_tool_angle.max())),
             "max_drift_m": s["max_drift_m"], "peak_thrust_N": s["peak_thrust_N"],
             "thrust_limited_periods": s["thrust_limited_periods"], "joint_limited_periods": s["joint_limited_periods"],
             "periods": len(r.log.time) - 1, "wall_s": time.perf_counter() - t0}

@@ -67,7 +67,7 @@ def test_feed_forward_is_mujocos_inverse_dynamics(tilt, current):
     vehicle = dataclasses.replace(trimmed(VehicleSettings(), ARM, Q_A), volume=0.0795)
     current, q, dt, k = np.asarray(current), _plan(), 0.02, 3
     model = hover_model(ARM, vehicle, current=current)
-    wb = WholeBody(ARM, vehicle, ControllerSettings(), WholeBodySettings(), POSE, q, model)
+    wb = WholeBody(ARM, vehicle, ControllerSettings(), WholeBodySettings(smoothing_s=0.0), POSE, q, model)
     data = mujoco.MjData(model)
     joints = [model.joint(j) for j in ARM.joint_names]
     dadr = [model.jnt_dofadr[j.id] for j in joints]
@@ -184,3 +184,20 @@ def test_a_control_period_is_the_same_under_jit():
     got = jax.jit(functools.partial(wb.step, xp=jnp))(jnp.asarray(2), *map(jnp.asarray, state))
     for name, a, b in zip(want._fields, want, got):
         np.testing.assert_allclose(np.asarray(b), a, atol=1e-9, err_msg=name)
+
+
+def test_the_feed_forwards_plan_is_smoothed_over_its_window():
+    """A corner in the plan (rest, then 0.4 rad/s): unsmoothed, one period carries the whole
+    change of rate; over a 3-period window twice, it is spread over 5 periods with the weights
+    1, 2, 3, 2, 1 (/9), and the rate far from the corner is the plan's."""
+    dt, k = 0.02, np.arange(40)
+    q = Q_A + 0.4 * dt * np.maximum(k - 20, 0)[:, None] * np.ones(ARM.n_joints)
+    vehicle = trimmed(VehicleSettings(), ARM, Q_A)
+    model = hover_model(ARM, vehicle)
+    raw, smooth = (WholeBody(ARM, vehicle, ControllerSettings(), WholeBodySettings(smoothing_s=w), POSE, q, model)
+                   for w in (0.0, 0.06))
+    # (q₂₁ − 2q₂₀ + q₁₉) / dt²: the whole change of rate in one period
+    np.testing.assert_allclose(raw.q_ddot[:, 0][18:23], [0, 0, 0.4 / dt, 0, 0], atol=1e-9)
+    np.testing.assert_allclose(smooth.q_ddot[:, 0].max(), 3 / 9 * 0.4 / dt, rtol=1e-9)  # the middle weight
+    np.testing.assert_allclose(smooth.q_ddot[10:30, 0].sum() * dt, 0.4, rtol=1e-9)  # the corner's change of rate
+    np.testing.assert_allclose(smooth.q_dot[25:35, 0], 0.4, rtol=1e-9)  # away from both ends

@@ -163,7 +163,8 @@ class HoverRun:
             return self.executed.status, "" if r.ok else r.reason
         limits = (f"; the thrusters were at their limit in {self.thrust_limited_periods} control periods"
                   if self.thrust_limited_periods else "")
-        for i, (e_tool, e_joint, ok) in enumerate(zip(self.gate_tool_error, self.gate_joint_error, self._angles_checked)):
+        gates = zip(self.gate_tool_error, self.gate_joint_error, self._angles_checked)
+        for i, (e_tool, e_joint, ok) in enumerate(gates):
             if e_tool > self.tool_tolerance_m:
                 return "held", (f"gate {i + 1} of {len(self.gate_times)}: the tool is {1e3 * e_tool:.1f} mm from its "
                                 f"docked position (tolerance {1e3 * self.tool_tolerance_m:.0f} mm){limits}")

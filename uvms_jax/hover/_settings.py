@@ -202,6 +202,10 @@ class WholeBodySettings:
         hydrostatics, the current's drag and added mass) to the thrusters' demand.
       added_mass: ``(3,)`` the hull's added mass along V's x, y, z [kg] for the feed-forward
         (0: the hover model has none, docs/hover.md).
+      smoothing_s: the plan's joint angles are averaged over this window [s] (a box, twice:
+        triangular weights) before their rates and accelerations go into the feed-forward: the
+        plan's waypoints are joined by straight lines, whose corners would ask for one period of
+        an acceleration the servos spread over several; 0: none.
     """
 
     tool_gain: float = setting(1.0, gt=0, le=1)
@@ -213,11 +217,12 @@ class WholeBodySettings:
     prediction_s: float = setting(0.02, ge=0)
     feed_forward: bool = True
     added_mass: tuple[float, float, float] = setting((0.0, 0.0, 0.0), ge=0)
+    smoothing_s: float = setting(0.06, ge=0)
 
     def __post_init__(self) -> None:
         if not 0 < self.tool_gain <= 1:
             raise ValueError(f"tool_gain must lie in (0, 1], got {self.tool_gain}")
-        for name in ("station_gain", "damping", "servo_lead_s", "prediction_s"):
+        for name in ("station_gain", "damping", "servo_lead_s", "prediction_s", "smoothing_s"):
             if not (math.isfinite(getattr(self, name)) and getattr(self, name) >= 0):
                 raise ValueError(f"{name} must be finite and >= 0, got {getattr(self, name)}")
         for name in ("vehicle_weight", "orientation_length"):

@@ -105,9 +105,11 @@ class WholeBody:
         """The plan's data per period, the vehicle at the docked pose: the tool's poses in V₀
         and their rate, the arm's momentum rate, its links' frames, the bodies' poses and
         velocities in V."""
-        dt, n = self.dt, q.shape[1]
-        padded = np.concatenate([q[:1], q, q[-1:]])
-        q_dot, q_ddot = (padded[2:] - padded[:-2]) / (2 * dt), (padded[2:] - 2 * q + padded[:-2]) / dt ** 2
+        dt = self.dt
+        smooth = _smoothed(q, round(self.settings.smoothing_s / dt))
+        padded = np.concatenate([smooth[:1], smooth, smooth[-1:]])
+        q_dot, q_ddot = (padded[2:] - padded[:-2]) / (2 * dt), (padded[2:] - 2 * smooth + padded[:-2]) / dt ** 2
+        self.q_dot, self.q_ddot = q_dot, q_ddot
         zeta = np.concatenate([np.zeros((len(q), _VEHICLE)), q], axis=1)
         k = kin.kinematics(self.chain, zeta)
         self.T_tool = np.asarray(k.T_base_tool, dtype=float)
@@ -157,7 +159,8 @@ class WholeBody:
         """``(6,)`` η: the vehicle's displacement from the docked pose, in V₀ (translation [m],
         XYZ Euler angles [rad]), from its position [m] and orientation in the world."""
         R_dock = xp.asarray(self.T_dock[:3, :3])
-        return xp.concatenate([R_dock.T @ (position - self.T_dock[:3, 3]), euler_xyz(R_dock.T @ R_world_vehicle, xp=xp)])
+        return xp.concatenate([R_dock.T @ (position - self.T_dock[:3, 3]),
+                               euler_xyz(R_dock.T @ R_world_vehicle, xp=xp)])
 
     def step(self, k, position, R_world_vehicle, velocity, angular_velocity, q_ref, integral, current, current_rate,
              xp=np) -> WholeBodyCommand:
@@ -217,6 +220,18 @@ class WholeBody:
             demand = demand + self.feed_forward(k, R, current, current_rate, xp=xp)
         saturated = xp.max(xp.abs(self.B_pinv @ demand) / self.thrust_limits) > 1.0
         return allocate_thrust(demand, self.B_pinv, self.thrust_limits, xp=xp), demand, integral, saturated
+
+
+def _smoothed(q: np.ndarray, width: int) -> np.ndarray:
+    """``q (K, n)`` averaged over ``width`` rows twice (a box, twice: triangular weights of
+    ``2 width − 1`` rows), its first and last rows held beyond its ends; ``width ≤ 1``: ``q``."""
+    if width <= 1:
+        return q
+    box = np.ones(width) / width
+    for _ in range(2):
+        padded = np.concatenate([np.repeat(q[:1], width // 2, 0), q, np.repeat(q[-1:], (width - 1) // 2, 0)])
+        q = np.stack([np.convolve(padded[:, j], box, mode="valid") for j in range(q.shape[1])], axis=1)
+    return q
 
 
 def _rotation(rotvec) -> np.ndarray:
