@@ -5,7 +5,7 @@ from __future__ import annotations
 from uvms_jax.text import md_table
 from blocks._format import _load, _rate
 
-__all__ = ["hover_mjx", "hover_robustness", "hover_vehicle", "hover_levelling"]
+__all__ = ["hover_mjx", "hover_robustness", "hover_vehicle", "hover_levelling", "hover_controllers"]
 
 
 def hover_mjx() -> str:
@@ -85,3 +85,31 @@ def hover_levelling() -> str:
     tilt = max(r["max_tilt_deg"] for r in runs.values())
     return (f"Held level by the vertical thrusters, the tilt stays within {tilt:.1f}° in each of the demo's "
             f"{len(runs)} hover runs (the `hover` stage of `benchmarks/results/demo_cpu.json`).\n")
+
+
+def _controllers_row(d: dict, control: str, speed: str) -> str:
+    runs = [r for r in d["runs"] if r["control"] == control and f"{r['speed_m_s']:.1f}" == speed]
+    reached = min(r["gates_reached"] for r in runs)
+    return (f"{1e3 * d['worst_tool_error_m'][control][speed]:.1f} / {1e3 * d['worst_gate_tool_error_m'][control][speed]:.1f}"
+            f" mm, {reached}/{runs[0]['gates']}")
+
+
+def hover_controllers() -> str:
+    plain, ff, nav, gust = (_load(f"hover_controllers{k}_cpu.json") for k in ("", "_ff", "_nav", "_gust"))
+    directions = sorted({r["direction_deg"] for r in plain["runs"]})
+    columns = [("PID (replay)", plain, "pid"), ("+ feed-forward", ff, "feed_forward"), ("whole-body", plain, "whole_body"),
+               ("whole-body, navigation fixes", nav, "whole_body")]
+    rows = [[f"{float(s):g} m/s" if float(s) else "still water", *(_controllers_row(d, c, s) for _, d, c in columns)]
+            for s in plain["worst_tool_error_m"]["pid"]]
+    n = nav["navigation"]
+    g = {c: {s: 1e3 * v for s, v in gust["worst_gate_tool_error_m"][c].items()} for c in ("pid", "whole_body")}
+    return (f"`{plain['command']}` and its variants (`--controls feed_forward`, `--navigation`), the demo's plan and docked "
+            f"pose, {plain['simulated_s']:.0f} s simulated, currents from {len(directions)} directions "
+            f"({', '.join(f'{x:g}°' for x in directions)}); worst tool error over the run / worst at a gate, and the "
+            f"fewest gates reached (a gate: the tool within 10 mm; the whole-body controller's also within 2°):\n\n"
+            + md_table(["current", *(c for c, _, _ in columns)], rows) +
+            f"\n\nNavigation fixes at {n['rate_hz']:g} Hz, {1e3 * n['latency_s']:.0f} ms late, {1e3 * n['position_noise_m']:g} mm "
+            f"and {n['angle_noise_deg']:g}° of noise, fused with dead reckoning (gain {n['fix_gain']:g}). With gusts "
+            f"({gust['gust_m_s']:g} m/s, `{gust['command']}`) the worst gate error is {g['pid']['0.3']:.0f} mm (PID) against "
+            f"{g['whole_body']['0.3']:.1f} mm (whole-body) at 0.3 m/s; at 0.5 m/s the gusts exceed the thrusters and both "
+            f"lose the path ({g['pid']['0.5']:.0f} / {g['whole_body']['0.5']:.0f} mm).\n")
