@@ -136,8 +136,7 @@ def make_arm_docking_problem(
         world whose rows are not the targets.
     """
     dtype = dtype or jnp.zeros(()).dtype
-    # Cast on the host: a cast of a device array compiles a program per shape.
-    arr = lambda x: jnp.asarray(np.asarray(x, dtype=np.float64).astype(dtype))
+    arr = lambda x: jnp.asarray(np.asarray(x, dtype=np.float64), dtype=dtype)
     T_tool = np.asarray(T_world_tool, dtype=np.float64)
     if T_tool.ndim != 3 or T_tool.shape[1:] != (4, 4) or T_tool.shape[0] < 1:
         raise ValueError(f"T_world_tool must have shape (k, 4, 4) with k >= 1, got {T_tool.shape}")
@@ -171,14 +170,14 @@ def make_arm_docking_problem(
         raise ValueError(f"world has {world.rows.radius.shape[0]} rows for {n_groups} targets, or bodies beyond the "
                          f"arm's {chain.n_joints}")
     # The world in the problem's float dtype (indices and masks stay as they are).
-    world = jax.tree_util.tree_map(lambda x: arr(x) if jnp.issubdtype(x.dtype, jnp.floating) else x, world)
+    world = jax.tree_util.tree_map(lambda x: x.astype(dtype) if jnp.issubdtype(x.dtype, jnp.floating) else x, world)
     lo, up = np.asarray(chain.lower, dtype=np.float64), np.asarray(chain.upper, dtype=np.float64)
     u = np.asarray(jax.random.uniform(jax.random.key(seed), (n_seeds, chain.n_joints), dtype=jnp.float32))
     return ArmDockingProblem(
         chain=kin.with_dtype(chain, dtype),
         T_vehicle_base=arr(mount),
         T_world_tool=arr(T_tool),
-        group=jnp.asarray(group.astype(np.int32)),
+        group=jnp.asarray(group, dtype=jnp.int32),
         seeds=arr(lo + u * (up - lo)),
         pose_low=arr(low),
         pose_high=arr(high),

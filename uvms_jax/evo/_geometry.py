@@ -113,7 +113,7 @@ def make_sphere_world(rows: dict, boxes: dict, faces: np.ndarray, balls: np.ndar
       ValueError: on inconsistent shapes or a negative margin.
     """
     dtype = dtype or jnp.zeros(()).dtype
-    f = lambda x: jnp.asarray(np.asarray(x, dtype=np.float64).astype(dtype))  # noqa: E731  cast on the host (no program per shape)
+    f = lambda x: jnp.asarray(np.asarray(x, dtype=np.float64), dtype=dtype)  # noqa: E731
     n_rows, n_sph = np.shape(rows["radius"])
     B, P, M = len(boxes["half"]), len(faces), len(balls)
     want = {"box_on": (n_rows, n_sph, B), "face_on": (n_rows, n_sph, P), "ball_on": (n_rows, n_sph, M),
@@ -127,7 +127,7 @@ def make_sphere_world(rows: dict, boxes: dict, faces: np.ndarray, balls: np.ndar
     if margin < 0 or not 0 <= n_base_boxes <= B or not 0 <= n_base_faces <= P:
         raise ValueError(f"need margin >= 0 and base obstacle counts within the lists, got {margin}, "
                          f"{n_base_boxes} of {B} boxes, {n_base_faces} of {P} polytopes")
-    ints = lambda x: jnp.asarray(np.asarray(x, dtype=np.int32))  # noqa: E731
+    ints = lambda x: jnp.asarray(x, dtype=jnp.int32)  # noqa: E731
     bools = lambda x: jnp.asarray(x, dtype=bool)  # noqa: E731
     return SphereWorld(
         rows=WorldRows(body=ints(rows["body"]), centre=f(rows["centre"]), radius=f(rows["radius"]),

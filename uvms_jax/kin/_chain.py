@@ -202,13 +202,8 @@ def chain_from_urdf_joints(
 
 
 def with_dtype(chain: Chain, dtype) -> Chain:
-    """The same chain with its geometry cast to ``dtype`` (float32 or float64): concrete arrays on
-    the host (a cast of a device array compiles a program per shape), traced ones in the trace."""
-    def cast(x):
-        if isinstance(x, jax.core.Tracer) or getattr(x, "dtype", None) == dtype:
-            return jnp.asarray(x, dtype=dtype)
-        return jnp.asarray(np.asarray(x).astype(dtype))
-    return jax.tree_util.tree_map(cast, chain)
+    """The same chain with its geometry cast to ``dtype`` (float32 or float64)."""
+    return jax.tree_util.tree_map(lambda x: jnp.asarray(x, dtype=dtype), chain)
 
 
 def check_joint_array(chain: Chain, q, label: str = "q") -> Array:
