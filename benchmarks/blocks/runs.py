@@ -5,7 +5,7 @@ from __future__ import annotations
 from uvms_jax.text import md_table
 from blocks._format import _batch, _load, _minutes, _reproduction, _sci
 
-__all__ = ["demo", "papers", "pipeline_arms", "own_arm", "weights_sweep", "hw_runner", "hw_acceptance", "sched_benchmark", "test_suite", "test_suite_isa"]
+__all__ = ["demo", "cold_demo", "papers", "pipeline_arms", "own_arm", "weights_sweep", "hw_runner", "hw_acceptance", "sched_benchmark", "test_suite", "test_suite_isa"]
 
 
 def demo() -> str:
@@ -41,7 +41,8 @@ def demo() -> str:
     ]
     if "hover" in d:
         def run(label, m):
-            return (f"{label} ({m['driver']}): {m['status']}, {m['gates_reached']}/{m['gates']} gates passed, the tool "
+            driver = "" if m["driver"] in label else f" ({m['driver']})"
+            return (f"{label}{driver}: {m['status']}, {m['gates_reached']}/{m['gates']} gates passed, the tool "
                     f"within 10 mm at {m['gates_tool_within_tolerance']}, drift ≤ {1e3 * m['max_drift_m']:.0f} mm, tool "
                     f"≤ {1e3 * m['max_tool_error_m']:.0f} mm, tilt ≤ {m['max_tilt_deg']:.1f}°, thrust ≤ "
                     f"{m['peak_thrust_N']:.0f} N")
@@ -241,3 +242,13 @@ def test_suite_isa() -> str:
     return (f"With XLA's CPU code generation held to AVX (`XLA_FLAGS={d['xla_flags']}`; `{d['command']}`, "
             f"`benchmarks/results/test_suite_avx_cpu.json`), from a fresh clone of commit {d['commit'][:7]}: the "
             f"{t['passed']} fast tests passed{failed} in {_minutes(t['seconds'])}, as with XLA's default code path.\n")
+
+
+def cold_demo() -> str:
+    d = _load("cold_demo_cpu.json")
+    w, o = d["whole_run"], d["outcome"]
+    stages = ", ".join(f"{name} {sec:.0f} s" for name, sec in o["stage_seconds"].items())
+    return (f"A newcomer's first run, with an empty compilation cache (`{d['command']}`, {d['cpus']} CPU cores): "
+            f"pipeline {w['wall_s']:.1f} s, of which {w['compile_s']:.1f} s compiling {w['programs_compiled']} XLA "
+            f"programs ({stages}); the same docked pose, {o['planned']['RRTConnect_success']} edges planned, hw "
+            f"{o['hw']['reason']}.\n")
