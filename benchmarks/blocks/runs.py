@@ -251,4 +251,13 @@ def cold_demo() -> str:
     return (f"A newcomer's first run, with an empty compilation cache (`{d['command']}`, {d['cpus']} CPU cores): "
             f"pipeline {w['wall_s']:.1f} s, of which {w['compile_s']:.1f} s compiling {w['programs_compiled']} XLA "
             f"programs ({stages}); the same docked pose, {o['planned']['RRTConnect_success']} edges planned, hw "
-            f"{o['hw']['reason']}.\n")
+            f"{o['hw']['reason']}.\n"
+            + _fresh_demo())
+
+
+def _fresh_demo() -> str:
+    f = _load("fresh_demo_cpu.json")
+    return (f"\n`make demo` from a fresh clone (`{f['command']}`: clone, virtual environment and install from pip's cache, "
+            f"then the demo with empty caches): {f['total_s']:.1f} s, of which {f['setup_s']:.1f} s setup and "
+            f"{f['pipeline_s']:.1f} s pipeline (its planning stage also compiles the Numba kernels, whose cache is per "
+            f"checkout: plan {f['stage_seconds']['plan']:.0f} s).\n")
