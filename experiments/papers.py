@@ -113,7 +113,7 @@ def scenario_times() -> str:
 def window_sweep() -> str:
     """The [D16] sampling-window sweep (``benchmarks/surrogate_window.py``) as a paragraph and a
     table: per setting, each network's units and largest relative test error (``*``: the 2 %
-    goal met), from the newest result file; empty text where there is none."""
+    goal met), from the last result file by name; empty text where there is none."""
     files = sorted(RESULTS.glob("surrogate_window_*.json"))
     if not files:
         return ""

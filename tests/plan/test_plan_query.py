@@ -9,6 +9,7 @@ its own hand and fingers: ``tests/plan/data/mbm/<family>_{scene,request}.yaml``.
 from __future__ import annotations
 
 import importlib.metadata
+import re
 from pathlib import Path
 
 import mujoco
@@ -137,7 +138,6 @@ def test_srdf_disabled_pairs_join_the_allowed_matrix(panda, tmp_path):
     srdf = ROBOTS / "panda_description/srdf/panda.srdf"
     allowed = P.load_srdf(srdf)
     # The oracle: the file's elements read by a regular expression, not by an XML parser.
-    import re
     expected = {frozenset(m) for m in re.findall(r'<disable_collisions link1="([^"]+)" link2="([^"]+)"', srdf.read_text())}
     assert allowed == expected and frozenset(("panda_hand", "panda_link5")) in allowed
     world = P.World(allowed=allowed)
