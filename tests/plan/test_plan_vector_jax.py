@@ -12,17 +12,18 @@ import numpy as np
 import pytest
 
 from uvms_jax import robot as R
-from uvms_jax.plan import Obstacle, VectorChecker, densify, load_moveit_scene
+from uvms_jax.plan import Obstacle, densify, load_moveit_scene
 from uvms_jax.plan._vector import robot_spheres_model
 from uvms_jax.plan._vector_jax import (motion_samples, numba_model, sphere_arm, sphere_worlds,
                                        states_free)
 from uvms_jax.plan._vector_kernels import FREE, sphere_obstacle_distance, states_status
+from uvms_jax.plan._worlds import World, obstacle_rows
 
 
 def numba_states_free(Q, model):
     """The Numba kernel's covering-sphere verdicts (what the JAX checker computes)."""
-    return states_status(np.ascontiguousarray(Q), *model[:9]) == FREE
-from uvms_jax.plan._worlds import World, obstacle_rows
+    return states_status(np.ascontiguousarray(Q), *model[:9], model[11]) == FREE
+
 
 ROBOTS = Path(str(importlib.metadata.distribution("example-robot-data").locate_file(
     "cmeel.prefix/share/example-robot-data/robots")))
@@ -113,7 +114,7 @@ def test_mbm_verdicts_match_numba_batched(panda, side, dtype):
     Q = np.stack([_states(panda, rng, 3000) for _ in worlds])
     got = np.asarray(jax.jit(jax.vmap(states_free, in_axes=(None, 0, 0)))(arm, batch, jnp.asarray(Q, dtype)))
     for b, w in enumerate(worlds):
-        unpadded = VectorChecker(panda, w, opening=OPENING, margin=0.01).states_status(Q[b]) == FREE
+        unpadded = numba_states_free(Q[b], side.model(w, 0.01))
         np.testing.assert_array_equal(unpadded, numba_states_free(Q[b], numba_model(side, batch, b)))
         _bracket(side, batch, b, Q[b].astype(np.float64), got[b], TOL[dtype])
     if dtype == np.float64:
@@ -133,7 +134,7 @@ def test_every_primitive_and_batch_shape(panda, side, tmp_path, shape):
     assert got.shape == shape
     flat = Q.reshape(-1, panda.n_joints)
     np.testing.assert_array_equal(numba_states_free(flat, numba_model(side, one)),
-                                  VectorChecker(panda, world, opening=OPENING).states_status(flat) == FREE)
+                                  numba_states_free(flat, side.model(world)))
     _bracket(side, one, None, flat, got.reshape(-1), TOL[np.float64])
 
 

@@ -28,8 +28,9 @@ import numpy as np
 from scipy.cluster.vq import kmeans2
 
 from uvms_jax.plan._rrtc import load
+from uvms_jax.plan._pair_tables import pair_tables
 from uvms_jax.plan._vector_kernels import (make_scratch, motion_free, pairs_touching, settle, state_free,
-                                           states_status, without_exact)
+                                           states_status, without_exact, without_tables)
 from uvms_jax.plan._worlds import World, add_obstacles, obstacle_rows
 from uvms_jax.robot import (BASE, Robot, RobotSpheres, Shape, base_body, card_jaws, collision_spheres, inscribed_spheres,
                             robot_mjcf)
@@ -119,15 +120,20 @@ class RobotSpheresModel:
     def model(self, world: World, margin: float = 0.0, exact: "ExactChecker | None" = None) -> tuple:
         """The compiled checker's arrays for this robot in ``world`` with ``margin`` [m];
         ``exact``: MuJoCo's model of both, which settles what the spheres cannot tell (None:
-        such states come out MAYBE)."""
+        such states come out MAYBE) and measures the pair tables
+        (:mod:`uvms_jax.plan._pair_tables`; none without it)."""
         rows, planes = obstacle_rows(world.obstacles)
         # Obstacles beyond every pose's reach never meet a sphere: left out of the loops.
         # A body's origin is at most max_reach from the base's; its group within |centre| + radius.
         reach = self.robot.max_reach + float(np.max(np.linalg.norm(self.groups[:, 3:6], axis=1) + self.groups[:, 6]))
         near = np.linalg.norm(rows[:, 16:19], axis=1) - rows[:, 19] <= reach + float(margin)
-        arrays = without_exact(len(self.groups), int(np.sum(near))) if exact is None else exact.arrays(near)
-        return (self.kin, self.groups, self.spheres, rows[near], planes, self.pairs(world), float(margin),
-                self.clusters, self.inner, arrays, int(exact is not None))
+        pairs = self.pairs(world)
+        if exact is None:
+            arrays, tables = without_exact(len(self.groups), int(np.sum(near))), without_tables(len(pairs))
+        else:
+            arrays, tables = exact.arrays(near), pair_tables(exact, self, pairs)
+        return (self.kin, self.groups, self.spheres, rows[near], planes, pairs, float(margin), self.clusters,
+                self.inner, arrays, int(exact is not None), tables)
 
 
 def _bound(c: np.ndarray, r: np.ndarray) -> list[float]:
@@ -230,7 +236,7 @@ def robot_spheres_model(robot: Robot, opening: float | None = None, spheres: Rob
                           dtype=np.int64).reshape(-1, 2)
     Q = np.random.default_rng(0).uniform(robot.lower, robot.upper, (_ALWAYS_SAMPLES, n))
     model = (kin, groups, sphere_rows, np.zeros((0, 20)), np.zeros((0, 4)), np.zeros((0, 2), np.int64), 0.0, clusters,
-             inner_rows, without_exact(len(groups), 0), 0)
+             inner_rows, without_exact(len(groups), 0), 0, without_tables(0))
     touching = pairs_touching(Q, model, candidates)
     for (a, b), always in zip(candidates, np.all(touching, axis=0)):
         if always:
@@ -372,13 +378,13 @@ class VectorChecker:
         """``(k,)`` uint8 FREE / HIT / MAYBE of the rows of ``Q (k, n)`` [rad] by the spheres
         alone (see :func:`~uvms_jax.plan._vector_kernels.state_status`), in one compiled call
         over the CPU's threads."""
-        return states_status(self._rows(Q), *self.model[:9])
+        return states_status(self._rows(Q), *self.model[:9], self.model[11])
 
     def states_free(self, Q) -> np.ndarray:
         """``(k,)`` bool: rows of ``Q (k, n)`` [rad] where the robot touches nothing (limits not
         checked): the spheres' verdict, MuJoCo's where the spheres cannot tell."""
         Q = self._rows(Q)
-        return settle(Q, states_status(Q, *self.model[:9]), self.model)
+        return settle(Q, states_status(Q, *self.model[:9], self.model[11]), self.model)
 
     def state_free(self, q) -> bool:
         """Whether the robot at ``q (n,)`` [rad] touches nothing (limits not checked), in one

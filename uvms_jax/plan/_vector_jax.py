@@ -33,7 +33,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from uvms_jax.plan._vector import RobotSpheresModel
-from uvms_jax.plan._vector_kernels import BOX, CAPSULE, CYLINDER, POLYTOPE, SPHERE, without_exact
+from uvms_jax.plan._vector_kernels import BOX, CAPSULE, CYLINDER, POLYTOPE, SPHERE, without_exact, without_tables
 from uvms_jax.plan._worlds import ROW, World, obstacle_rows
 
 __all__ = ["PAD_PLANE", "PAD_ROW", "SphereArm", "SphereWorlds", "motion_samples", "numba_model", "sphere_arm",
@@ -153,7 +153,7 @@ def numba_model(side: RobotSpheresModel, world: SphereWorlds, index: int | None 
     rows = pick(world.obstacles).astype(np.float64)
     return (side.kin, side.groups, side.spheres, rows, pick(world.planes).astype(np.float64),
             cands[pick(world.pair_on)], float(pick(world.margin)), side.clusters, side.inner,
-            without_exact(len(side.groups), len(rows)), 0)
+            without_exact(len(side.groups), len(rows)), 0, without_tables(int(np.sum(pick(world.pair_on)))))
 
 
 _EYE = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)

@@ -21,11 +21,14 @@ Everything is a flat array so that Numba compiles one loop per kernel:
 * ``pairs``: ``(P, 2)`` group pairs checked against each other (self-collision).
 
 The model tuple is ``(kin, groups, spheres, obstacles, planes, pairs, margin, clusters, inner,
-exact, resolve)``. ``exact`` is MuJoCo's model of the same robot and world, called through its C
+exact, resolve, tables)``. ``exact`` is MuJoCo's model of the same robot and world, called through its C
 API: ``(mjModel address, mjData address, qpos (view of the mjData's), the arm joints' qpos
 addresses (n,), per group its geoms' range (G, 2) into geom ids (K,), each obstacle row's geom
 id (M,))``; ``resolve`` 1: the states the spheres cannot tell are measured by it (never in
-parallel threads: the mjData is shared).
+parallel threads: the mjData is shared). ``tables``: MuJoCo's distance between the two groups of
+a pair two joints apart, over a grid of those joints (:mod:`uvms_jax.plan._pair_tables`):
+``(index (P,) per pair its table or -1, meta (T, 8) [joint a, joint b, first node a, first
+node b, spacing, bound, nodes a, nodes b], values (T, Na, Nb) float32 [m])``.
 
 A sphere collides with an obstacle when its signed distance is below its radius plus the
 margin; a polytope's distance is bounded below by its largest face distance, so polytopes are
@@ -45,6 +48,7 @@ import numpy as np
 
 BOX, SPHERE, CAPSULE, CYLINDER, POLYTOPE = 0, 1, 2, 3, 4
 FREE, HIT, MAYBE = 0, 1, 2  # outcomes of state_status
+_TABLE_CAP = 0.1  # [m] a table's distances are measured up to this (farther: stored as it)
 
 
 def _load_mujoco() -> None:
@@ -277,6 +281,25 @@ def _undecided(q, g, others, exact, resolve, margin, posed):
     return FREE, True
 
 
+@numba.njit(cache=True, inline="always")
+def _table_verdict(q, k, tables, margin) -> int:
+    """A tabled pair's verdict at ``q``: the distance at the nearest grid node, give or take
+    the table's bound (how far the pair's distance can change within half a spacing of each of
+    its joints): FREE or HIT where that settles it against ``margin`` [m], else MAYBE (the
+    spheres decide, as for an untabled pair; also off the grid)."""
+    meta, values = tables[1][k], tables[2][k]
+    i = int(np.floor((q[int(meta[0])] - meta[2]) / meta[4] + 0.5))
+    j = int(np.floor((q[int(meta[1])] - meta[3]) / meta[4] + 0.5))
+    if i < 0 or j < 0 or i >= meta[6] or j >= meta[7]:
+        return MAYBE
+    d = values[i, j]
+    if d - meta[5] > margin:
+        return FREE
+    if d + meta[5] < margin:
+        return HIT
+    return MAYBE
+
+
 @numba.njit(cache=True)
 def state_status(q, model, scratch) -> int:
     """The robot at ``q (n,)`` against the world and itself: :data:`FREE` (nothing nearer than
@@ -290,7 +313,7 @@ def state_status(q, model, scratch) -> int:
     settles it)."""
     kin, groups, obstacles, planes, pairs, margin, clusters = model[0], model[1], model[3], model[4], model[5], \
         model[6], model[7]
-    exact, resolve = model[9], model[10]
+    exact, resolve, tables = model[9], model[10], model[11]
     R, t, gc, _, cc = scratch
     pose_bodies(q, kin, R, t)
     G = groups.shape[0]
@@ -321,6 +344,12 @@ def state_status(q, model, scratch) -> int:
             status = max(status, verdict)
     for p in range(pairs.shape[0]):
         g1, g2 = pairs[p, 0], pairs[p, 1]
+        if tables[0][p] >= 0:
+            verdict = _table_verdict(q, tables[0][p], tables, margin)
+            if verdict == FREE:
+                continue
+            if verdict == HIT:
+                return HIT
         reach = groups[g1, 6] + groups[g2, 6] + margin
         if (gc[g1, 0] - gc[g2, 0]) ** 2 + (gc[g1, 1] - gc[g2, 1]) ** 2 + (gc[g1, 2] - gc[g2, 2]) ** 2 > reach * reach:
             continue
@@ -347,16 +376,23 @@ def without_exact(n_groups: int, n_obstacles: int) -> tuple:
             np.zeros(n_obstacles, np.int32))
 
 
+@numba.njit(cache=True)
+def without_tables(n_pairs: int) -> tuple:
+    """The ``tables`` entry of a model with no pair tables."""
+    return np.full(n_pairs, -1, np.int64), np.zeros((0, 8)), np.zeros((0, 1, 1), np.float32)
+
+
 @numba.njit(cache=True, parallel=True)
-def states_status(Q, kin, groups, spheres, obstacles, planes, pairs, margin, clusters, inner) -> np.ndarray:
-    """``(k,)`` uint8: :func:`state_status` of each row of ``Q (k, n)`` by the spheres alone (the
-    model's entries before ``exact``: threads share no mjData), in chunks over the CPU's threads."""
+def states_status(Q, kin, groups, spheres, obstacles, planes, pairs, margin, clusters, inner, tables) -> np.ndarray:
+    """``(k,)`` uint8: :func:`state_status` of each row of ``Q (k, n)`` by the spheres and the
+    pair tables alone (the model without ``exact``: threads share no mjData), in chunks over the
+    CPU's threads."""
     k = Q.shape[0]
     out = np.empty(k, dtype=np.uint8)
     chunk = 256
     for c in numba.prange((k + chunk - 1) // chunk):
         model = (kin, groups, spheres, obstacles, planes, pairs, margin, clusters, inner,
-                 without_exact(groups.shape[0], obstacles.shape[0]), 0)
+                 without_exact(groups.shape[0], obstacles.shape[0]), 0, tables)
         scratch = make_scratch(model)
         for i in range(c * chunk, min(k, (c + 1) * chunk)):
             out[i] = state_status(Q[i], model, scratch)
@@ -437,4 +473,25 @@ def settle(Q, status, model) -> np.ndarray:
     for i in range(Q.shape[0]):
         if status[i] == MAYBE:
             out[i] = state_status(Q[i], model, scratch) == FREE
+    return out
+
+
+@numba.njit(cache=True)
+def distance_table(exact, g1, g2, ja, jb, first_a, first_b, spacing, na, nb, n) -> np.ndarray:
+    """``(na, nb)`` float32: MuJoCo's least distance [m] between the geoms of groups ``g1`` and
+    ``g2`` (``exact``'s ranges) with joint ``ja`` at ``first_a + i spacing`` and ``jb`` at
+    ``first_b + j spacing`` (the other ``n - 2`` joints at 0), up to :data:`_TABLE_CAP`."""
+    m, d, ranges, geoms = exact[0], exact[1], exact[4], exact[5]
+    out = np.empty((na, nb), np.float32)
+    q = np.zeros(n)
+    for i in range(na):
+        q[ja] = first_a + i * spacing
+        for j in range(nb):
+            q[jb] = first_b + j * spacing
+            _pose_exact(q, exact)
+            best = _TABLE_CAP
+            for k in range(ranges[g1, 0], ranges[g1, 1]):
+                for l in range(ranges[g2, 0], ranges[g2, 1]):
+                    best = min(best, _mj_geom_distance(m, d, geoms[k], geoms[l], _TABLE_CAP, 0))
+            out[i, j] = best
     return out

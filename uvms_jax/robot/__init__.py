@@ -43,3 +43,4 @@ from uvms_jax.robot._parse import chain_from_urdf
 from uvms_jax.robot._spheres import RobotSpheres
 from uvms_jax.robot._spheres import collision_spheres
 from uvms_jax.robot._spheres import inscribed_spheres
+from uvms_jax.robot._spheres import spheres_cache_dir
