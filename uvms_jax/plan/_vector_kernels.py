@@ -282,6 +282,18 @@ def _undecided(q, g, others, exact, resolve, margin, posed):
 
 
 @numba.njit(cache=True, inline="always")
+def _place_clusters(g, groups, clusters, R, t, cc, placed) -> None:
+    """World centres ``cc`` of group ``g``'s clusters, once per state (``placed (G,)``): only the
+    groups whose bound meets something need them."""
+    if placed[g]:
+        return
+    b = int(groups[g, 2])
+    for c in range(int(groups[g, 7]), int(groups[g, 8])):
+        cc[c, 0], cc[c, 1], cc[c, 2] = _to_world(R, t, b, clusters[c, 2], clusters[c, 3], clusters[c, 4])
+    placed[g] = True
+
+
+@numba.njit(cache=True, inline="always")
 def _table_verdict(q, k, tables, margin) -> int:
     """A tabled pair's verdict at ``q``: the distance at the nearest grid node, give or take
     the table's bound (how far the pair's distance can change within half a spacing of each of
@@ -314,14 +326,12 @@ def state_status(q, model, scratch) -> int:
     kin, groups, obstacles, planes, pairs, margin, clusters = model[0], model[1], model[3], model[4], model[5], \
         model[6], model[7]
     exact, resolve, tables = model[9], model[10], model[11]
-    R, t, gc, _, cc = scratch
+    R, t, gc, _, cc, placed = scratch
     pose_bodies(q, kin, R, t)
     G = groups.shape[0]
     for g in range(G):
-        b = int(groups[g, 2])
-        gc[g, 0], gc[g, 1], gc[g, 2] = _to_world(R, t, b, groups[g, 3], groups[g, 4], groups[g, 5])
-        for c in range(int(groups[g, 7]), int(groups[g, 8])):
-            cc[c, 0], cc[c, 1], cc[c, 2] = _to_world(R, t, b, clusters[c, 2], clusters[c, 3], clusters[c, 4])
+        gc[g, 0], gc[g, 1], gc[g, 2] = _to_world(R, t, int(groups[g, 2]), groups[g, 3], groups[g, 4], groups[g, 5])
+        placed[g] = False
     status, posed = FREE, False
     for g in range(G):
         if groups[g, 2] < 0:  # the base's groups: fixed, as the world is
@@ -334,6 +344,7 @@ def state_status(q, model, scratch) -> int:
                 continue
             if sphere_obstacle_distance(gc[g, 0], gc[g, 1], gc[g, 2], o, planes) >= gr + margin:
                 continue
+            _place_clusters(g, groups, clusters, R, t, cc, placed)
             if not _hits_obstacle(g, o, model, R, t, cc):
                 continue
             if _inner_hits_obstacle(g, o, model, R, t):
@@ -353,6 +364,8 @@ def state_status(q, model, scratch) -> int:
         reach = groups[g1, 6] + groups[g2, 6] + margin
         if (gc[g1, 0] - gc[g2, 0]) ** 2 + (gc[g1, 1] - gc[g2, 1]) ** 2 + (gc[g1, 2] - gc[g2, 2]) ** 2 > reach * reach:
             continue
+        _place_clusters(g1, groups, clusters, R, t, cc, placed)
+        _place_clusters(g2, groups, clusters, R, t, cc, placed)
         if not _groups_touch(g1, g2, model, R, t, cc):
             continue
         if _inner_groups_touch(g1, g2, model, R, t):
@@ -402,9 +415,10 @@ def states_status(Q, kin, groups, spheres, obstacles, planes, pairs, margin, clu
 @numba.njit(cache=True)
 def make_scratch(model):
     """Work arrays of one thread's checks: body rotations ``(n, 3, 3)`` and positions ``(n, 3)``,
-    group centres ``(G, 3)``, one configuration ``(n,)``, cluster centres ``(C, 3)``."""
+    group centres ``(G, 3)``, one configuration ``(n,)``, cluster centres ``(C, 3)``, whether
+    each group's cluster centres are placed for the current state ``(G,)``."""
     n, G, C = model[0].shape[0], model[1].shape[0], model[7].shape[0]
-    return np.empty((n, 3, 3)), np.empty((n, 3)), np.empty((G, 3)), np.empty(n), np.empty((C, 3))
+    return np.empty((n, 3, 3)), np.empty((n, 3)), np.empty((G, 3)), np.empty(n), np.empty((C, 3)), np.zeros(G, np.bool_)
 
 
 @numba.njit(cache=True)
@@ -450,7 +464,7 @@ def pairs_touching(Q, model, candidates) -> np.ndarray:
     """``(k, P)`` bool: whether the two groups of each candidate pair ``(P, 2)`` have spheres
     nearer than the margin at each row of ``Q (k, n)`` (for the pairs that touch in every pose)."""
     out = np.zeros((Q.shape[0], candidates.shape[0]), dtype=np.bool_)
-    R, t, _, _, cc = make_scratch(model)
+    R, t, _, _, cc, _ = make_scratch(model)
     groups, clusters = model[1], model[7]
     for i in range(Q.shape[0]):
         pose_bodies(Q[i], model[0], R, t)
