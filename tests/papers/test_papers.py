@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 import yaml
 
-from uvms_jax import evo, kin, papers
+from uvms_jax import evo, kin, papers, sched
 from uvms_jax.papers import docking, thesis
 from uvms_jax.settings import from_mapping
 
@@ -49,6 +49,13 @@ def test_configs_repeat_the_paper_data():
     assert from_mapping(evo.SceneSettings, scene) == evo.SceneSettings()
     arm_defaults = inspect.signature(kin.docking_arm).parameters
     assert tuple(arm_defaults[n].default for n in ("l0", "l1", "l2")) == papers.D11_ARM_LENGTHS
+
+
+def test_stage_literals_repeat_the_thesis_times():
+    """The scheduling stage prints the thesis's Table 5.5 solver times beside its own: its literals
+    (``sched.THESIS_SOLVER_MS``) are the table's, row by row (Dijkstra is our greedy)."""
+    names = {"Dijkstra": "greedy", "GRASP": "grasp", "A*": "astar"}
+    assert {names[alg]: ms for alg, path, K, N, C, ms in papers.T22_TABLES["5.5"]} == sched.THESIS_SOLVER_MS
 
 
 def test_heading_and_distance():
