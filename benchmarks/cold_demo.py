@@ -56,7 +56,7 @@ def child(events_path: Path, overrides: list[str]) -> None:
         if event in (TRACE, LOWER, BACKEND) else None)
     jax.monitoring.register_event_listener(lambda event, **kw: rec["hits"].append(time.time())
                                            if event == CACHE_HIT else None)
-    from uvms_jax.pipeline._stages import STAGE_FNS  # the dict the pipeline's runner calls through
+    from uvms_jax.pipeline.stages import STAGE_FNS  # the dict the pipeline's runner calls through
 
     def timed(name, fn):
         def stage(*args, **kwargs):

@@ -54,7 +54,7 @@ from uvms_jax.evo._collide import capsules_hit_boxes, link_points
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "experiments"))
 from pipeline import settings_of  # noqa: E402  (the pipeline's own reading of its config)
-from uvms_jax.pipeline import docked_scene  # noqa: E402
+from uvms_jax.plan import docked_scene  # noqa: E402
 
 # Vehicle poses [x, y, z, ψ] of the agreement: the demo's docked pose and one over the other tables
 # (those of tests/plan/test_plan_world.py), and for other arms the centre of the tiny preset's

@@ -29,7 +29,7 @@ import time
 from cobs import cobs
 from crc import Calculator
 
-from uvms_jax.hw import (CRC8_CONFIG, PacketID, PacketReader, ReachArm, SimArm, SimConfig, SimServer, UdpTransport,
+from uvms_jax.hw import (CRC8_CONFIG, PacketID, PacketReader, ReachArm, SimArm, SimSettings, SimServer, UdpTransport,
                          encode_floats, encode_packet, joint_specs)
 from uvms_jax.robot import load_arm
 
@@ -142,7 +142,7 @@ def round_trip(n: int) -> dict:
         proc.terminate()
         proc.wait(10)
     # the simulator as a thread of this process (what `uvms-hw run --sim` does)
-    with SimServer(SimArm(ROBOT, SimConfig())) as server:
+    with SimServer(SimArm(ROBOT, SimSettings())) as server:
         out["bravo7_sim_thread"] = _percentiles(_time_reads(server.address, n))
 
     srv = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)

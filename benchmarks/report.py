@@ -1,5 +1,5 @@
-"""The quoted figures of README.md, BENCHMARKS.md and docs/ (theory, docking, hover), generated from
-benchmarks/results/ and docs/reproduction.json.
+"""The quoted figures of README.md, BENCHMARKS.md (with its pages, docs/benchmarks/) and docs/
+(theory, docking, hover, planning), generated from benchmarks/results/ and docs/reproduction.json.
 
 Each generated block sits between ``<!-- report:NAME -->`` and ``<!-- /report:NAME -->`` in one
 of :data:`DOCUMENTS`, and is written by the function of that name in ``benchmarks/blocks/`` (one
@@ -28,8 +28,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))  # blocks/ and sources.
 from blocks import docking, hover, kin, planning, runs, surrogate  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
-DOCUMENTS = (ROOT / "README.md", ROOT / "BENCHMARKS.md", ROOT / "docs" / "theory.md", ROOT / "docs" / "docking.md",
-             ROOT / "docs" / "hover.md", ROOT / "docs" / "planning.md")
+DOCUMENTS = (ROOT / "README.md", ROOT / "BENCHMARKS.md", *sorted((ROOT / "docs" / "benchmarks").glob("*.md")),
+             ROOT / "docs" / "theory.md", ROOT / "docs" / "docking.md", ROOT / "docs" / "hover.md",
+             ROOT / "docs" / "planning.md")
 BLOCK = re.compile(r"(<!-- report:(?P<name>[a-z0-9_]+) -->\n)(?P<body>.*?)(<!-- /report:(?P=name) -->)", re.S)
 #: block name → its renderer (``() -> str``), from every topic module's ``__all__``.
 BLOCKS = {name: getattr(module, name) for module in (kin, docking, surrogate, hover, planning, runs)
@@ -59,7 +60,7 @@ def main() -> int:
     parser.add_argument("--check", action="store_true",
                         help="only report blocks that are out of date and prose numbers without a source")
     args = parser.parse_args()
-    stale = {doc.name: stale_blocks(doc.read_text()) for doc in DOCUMENTS}
+    stale = {doc.relative_to(ROOT).as_posix(): stale_blocks(doc.read_text()) for doc in DOCUMENTS}
     if args.check:
         import sources
 

@@ -36,10 +36,13 @@ import re
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-#: The documents whose prose numbers need a source; docs/reproduction.md is checked through its
-#: templates (its ``{placeholders}`` are filled from docs/reproduction.json by experiments/papers.py).
+#: docs/reproduction.md and its pages (docs/reproduction/): written by experiments/papers.py from
+#: its templates, whose ``{placeholders}`` it fills from docs/reproduction.json.
+GENERATED_DOCUMENTS = (ROOT / "docs" / "reproduction.md", *sorted((ROOT / "docs" / "reproduction").glob("*.md")))
+#: The documents whose prose numbers need a source; the generated ones are checked through their
+#: templates.
 SOURCED_DOCUMENTS = (ROOT / "README.md", ROOT / "BENCHMARKS.md",
-                     *sorted(p for p in (ROOT / "docs").glob("*.md") if p.name != "reproduction.md"),
+                     *sorted(p for p in (ROOT / "docs").rglob("*.md") if p not in GENERATED_DOCUMENTS),
                      *sorted((ROOT / "experiments" / "papers_templates").glob("*.md")))
 PAPERS = ("D11", "D16", "T22")
 #: How a value may be printed: as it is, in per cent, in thousandths (ms, mm), in millionths

@@ -1,7 +1,7 @@
 """Why the surrogate speed tables swing with the batch size: the index functions of
 ``benchmarks/surrogate.py`` timed in variants that separate the candidate causes.
 
-The surrogate tables (BENCHMARKS.md, ``make papers``) time each function at 1e3, 1e5 and 1e6
+The surrogate tables (docs/benchmarks/surrogates.md, ``make papers``) time each function at 1e3, 1e5 and 1e6
 inputs, the largest in chunks of 1e5 through ``lax.map`` (``surrogate.time_index_fn``), with
 calls issued back to back and one wait. Here, at each batch size (UVMS-12 configurations of the
 paper's sampling, ``surrogate.tile_batch``, float32), every function is timed

@@ -1,12 +1,14 @@
-"""Regenerate docs/reproduction.md: every table and figure of the three papers, theirs beside ours.
+"""Regenerate docs/reproduction.md and its pages, one per paper (docs/reproduction/): every table
+and figure of the three papers, theirs beside ours.
 
     python experiments/papers.py                    # preset "fast": 10–25 min on a 2-core CPU
     python experiments/papers.py --preset paper     # the papers' sizes where they differ
-    python experiments/papers.py --out /tmp/repro   # write elsewhere (doc + img/papers/)
+    python experiments/papers.py --out /tmp/repro   # write elsewhere (docs + img/papers/)
     python experiments/papers.py --only docking --preset paper   # one section again, the others kept
 
 Four sections, each computed by the package and written into its Markdown template
-(experiments/papers_templates/<section>.md, ``{placeholders}`` for the numbers):
+(experiments/papers_templates/<section>.md, ``{placeholders}`` for the numbers), on the page of
+its paper (:data:`PAGES`):
 
 - docking paper [D11] (uvms_jax.papers.docking): Tables 3–4 under our frames, the bound on w of
   any 6 × 6 Jacobian of the arm, M_a under the readings of the paper we tried, headings against
@@ -25,8 +27,8 @@ Four sections, each computed by the package and written into its Markdown templa
 
 Figures go to ``<out>/img/papers/``. Everything the papers print is written once, as data, in
 uvms_jax.papers (``D11_*``, ``D16_*``, ``T22_*``); the fixed prose is in the templates. Every
-computed field goes to ``<out>/reproduction.json`` beside the document, which is exactly
-:func:`document` of those fields (``tests/papers`` renders it again and compares): the one source
+computed field goes to ``<out>/reproduction.json`` beside the documents, which are exactly
+:func:`documents` of those fields (``tests/papers`` renders it again and compares): the one source
 of every number the document quotes. Each section records the command, preset and device of
 its own run, so ``--only`` recomputes some sections (a GPU for the docking paper's sizes, say)
 and keeps the others as they were recorded.
@@ -64,6 +66,12 @@ def render(name: str, **fields) -> str:
 
 
 TEMPLATE_OF = {"docking": "docking", "docking_views": "docking_views", "surrogate": "dexterity", "thesis": "thesis"}
+#: The papers' pages, in docs/reproduction/: page → the sections it holds, in order.
+PAGES = {"docking": ("docking", "docking_views"), "dexterity": ("surrogate",), "thesis": ("thesis",)}
+PAGE_DIR = "reproduction"
+PAGE_HEAD = ("One paper's part of [Reproducing the papers](../reproduction.md), which says how to run it,\n"
+             "lists every item of the three papers and names the runs that computed this page.\n\n")
+INDEX_HEADING = "## 1–3. The papers, one page each\n\n"
 
 
 def fields_of(name: str, preset, img: Path, edges: Path | None) -> dict:
@@ -88,15 +96,35 @@ def size_search_fields() -> dict:
     return dexterity.size_search_fields(record, SIZE_SEARCH.relative_to(ROOT).as_posix())
 
 
-def document(record: dict) -> str:
-    """reproduction.md from the record of its runs: ``{"sections": {name: fields}}``, each
-    section's fields holding the ``command``, ``preset`` and ``device`` of the run that computed it."""
+def documents(record: dict) -> dict[str, str]:
+    """reproduction.md and one page per paper (:data:`PAGES`), by their paths relative to the
+    output folder, from the record of their runs: ``{"sections": {name: fields}}``, each
+    section's fields holding the ``command``, ``preset`` and ``device`` of the run that computed it.
+
+    reproduction.md holds what is not one paper's: how to run, an index of the pages, the
+    execution on the Bravo 7, every item of the papers and the runs that computed them."""
     extra = {"surrogate": {"window_sweep": window_sweep()}}
-    body = [render(TEMPLATE_OF[name], **fields, **extra.get(name, {})) for name, fields in record["sections"].items()]
+    sections = {name: render(TEMPLATE_OF[name], **fields, **extra.get(name, {}))
+                for name, fields in record["sections"].items()}
+    pages = {f"{PAGE_DIR}/{page}.md": _page("\n".join(sections[n] for n in names))
+             for page, names in PAGES.items() if all(n in sections for n in names)}
+    index = "".join(f"- [{_heading(text)}]({path})\n" for path, text in pages.items())
     runs = sorted({(f["command"], f["device"]) for f in record["sections"].values()})
     footer = "\n---\nGenerated section by section: " + "; ".join(f"`{c}` on {d}" for c, d in runs) + ".\n"
-    return (render("intro") + render("howto") + "\n".join(body) + "\n" + render("execution") + "\n"
+    main = (render("intro") + render("howto") + INDEX_HEADING + index + "\n" + render("execution") + "\n"
             + render("items", t22_times=scenario_times()) + footer)
+    return {"reproduction.md": main, **pages}
+
+
+def _page(body: str) -> str:
+    """One paper's page: a line back to reproduction.md, then its sections; the page sits one
+    folder below docs/, so its figure links (``img/papers/…``, relative to docs/) go up one."""
+    return PAGE_HEAD + body.replace("](img/", "](../img/")
+
+
+def _heading(text: str) -> str:
+    """The first second-level heading of a page (its paper's section title)."""
+    return next(line[3:] for line in text.splitlines() if line.startswith("## "))
 
 
 def scenario_times() -> str:
@@ -162,7 +190,7 @@ def main(argv=None) -> int:
     ap.add_argument("--preset", choices=sorted(PRESETS), default="fast",
                     help="sizes (fast: 10 min on a 2-core CPU with a warm compilation cache, ~25 min cold; "
                          "paper: the papers' sizes, hours; tiny: a smoke run)")
-    ap.add_argument("--out", type=Path, default=ROOT / "docs", help="folder of reproduction.md and img/papers/")
+    ap.add_argument("--out", type=Path, default=ROOT / "docs", help="folder of reproduction.md, reproduction/ and img/papers/")
     ap.add_argument("--edges", type=Path, default=None,
                     help="edges.csv of experiments/plan.py for the thesis tables (default: plan the thesis cage here)")
     ap.add_argument("--only", nargs="+", choices=SECTIONS, default=SECTIONS, help="sections to compute")
@@ -189,8 +217,10 @@ def main(argv=None) -> int:
     total = time.perf_counter() - t0
     record = {"sections": {n: sections[n] for n in SECTIONS}}
     write_atomic(args.out / "reproduction.json", json.dumps(record, indent=1, ensure_ascii=False) + "\n")
-    write_atomic(args.out / "reproduction.md", document(record))
-    log.info("wrote %s in %.0f s", args.out / "reproduction.md", total)
+    for path, text in documents(record).items():
+        (args.out / path).parent.mkdir(parents=True, exist_ok=True)
+        write_atomic(args.out / path, text)
+    log.info("wrote %s and its pages in %s in %.0f s", args.out / "reproduction.md", args.out / PAGE_DIR, total)
     return 0
 
 

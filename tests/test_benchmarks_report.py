@@ -1,5 +1,5 @@
-"""README.md, BENCHMARKS.md and docs/ quote their generated figures as written from benchmarks/results/
-(benchmarks/report.py)."""
+"""README.md, BENCHMARKS.md with its pages (docs/benchmarks/) and docs/ quote their generated
+figures as written from benchmarks/results/ (benchmarks/report.py)."""
 
 import importlib.util
 from pathlib import Path
@@ -15,7 +15,7 @@ def test_every_generated_block_matches_its_result_files():
     names = [m.group("name") for text in texts for m in report.BLOCK.finditer(text)]
     assert sorted(names) == sorted(report.BLOCKS)  # every block is in a document, once
     for doc, text in zip(report.DOCUMENTS, texts):
-        assert report.stale_blocks(text) == [], f"{doc.name}: run python benchmarks/report.py"
+        assert report.stale_blocks(text) == [], f"{doc.relative_to(ROOT)}: run python benchmarks/report.py"
 
 
 def test_an_edited_figure_is_caught():
@@ -74,6 +74,6 @@ RETRACTED = (
 
 
 def test_retracted_claims_stay_out():
-    for doc in sources.SOURCED_DOCUMENTS + (ROOT / "docs" / "reproduction.md",):
+    for doc in sources.SOURCED_DOCUMENTS + sources.GENERATED_DOCUMENTS:
         text = doc.read_text()
         assert [c for c in RETRACTED if c in text] == [], doc.name

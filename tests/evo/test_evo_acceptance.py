@@ -53,7 +53,7 @@ def test_the_demos_docking_stage_reaches_its_dense_reference(monkeypatch):
     """The demo's docking stage (configs/pipeline.yaml: 2 GA runs and the multistart grid search
     of configs/docking/preset/demo.yaml), seed 0 on the CPU, reaches ≥ 0.99 of the dense
     reference that `benchmarks/docking_search.py --reference` recorded on a GPU (an 823 284-pose
-    grid and 8 zoom stages). BENCHMARKS.md has the 20 seeds."""
+    grid and 8 zoom stages). docs/benchmarks/docking.md has the 20 seeds."""
     import importlib.util
     import json
 

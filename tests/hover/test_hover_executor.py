@@ -34,7 +34,7 @@ def test_the_executor_passes_its_gates_on_the_hovering_vehicle(runs):
         m = run.summary()
         assert m["driver"] == "BPL executor" and m["status"] == "completed", (v, m["reason"])
         assert m["gates"] == m["gates_reached"] == PLAN_GATES
-        assert np.all(run.gate_joint_error <= hw.HwConfig().gate_threshold_rad)
+        assert np.all(run.gate_joint_error <= hw.ExecutorSettings().gate_threshold_rad)
         assert run.executed.sim.limit_violations == 0
 
 
@@ -57,7 +57,7 @@ def test_the_device_reports_its_pose_relative_to_the_moving_base():
     """KM_END_POS is in the base frame: the arm's forward kinematics, however the vehicle moves."""
     world = HoverWorld(trimmed(VehicleSettings(), ARM, Q_A), current=CurrentSettings(velocity=(0.4, 0.0, 0.0)),
                        xyz=POSE[:3], rpy=(0.1, -0.05, POSE[3]))
-    arm = hw.SimArm(ARM, hw.SimConfig(), [*Q_B, 0.0], world)
+    arm = hw.SimArm(ARM, hw.SimSettings(), [*Q_B, 0.0], world)
     arm.step_to(1.0)
     assert np.linalg.norm(arm.data.qpos[:3] - POSE[:3]) > 1e-3  # the vehicle moved
     T = np.asarray(kin.fk(kin.with_dtype(ARM.chain, np.float64), arm.positions()[:-1]))

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import enum
 
-from uvms_jax.hw import (BROADCAST, Executor, HwConfig, LoopbackTransport, PacketID, PacketReader, ReachArm, SimArm,
-                         SimConfig, SimLink, VirtualClock, decode_float, joint_specs, parse_plan)
+from uvms_jax.hw import (BROADCAST, Executor, ExecutorSettings, LoopbackTransport, PacketID, PacketReader, ReachArm,
+                         SimArm, SimLink, SimSettings, VirtualClock, decode_float, joint_specs, parse_plan)
 from uvms_jax.robot import load_arm
 
 BRAVO = load_arm("bravo7")  # the robot the hardware tests drive
@@ -38,7 +38,8 @@ def short_plan(q0=Q0, q1=Q1):
 class SimRun:
     """A client + executor wired to a simulated arm on a virtual clock."""
 
-    def __init__(self, sim: SimConfig = SimConfig(), hw: HwConfig = HwConfig(), q0=Q0, jaws=0.0, robot=BRAVO):
+    def __init__(self, sim: SimSettings = SimSettings(), hw: ExecutorSettings = ExecutorSettings(), q0=Q0, jaws=0.0,
+                 robot=BRAVO):
         self.clock = VirtualClock()
         self.arm = SimArm(robot, sim, list(q0) + [jaws])
         self.link = SimLink(self.arm)

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from uvms_jax.hw import (ANSWER_FORMATS, BASE_COMPUTER, BROADCAST, HardwareStatus, PacketID,
-                         PacketReader, SimArm, SimConfig, SimLink, decode_answer, encode_packet)
+                         PacketReader, SimArm, SimSettings, SimLink, decode_answer, encode_packet)
 
 from _hw_helpers import BRAVO, DeviceID, Q0, SimRun, urdf_link_frames, ypr_matrix
 
@@ -70,7 +70,7 @@ def test_units_of_the_answers():
     assert 10 < v[(DeviceID.F, PacketID.VOLTAGE)][0] < 50  # V
 
 
-def _datagrams_for(request: bytes, config: SimConfig = SimConfig()) -> list[bytes]:
+def _datagrams_for(request: bytes, config: SimSettings = SimSettings()) -> list[bytes]:
     link = SimLink(SimArm(BRAVO, config, Q0 + [0.0]))
     link.receive(request, 0.0)
     return link.pop_due(0.0)
@@ -87,14 +87,15 @@ def test_broadcast_request_gives_one_datagram_per_packet():
 
 
 def test_coalesced_replies_are_one_datagram_and_the_client_reads_them_all():
-    d = _datagrams_for(encode_packet(BROADCAST, PacketID.REQUEST, bytes([PacketID.POSITION])), SimConfig(coalesce=True))
+    request = encode_packet(BROADCAST, PacketID.REQUEST, bytes([PacketID.POSITION]))
+    d = _datagrams_for(request, SimSettings(coalesce=True))
     assert len(d) == 1 and len(PacketReader().feed(d[0])) == 7
-    run = SimRun(SimConfig(coalesce=True))
+    run = SimRun(SimSettings(coalesce=True))
     assert run.client.read_state().positions == pytest.approx(Q0 + [0.0], abs=1e-5)
 
 
 def test_unknown_ids_are_ignored_and_counted():
-    arm = SimArm(BRAVO, SimConfig(), Q0 + [0.0])
+    arm = SimArm(BRAVO, SimSettings(), Q0 + [0.0])
     link = SimLink(arm)
     link.receive(encode_packet(BROADCAST, PacketID.REQUEST, bytes([0x63, PacketID.KM_END_POS])), 0.0)
     assert link.pop_due(0.0) == [] and arm.unanswered == 14  # joints do not answer the pose
@@ -118,7 +119,7 @@ def test_end_pose_is_the_urdf_forward_kinematics(rng):
 def test_end_velocity_is_the_derivative_of_the_pose(rng):
     q = np.array([1.0, 1.4, 1.7, 2.0, 1.2, 0.7])
     qd = rng.uniform(-0.4, 0.4, 6)
-    arm = SimArm(BRAVO, SimConfig(), list(q) + [0.0])
+    arm = SimArm(BRAVO, SimSettings(), list(q) + [0.0])
     arm.data.qvel[arm._dadr[:6]] = qd
     got = np.array(decode_answer(PacketID.KM_END_VEL, arm.answer(BASE_COMPUTER, PacketID.KM_END_VEL)))
 
@@ -135,7 +136,7 @@ def test_end_velocity_is_the_derivative_of_the_pose(rng):
 
 def test_four_status_bytes_reach_the_client():
     bits = HardwareStatus.MOTOR_OVER_CURRENT | HardwareStatus.OVER_TEMPERATURE
-    run = SimRun(SimConfig(fault_joint="E", fault_bits=int(bits)))
+    run = SimRun(SimSettings(fault_joint="E", fault_bits=int(bits)))
     raw = run.client.request([PacketID.HARDWARE_STATUS], [DeviceID.E])[(DeviceID.E, PacketID.HARDWARE_STATUS)]
     assert raw == bytes([0x20, 0x20, 0x00, 0x00])  # byte A 0x20 over temperature, byte B 0x20 motor over current
     assert run.client.read_hardware_status()[DeviceID.E] == bits

@@ -11,7 +11,7 @@ import pytest
 
 from _hw_helpers import BRAVO, Recorder, short_plan
 from uvms_jax import planfile
-from uvms_jax.hw import (HwConfig, PacketID, PacketReader, PlanError, ReachArm, SimArm, SimConfig, check_arm,
+from uvms_jax.hw import (ExecutorSettings, PacketID, PacketReader, PlanError, ReachArm, SimArm, SimSettings, check_arm,
                          check_plan, device_ids, joint_specs, run_plan, sim_spec)
 from uvms_jax.hw.cli import main
 from uvms_jax.robot import load_arm
@@ -43,8 +43,8 @@ def test_alpha5_runs_a_plan_over_bpl_on_the_simulated_arm():
     assert run.ok, run.result.reason
     # every waypoint (a segment's first repeats the previous gate) and the jaws step passed its gate
     assert [(g.segment, g.waypoint) for g in run.result.gates] == [(0, 0), (0, 1), (0, -1), (1, 1)]
-    assert run.result.max_gate_error_rad <= HwConfig().gate_threshold_rad
-    assert run.result.max_gate_error_mm <= HwConfig().gate_threshold_mm
+    assert run.result.max_gate_error_rad <= ExecutorSettings().gate_threshold_rad
+    assert run.result.max_gate_error_mm <= ExecutorSettings().gate_threshold_mm
     assert run.sim.limit_violations == 0
     assert run.log.joint_names == ALPHA.actuators
 
@@ -55,11 +55,11 @@ def test_alpha5_speaks_to_its_own_device_ids():
     from uvms_jax.hw import Executor, LoopbackTransport, SimLink, VirtualClock
 
     clock = VirtualClock()
-    arm = SimArm(ALPHA, SimConfig(), [*A0, 0.0])
+    arm = SimArm(ALPHA, SimSettings(), [*A0, 0.0])
     transport = LoopbackTransport(SimLink(arm), clock)
     client = ReachArm(transport, joint_specs(ALPHA), clock=clock.now)
     assert client.read_position_limits()[1] == pytest.approx((0.0, 15.0))  # the jaws [mm]
-    res = Executor(client, HwConfig(), sleep=clock.sleep).run(alpha_plan())
+    res = Executor(client, ExecutorSettings(), sleep=clock.sleep).run(alpha_plan())
     assert res.ok, res.reason
     reader = PacketReader()
     sent = [p for d in transport.sent for p in reader.feed(d)]
@@ -121,7 +121,7 @@ def test_an_arm_without_gripper_runs_its_moves_and_dwells():
     run = run_plan(plan, bare, link="loopback")
     assert run.ok, run.result.reason
     assert [(g.segment, g.waypoint) for g in run.result.gates] == [(0, 0), (0, 1), (1, 1), (2, 1)]
-    assert run.result.max_gate_error_rad <= HwConfig().gate_threshold_rad
+    assert run.result.max_gate_error_rad <= ExecutorSettings().gate_threshold_rad
     assert np.isnan(run.result.max_gate_error_mm) and run.log.joint_names == bare.joint_names
     # the dwell: from the gate at A1 to the next gate, the arm stood still for at least dwell_s
     ticks = [row for row in run.log.rows if row[1] == 1]
@@ -138,7 +138,7 @@ def test_arm_without_mass_properties_is_simulated_weightless():
 
     model = sim_spec(ALPHA).compile()
     assert np.all(model.body_gravcomp[1:] == 1.0)
-    arm = SimArm(ALPHA, SimConfig(base_rpy=(np.pi, 0.0, 0.0)), [*A0, 5.0])
+    arm = SimArm(ALPHA, SimSettings(base_rpy=(np.pi, 0.0, 0.0)), [*A0, 5.0])
     assert arm._buoy_ids.size == 0
     arm.step_to(1.0)
     np.testing.assert_allclose(arm.positions()[:4], A0, atol=1e-4)

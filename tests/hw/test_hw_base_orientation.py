@@ -1,4 +1,4 @@
-"""The simulated arm's base orientation (``SimConfig.base_rpy``): gravity and buoyancy follow
+"""The simulated arm's base orientation (``SimSettings.base_rpy``): gravity and buoyancy follow
 the world's z, so a base hanging under a vehicle carries the negated loads of an upright one and
 still runs a plan through every gate. (The holding loads against an independent statics sum for
 hanging and tilted bases are in test_hw_sim_dynamics.py.)"""
@@ -12,8 +12,9 @@ import numpy as np
 import pytest
 
 from _hw_helpers import BRAVO, Q0, SimRun, assert_within_limits, short_plan
-from uvms_jax.hw import HwConfig, SimArm, SimConfig, config_from_mapping, plan_to_dict
+from uvms_jax.hw import ExecutorSettings, HwSettings, SimArm, SimSettings, plan_to_dict
 from uvms_jax.hw import cli
+from uvms_jax.settings import from_mapping
 
 HANGING = (math.pi, 0.0, 0.0)
 SETTLE_S = 0.3  # simulated time at rest before the currents are read [s]
@@ -38,10 +39,10 @@ def test_flipped_base_negates_the_holding_loads(rng, water):
     checked = 0
     for q in rng.uniform([0.5, 0.3, 0.3, 0.5, 0.3, 0.5], [5.5, 3.2, 3.2, 5.5, 3.2, 5.5], (6, 6)):
         q = [*q, 0.0]
-        upright = holding_currents(SimConfig(water_density=water), q)
+        upright = holding_currents(SimSettings(water_density=water), q)
         if np.any(np.abs(upright) >= SATURATED_MA):  # in air the drives cannot hold every pose
             continue
-        hanging = holding_currents(SimConfig(water_density=water, base_rpy=HANGING), q)
+        hanging = holding_currents(SimSettings(water_density=water, base_rpy=HANGING), q)
         assert np.max(np.abs(upright)) > 100.0  # a real load, not noise
         np.testing.assert_allclose(hanging, -upright, rtol=1e-6, atol=1e-6)
         checked += 1
@@ -51,30 +52,30 @@ def test_flipped_base_negates_the_holding_loads(rng, water):
 def test_yaw_does_not_change_the_loads():
     """A vehicle's heading turns the base about the world's z, along which the loads act."""
     q = [3.15, 1.57, 3.1, 3.15, 1.75, 3.15, 0.0]  # forearm out
-    hanging = holding_currents(SimConfig(base_rpy=HANGING), q)
-    turned = holding_currents(SimConfig(base_rpy=(math.pi, 0.0, 2.0)), q)
+    hanging = holding_currents(SimSettings(base_rpy=HANGING), q)
+    turned = holding_currents(SimSettings(base_rpy=(math.pi, 0.0, 2.0)), q)
     np.testing.assert_allclose(turned, hanging, rtol=1e-6, atol=1e-6)
 
 
 def test_weightless_arm_ignores_the_base_orientation():
     q = [3.15, 1.57, 3.1, 3.15, 1.75, 3.15, 0.0]
-    currents = holding_currents(SimConfig(dynamics=False, base_rpy=(1.0, -0.5, 0.3)), q)
+    currents = holding_currents(SimSettings(dynamics=False, base_rpy=(1.0, -0.5, 0.3)), q)
     assert np.max(np.abs(currents)) < 5.0
 
 
 def test_hanging_arm_runs_a_plan_through_every_gate():
-    run = SimRun(SimConfig(base_rpy=HANGING))
+    run = SimRun(SimSettings(base_rpy=HANGING))
     res = run.executor.run(short_plan())
     assert res.ok, res.reason
     assert len(res.gates) == 4  # start, out, jaws, back
-    assert res.max_gate_error_rad <= HwConfig().gate_threshold_rad
-    assert all(g.error_mm <= HwConfig().gate_threshold_mm for g in res.gates)
-    np.testing.assert_allclose(run.arm.positions()[:6], Q0, atol=HwConfig().gate_threshold_rad)
+    assert res.max_gate_error_rad <= ExecutorSettings().gate_threshold_rad
+    assert all(g.error_mm <= ExecutorSettings().gate_threshold_mm for g in res.gates)
+    np.testing.assert_allclose(run.arm.positions()[:6], Q0, atol=ExecutorSettings().gate_threshold_rad)
     assert_within_limits(run.sent_packets())
     assert run.arm.limit_violations == 0
     # the drives carry the hanging loads: those of the upright arm in the same pose, negated
     run.arm.step_to(run.arm.time + 1.0)  # settled (the executor left the arm holding still)
-    upright = holding_currents(SimConfig(), run.arm.positions())[:6]
+    upright = holding_currents(SimSettings(), run.arm.positions())[:6]
     assert np.max(np.abs(upright)) > 1000.0  # mA: a real load
     np.testing.assert_allclose(run.arm.currents()[:6], -upright, atol=5.0)
 
@@ -82,14 +83,14 @@ def test_hanging_arm_runs_a_plan_through_every_gate():
 @pytest.mark.parametrize("bad", [(0.0, 0.0), (0.0, math.nan, 0.0), (math.inf, 0.0, 0.0), ("x", 0.0, 0.0), 1.0])
 def test_base_rpy_must_be_three_finite_angles(bad):
     with pytest.raises(ValueError, match="base_rpy must be 3 finite angles"):
-        SimConfig(base_rpy=bad)
+        SimSettings(base_rpy=bad)
 
 
 def test_base_rpy_from_a_config_mapping():
-    _, sim = config_from_mapping({"sim": {"base_rpy": [math.pi, 0, 0.5]}})
+    sim = from_mapping(HwSettings, {"sim": {"base_rpy": [math.pi, 0, 0.5]}}, "hw").sim
     assert sim.base_rpy == (math.pi, 0.0, 0.5)
     with pytest.raises(ValueError, match=r"hw.sim.base_rpy: expected 3 values"):
-        config_from_mapping({"sim": {"base_rpy": [0.0, 0.0]}})
+        from_mapping(HwSettings, {"sim": {"base_rpy": [0.0, 0.0]}}, "hw")
 
 
 @pytest.fixture

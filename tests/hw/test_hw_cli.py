@@ -10,7 +10,7 @@ import pytest
 import yaml
 
 from _hw_helpers import short_plan
-from uvms_jax.hw import HwConfig, HwSettings, SimConfig, config_from_mapping, plan_to_dict
+from uvms_jax.hw import ExecutorSettings, HwSettings, SimSettings, plan_to_dict
 from uvms_jax.settings import from_mapping
 from uvms_jax.hw.cli import build_parser, main
 
@@ -64,15 +64,15 @@ def test_sim_stuck_joint_exit_1(plan_file, tmp_path, capsys):
 
 def test_yaml_mirrors_dataclass_defaults(tmp_path, plan_file):
     cfg = yaml.safe_load((ROOT / "configs" / "hw" / "default.yaml").read_text())
-    hw, sim = config_from_mapping(cfg)
-    assert hw == HwConfig() and sim == SimConfig()
-    assert set(cfg["executor"]) == {f.name for f in dataclasses.fields(HwConfig)}
-    assert set(cfg["sim"]) == {f.name for f in dataclasses.fields(SimConfig)}
-    assert from_mapping(HwSettings, cfg) == HwSettings(hw, sim)
+    settings = from_mapping(HwSettings, cfg, "hw")
+    assert settings.executor == ExecutorSettings() and settings.sim == SimSettings()
+    assert set(cfg["executor"]) == {f.name for f in dataclasses.fields(ExecutorSettings)}
+    assert set(cfg["sim"]) == {f.name for f in dataclasses.fields(SimSettings)}
+    assert settings == HwSettings()
     with pytest.raises(ValueError, match=r"hw.executor: unknown keys \['rate'\]"):
-        config_from_mapping({"executor": {"rate": 5}})
+        from_mapping(HwSettings, {"executor": {"rate": 5}}, "hw")
     with pytest.raises(ValueError, match=r"hw: unknown keys \['exec'\]"):
-        config_from_mapping({"exec": {}})
+        from_mapping(HwSettings, {"exec": {}}, "hw")
     bad = tmp_path / "bad.yaml"
     bad.write_text("executor:\n  rate_hz: -1\n")
     assert main(["run", str(plan_file), "--dry-run", "--config", str(bad)]) == 2
@@ -104,8 +104,8 @@ def _help(*command: str) -> str:
 
 def test_help_shows_defaults_and_exit_codes():
     text = _help("run")
-    assert f"(default: {HwConfig().rate_hz}, or --config)" in text
-    assert f"(default: {HwConfig().speed_scale}, or --config)" in text
+    assert f"(default: {ExecutorSettings().rate_hz}, or --config)" in text
+    assert f"(default: {ExecutorSettings().speed_scale}, or --config)" in text
     assert "exit status:" in text and "2  plan refused or bad arguments" in text
     assert "(default: None)" not in text
     assert "(default: 6789)" in _help("sim")
@@ -125,7 +125,7 @@ def test_speed_scale_reaches_the_executor(tmp_path, capsys):
     from uvms_jax.hw.cli import _configs
 
     args = build_parser().parse_args(["run", "plan.json", "--speed-scale", "0.5"])
-    assert _configs(args)[0] == dataclasses.replace(HwConfig(), speed_scale=0.5)
+    assert _configs(args)[0] == dataclasses.replace(ExecutorSettings(), speed_scale=0.5)
     # a plan slow enough for half speed runs on the simulated arm
     obj = plan_to_dict(short_plan())
     for s in obj["segments"]:

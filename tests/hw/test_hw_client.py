@@ -7,7 +7,7 @@ import time
 import pytest
 
 from uvms_jax.hw import (BROADCAST, HardwareStatus, LimitError, LinkError, Mode, PacketID,
-                         PacketReader, SerialTransport, SimArm, SimConfig, SimServer, UdpTransport, encode_floats,
+                         PacketReader, SerialTransport, SimArm, SimSettings, SimServer, UdpTransport, encode_floats,
                          parse_host_port)
 
 from _hw_helpers import BRAVO, DeviceID, Q0, Recorder, SimRun, bravo7_client
@@ -66,7 +66,7 @@ def test_request_timeout_names_missing():
 
 
 def test_reads_over_loopback():
-    run = SimRun(SimConfig(fault_joint="C", fault_bits=HardwareStatus.OVER_TEMPERATURE))
+    run = SimRun(SimSettings(fault_joint="C", fault_bits=HardwareStatus.OVER_TEMPERATURE))
     c = run.client
     s = c.read_state()
     assert s.positions == pytest.approx(Q0 + [0.0], abs=1e-5)
@@ -123,7 +123,7 @@ def test_stream_state_replaces_polling():
 
 
 def test_udp_round_trip_with_server():
-    with SimServer(SimArm(BRAVO, SimConfig(), Q0 + [5.0])) as server:
+    with SimServer(SimArm(BRAVO, SimSettings(), Q0 + [5.0])) as server:
         with bravo7_client(UdpTransport(*server.address), request_timeout=0.2) as c:
             s = c.read_state()
             assert s.positions[-1] == pytest.approx(5.0, abs=1e-4)

@@ -10,12 +10,12 @@ import struct
 
 import numpy as np
 
-from uvms_jax.hw import (HwConfig, PacketID, PacketReader, SimConfig, crc8, decode_float,
+from uvms_jax.hw import (ExecutorSettings, PacketID, PacketReader, SimSettings, crc8, decode_float,
                          encode_packet)
 
 from _hw_helpers import BRAVO7, SimRun, assert_within_limits, short_plan
 
-GATE = HwConfig().gate_threshold_rad
+GATE = ExecutorSettings().gate_threshold_rad
 
 
 def test_the_crc_lets_about_one_in_300_three_bit_errors_through():
@@ -64,7 +64,7 @@ class Corrupting:
         self.inner.close()
 
 
-def _corrupted_run(rate, jump, seed=0, hw=HwConfig()):
+def _corrupted_run(rate, jump, seed=0, hw=ExecutorSettings()):
     run = SimRun(hw=hw)
     run.client.transport = Corrupting(run.transport, rate, jump, seed)
     res = run.executor.run(short_plan())
@@ -101,7 +101,7 @@ def test_persistent_corruption_stops_into_hold():
 
 
 def test_streamed_state_run_sends_no_request_per_tick():
-    run = SimRun(hw=HwConfig(stream_hz=50))
+    run = SimRun(hw=ExecutorSettings(stream_hz=50))
     res = run.executor.run(short_plan())
     assert res.ok, res.reason
     assert res.max_gate_error_rad <= GATE
@@ -116,7 +116,7 @@ def test_streamed_state_run_sends_no_request_per_tick():
 
 
 def test_streamed_state_with_drops_completes_or_holds():
-    run = SimRun(SimConfig(drop=0.1, seed=4), HwConfig(stream_hz=50))
+    run = SimRun(SimSettings(drop=0.1, seed=4), ExecutorSettings(stream_hz=50))
     res = run.executor.run(short_plan())
     assert run.arm.limit_violations == 0
     assert res.ok or "lost link" in res.reason, res.reason

@@ -13,11 +13,11 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from _hw_helpers import BRAVO, Q0, Q1, SimRun, assert_within_limits, bravo7_client, short_plan
-from uvms_jax.hw import (Executor, HardwareStatus, HwConfig, PacketID, PacketReader, PlanError, SimArm,
-                         SimConfig, SimServer, UdpTransport, decode_float, load_plan, parse_plan,
+from uvms_jax.hw import (Executor, HardwareStatus, ExecutorSettings, PacketID, PacketReader, PlanError, SimArm,
+                         SimSettings, SimServer, UdpTransport, decode_float, load_plan, parse_plan,
                          synchronised_move)
 
-GATE = HwConfig().gate_threshold_rad
+GATE = ExecutorSettings().gate_threshold_rad
 
 
 def last_packets_are_hold(run: SimRun) -> bool:
@@ -33,7 +33,7 @@ def test_nominal_run_passes_every_gate(tmp_path):
     assert res.ok, res.reason
     assert len(res.gates) == 4  # start, out, jaws, back
     assert res.max_gate_error_rad <= GATE
-    assert all(g.error_mm <= HwConfig().gate_threshold_mm for g in res.gates)
+    assert all(g.error_mm <= ExecutorSettings().gate_threshold_mm for g in res.gates)
     np.testing.assert_allclose(run.arm.positions()[:6], Q0, atol=GATE)
     assert run.arm.positions()[6] == pytest.approx(10.0, abs=0.5)
     assert_within_limits(run.sent_packets())
@@ -55,7 +55,7 @@ def test_synchronised_arrival_in_log():
 
 @pytest.mark.parametrize("seed", [1, 2, 3])
 def test_drop_and_corruption_complete_or_abort_safely(seed):
-    run = SimRun(SimConfig(drop=0.1, corrupt=0.01, seed=seed))
+    run = SimRun(SimSettings(drop=0.1, corrupt=0.01, seed=seed))
     res = run.executor.run(short_plan())
     assert_within_limits(run.sent_packets())
     assert run.arm.limit_violations == 0
@@ -66,8 +66,8 @@ def test_drop_and_corruption_complete_or_abort_safely(seed):
 
 
 def test_stuck_joint_aborts_within_timeout():
-    cfg = HwConfig(gate_timeout_s=1.0)
-    run = SimRun(SimConfig(stuck_joint="E"), cfg)
+    cfg = ExecutorSettings(gate_timeout_s=1.0)
+    run = SimRun(SimSettings(stuck_joint="E"), cfg)
     res = run.executor.run(short_plan())
     assert not res.ok and "joint E" in res.reason
     move = synchronised_move(np.array(Q0), np.array(Q1), np.full(6, 0.5), np.full(6, 1.0), 0.8).duration
@@ -76,7 +76,7 @@ def test_stuck_joint_aborts_within_timeout():
 
 
 def test_hardware_fault_aborts():
-    run = SimRun(SimConfig(fault_joint="D", fault_bits=HardwareStatus.MOTOR_DRIVER_FAULT, fault_after_s=0.5))
+    run = SimRun(SimSettings(fault_joint="D", fault_bits=HardwareStatus.MOTOR_DRIVER_FAULT, fault_after_s=0.5))
     res = run.executor.run(short_plan())
     assert not res.ok and "MOTOR_DRIVER_FAULT" in res.reason and "joint D" in res.reason
     assert last_packets_are_hold(run)
@@ -92,11 +92,11 @@ def test_lost_link_aborts():
     run.transport.recv = recv
     res = run.executor.run(short_plan())
     assert not res.ok and "lost link" in res.reason
-    assert res.duration_s <= 1.0 + HwConfig().link_timeout_s + 0.1
+    assert res.duration_s <= 1.0 + ExecutorSettings().link_timeout_s + 0.1
 
 
 def test_no_link_at_start():
-    run = SimRun(SimConfig(drop=1.0))
+    run = SimRun(SimSettings(drop=1.0))
     res = run.executor.run(short_plan())
     assert not res.ok and "LinkError" in res.reason and res.ticks == 0
 
@@ -106,7 +106,7 @@ def test_start_too_far_refuses_before_motion():
     res = run.executor.run(short_plan())
     assert not res.ok and "from the plan start" in res.reason
     assert not any(p.packet_id == PacketID.POSITION for p in run.sent_packets())
-    run = SimRun(hw=HwConfig(approach=True), q0=[q + 0.2 for q in Q0])
+    run = SimRun(hw=ExecutorSettings(approach=True), q0=[q + 0.2 for q in Q0])
     assert run.executor.run(short_plan()).ok
 
 
@@ -143,7 +143,7 @@ def test_property_no_command_outside_limits(start, deltas, slack, jaws, drop):
     t = [0.0] + list(np.cumsum(dts))
     plan = parse_plan({"joint_names": list("GFEDCB"),
                        "segments": [{"t": t, "q": q, "gripper": None if jaws is None else {"jaws_mm": jaws}}]})
-    run = SimRun(SimConfig(drop=drop, seed=7), HwConfig(gate_timeout_s=0.5), q0=start)
+    run = SimRun(SimSettings(drop=drop, seed=7), ExecutorSettings(gate_timeout_s=0.5), q0=start)
     try:
         res = run.executor.run(plan)
     except PlanError:
@@ -155,25 +155,25 @@ def test_property_no_command_outside_limits(start, deltas, slack, jaws, drop):
     assert res.ok or last_packets_are_hold(run)
 
 
-def _udp_run(sim: SimConfig):
+def _udp_run(sim: SimSettings):
     # Real time over a socket: a generous link timeout keeps a busy test machine (another test
     # worker compiling) from reading as a lost link; the fault tests cover the short one.
     with SimServer(SimArm(BRAVO, sim, Q0 + [0.0])) as server:
         with bravo7_client(UdpTransport(*server.address)) as client:
-            res = Executor(client, HwConfig(link_timeout_s=3.0)).run(short_plan())
+            res = Executor(client, ExecutorSettings(link_timeout_s=3.0)).run(short_plan())
         assert server.error is None
     return res, server
 
 
 def test_udp_sim_nominal():
-    res, server = _udp_run(SimConfig())
+    res, server = _udp_run(SimSettings())
     assert res.ok, res.reason
     assert res.max_gate_error_rad <= GATE
     assert server.arm.limit_violations == 0
 
 
 def test_udp_sim_with_faults():
-    res, server = _udp_run(SimConfig(drop=0.1, corrupt=0.01, latency_s=0.002, seed=5))
+    res, server = _udp_run(SimSettings(drop=0.1, corrupt=0.01, latency_s=0.002, seed=5))
     assert server.link.dropped > 0
     assert server.arm.limit_violations == 0
     if res.ok:
@@ -200,7 +200,7 @@ def expected_gates(plan) -> int:
     return waypoints - joins + sum(s.jaws_mm is not None for s in plan.segments)
 
 
-@pytest.mark.parametrize("sim", [SimConfig(), SimConfig(drop=0.1, corrupt=0.01, seed=11)], ids=["clean", "faulty"])
+@pytest.mark.parametrize("sim", [SimSettings(), SimSettings(drop=0.1, corrupt=0.01, seed=11)], ids=["clean", "faulty"])
 def test_thesis_plan_in_simulated_time(sim):
     """The shipped example, every gate within 0.01 rad (simulated time, no sockets)."""
     plan = load_plan(EXAMPLE)
@@ -219,7 +219,7 @@ def test_closing_jaws_grip_an_object():
     """Jaws that stall on an object pass the grasp gate; later arm gates expect them there."""
     plan = load_plan(EXAMPLE)
     width = 12.0  # between the example's closed (5 mm) and open (30 mm) jaws
-    run = SimRun(SimConfig(object_width_mm=width), q0=plan.segments[0].q[0])
+    run = SimRun(SimSettings(object_width_mm=width), q0=plan.segments[0].q[0])
     res = run.executor.run(plan)
     assert res.ok, res.reason
     assert res.max_gate_error_rad <= GATE
@@ -228,9 +228,9 @@ def test_closing_jaws_grip_an_object():
     assert [g.gripped for g in jaw_gates] == [goal < width for goal in jaw_goals]
     for g, goal in zip(jaw_gates, jaw_goals):
         if g.gripped:  # stopped on the object, short of the commanded opening
-            assert g.error_mm == pytest.approx(width - goal, abs=HwConfig().gate_threshold_mm)
+            assert g.error_mm == pytest.approx(width - goal, abs=ExecutorSettings().gate_threshold_mm)
     assert res.grips == sum(goal < width for goal in jaw_goals) > 0
-    assert res.max_gate_error_mm <= HwConfig().gate_threshold_mm  # the jaws gates that were reached
+    assert res.max_gate_error_mm <= ExecutorSettings().gate_threshold_mm  # the jaws gates that were reached
     assert run.arm.limit_violations == 0
 
 
@@ -238,7 +238,7 @@ def test_object_slipping_out_stops_the_run():
     """After a grip, jaws that close further (the object is gone) fail the next gate: hold."""
     plan = load_plan(EXAMPLE)
     width = 12.0
-    run = SimRun(SimConfig(object_width_mm=width), q0=plan.segments[0].q[0])
+    run = SimRun(SimSettings(object_width_mm=width), q0=plan.segments[0].q[0])
     first_grip = next(i for i, s in enumerate(plan.segments) if s.jaws_mm is not None and s.jaws_mm < width)
 
     def object_slips(i, n, name):
@@ -255,8 +255,8 @@ def test_object_slipping_out_stops_the_run():
 def test_stalled_jaws_abort_when_settling_is_not_allowed():
     """Without time to settle on the object, the grasp gate times out and the arm holds."""
     plan = load_plan(EXAMPLE)
-    hw = HwConfig(gate_timeout_s=0.5, grip_settle_s=1.0)
-    run = SimRun(SimConfig(object_width_mm=12.0), hw=hw, q0=plan.segments[0].q[0])
+    hw = ExecutorSettings(gate_timeout_s=0.5, grip_settle_s=1.0)
+    run = SimRun(SimSettings(object_width_mm=12.0), hw=hw, q0=plan.segments[0].q[0])
     res = run.executor.run(plan)
     assert not res.ok and "gate not reached" in res.reason and "joint A" in res.reason
     assert last_packets_are_hold(run)

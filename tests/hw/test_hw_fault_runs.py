@@ -16,7 +16,7 @@ import time
 import pytest
 
 from _hw_helpers import BRAVO7, SimRun, short_plan
-from uvms_jax.hw import HwConfig, PacketID, SimConfig, decode_float, encode_packet, plan_to_dict
+from uvms_jax.hw import ExecutorSettings, PacketID, SimSettings, decode_float, encode_packet, plan_to_dict
 from uvms_jax.hw.cli import main
 
 # The served simulator (``uvms-hw sim``) starts mid-range with the jaws at 0 mm.
@@ -130,7 +130,7 @@ MATRIX = {
 @pytest.mark.parametrize("case", list(MATRIX))
 def test_fault_matrix_ends_completed_or_held_with_its_reason(case):
     sim, hw, reason, counter, bound = MATRIX[case]
-    run = SimRun(SimConfig(**sim), HwConfig(**hw))
+    run = SimRun(SimSettings(**sim), ExecutorSettings(**hw))
     t = time.monotonic()
     res = run.executor.run(short_plan())
     assert time.monotonic() - t < 20  # no hang (each takes well under a second alone)
@@ -140,7 +140,7 @@ def test_fault_matrix_ends_completed_or_held_with_its_reason(case):
         assert getattr(run.link, counter) > 0  # the fault was there
     if reason is None:
         assert res.ok and res.reason == "completed", res.reason
-        assert len(res.gates) == 4 and res.max_gate_error_rad <= HwConfig().gate_threshold_rad
+        assert len(res.gates) == 4 and res.max_gate_error_rad <= ExecutorSettings().gate_threshold_rad
     else:
         assert not res.ok and res.reason.startswith(reason), res.reason
         assert res.abort_after_s <= res.duration_s
@@ -153,6 +153,6 @@ def test_fault_matrix_link_lost_mid_run_holds_after_the_link_timeout():
     res = run.executor.run(short_plan())
     assert not res.ok and res.reason.startswith("LinkError: lost link"), res.reason
     assert len(res.gates) == 3  # segment 0 (its start, move and gripper step) passed before the cut
-    timeout = HwConfig().link_timeout_s
+    timeout = ExecutorSettings().link_timeout_s
     assert timeout <= res.abort_after_s <= timeout + 0.2  # it stops link_timeout_s after the last state
     assert _hold_sent_last(run)

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from _hw_helpers import BRAVO
-from uvms_jax.hw import HwConfig, PlanError, check_plan, load_plan, parse_plan, plan_to_dict
+from uvms_jax.hw import ExecutorSettings, PlanError, check_plan, load_plan, parse_plan, plan_to_dict
 
 EXAMPLE = Path(__file__).parents[2] / "examples" / "thesis_plan.json"
 GOOD = {
@@ -87,7 +87,7 @@ def test_joint_order_and_speed_scale():
     with pytest.raises(PlanError, match="must be"):
         check_plan(parse_plan(mutate(["joint_names"], list("BCDEFG"))), BRAVO)
     with pytest.raises(PlanError, match="needs"):  # 0.25 rad/s over a 0.1 × 0.5 rad/s budget
-        check_plan(parse_plan(GOOD), BRAVO, HwConfig(speed_scale=0.1))
+        check_plan(parse_plan(GOOD), BRAVO, ExecutorSettings(speed_scale=0.1))
 
 
 def test_many_problems_listed_and_capped():

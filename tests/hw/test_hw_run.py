@@ -10,7 +10,7 @@ import pytest
 
 from _hw_helpers import BRAVO, BRAVO7, JAWS, DeviceID, Q0, SimRun, bravo7_client, short_plan
 from uvms_jax import bravo7
-from uvms_jax.hw import (HwConfig, HwRun, PlanError, SimArm, SimConfig, SimServer,
+from uvms_jax.hw import (ExecutorSettings, HwRun, PlanError, SimArm, SimSettings, SimServer,
                          UdpTransport, plan_to_dict, parse_plan, run_plan, run_report, sim_spec, write_run)
 
 REPORT_KEYS = {"ok", "status", "reason", "gates", "max_gate_error_rad", "max_gate_error_mm", "grips", "duration_s",
@@ -30,7 +30,7 @@ def test_loopback_run_is_the_executor_run():
 
 
 def test_write_run_files_and_report(tmp_path):
-    run = run_plan(short_plan(), BRAVO, sim=SimConfig(drop=0.02, seed=3))
+    run = run_plan(short_plan(), BRAVO, sim=SimSettings(drop=0.02, seed=3))
     out = tmp_path / "a" / "b"
     report = write_run(run, out, plan_path="plan.json")
     assert {p.name for p in out.iterdir()} == {"run.csv", "run.png", "results.json"}
@@ -46,7 +46,7 @@ def test_write_run_files_and_report(tmp_path):
 
 
 def test_aborted_run_is_a_result_not_an_exception(tmp_path):
-    run = run_plan(short_plan(), BRAVO, config=HwConfig(gate_timeout_s=0.5), sim=SimConfig(stuck_joint="B"))
+    run = run_plan(short_plan(), BRAVO, config=ExecutorSettings(gate_timeout_s=0.5), sim=SimSettings(stuck_joint="B"))
     assert not run.ok and "joint B" in run.result.reason
     report = run_report(run)
     assert not report["ok"] and report["abort_after_s"] is not None and "out" not in report
@@ -67,7 +67,7 @@ def test_udp_simulated_and_client_links():
     run = run_plan(short_plan(), BRAVO, link="udp")
     assert run.ok, run.result.reason
     assert run.link == "udp" and run.sim.limit_violations == 0
-    with SimServer(SimArm(BRAVO, SimConfig(), [*Q0, 0.0])) as server:
+    with SimServer(SimArm(BRAVO, SimSettings(), [*Q0, 0.0])) as server:
         with bravo7_client(UdpTransport(*server.address)) as client:
             run = run_plan(short_plan(), BRAVO, link=client)
     assert run.ok, run.result.reason

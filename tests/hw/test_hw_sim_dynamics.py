@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from uvms_jax import bravo7, kin
-from uvms_jax.hw import Mode, PacketID, SimArm, SimConfig
+from uvms_jax.hw import Mode, PacketID, SimArm, SimSettings
 
 from _hw_helpers import BRAVO, DeviceID, SimRun, urdf_link_frames, ypr_matrix
 
@@ -51,7 +51,7 @@ def test_holding_currents_are_the_static_load(rng, water, base_rpy):
     poses = [q for q in poses if np.all(np.abs(static_torques(q, water, base_rpy)) < 0.9 * TAU_MAX)]
     assert len(poses) >= 3
     for q in poses[:3]:
-        run = SimRun(SimConfig(water_density=water, base_rpy=base_rpy), q0=list(q))
+        run = SimRun(SimSettings(water_density=water, base_rpy=base_rpy), q0=list(q))
         run.clock.sleep(0.5)
         got = run.client.read([PacketID.CURRENT], list(DeviceID)[:-1])
         current = np.array([got[(j.device_id, PacketID.CURRENT)][0] for j in bravo7.ARM_JOINTS])  # mA
@@ -62,8 +62,8 @@ def test_holding_currents_are_the_static_load(rng, water, base_rpy):
 def test_water_carries_part_of_the_load():
     q = [3.15, 1.57, 3.1, 3.15, 1.75, 3.15, 0.0]  # forearm out
     currents = {}
-    for name, config in (("water", SimConfig()), ("air", SimConfig(water_density=0.0)),
-                         ("weightless", SimConfig(dynamics=False))):
+    for name, config in (("water", SimSettings()), ("air", SimSettings(water_density=0.0)),
+                         ("weightless", SimSettings(dynamics=False))):
         arm = SimArm(BRAVO, config, q)
         arm.step_to(0.2)
         currents[name] = np.abs(arm.currents())
@@ -85,5 +85,5 @@ def test_the_arm_sags_while_it_moves_a_load():
             worst = max(worst, 0.5 - arm.velocities()[1])
         return worst
 
-    water, air, weightless = lag(SimConfig()), lag(SimConfig(water_density=0.0)), lag(SimConfig(dynamics=False))
+    water, air, weightless = lag(SimSettings()), lag(SimSettings(water_density=0.0)), lag(SimSettings(dynamics=False))
     assert air > water > weightless

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from _hw_helpers import BRAVO, BRAVO7, SimRun
-from uvms_jax.hw import BROADCAST, PacketID, PacketReader, SimArm, SimConfig, encode_floats, encode_packet
+from uvms_jax.hw import BROADCAST, PacketID, PacketReader, SimArm, SimSettings, encode_floats, encode_packet
 from uvms_jax.hw._joints import wire_position
 from uvms_jax.hw._sim_link import QUEUE_LIMIT
 
@@ -29,7 +29,7 @@ def test_full_speed_demands_stop_at_the_limit(side, demand):
     lower = np.array([j.lower for j in BRAVO7])
     upper = np.array([j.upper for j in BRAVO7])
     limit = upper if side > 0 else lower
-    arm = SimArm(BRAVO, SimConfig(), limit - side * START_INSIDE)
+    arm = SimArm(BRAVO, SimSettings(), limit - side * START_INSIDE)
     for j in BRAVO7:
         if demand == "velocity":
             _send(arm, j.device_id, PacketID.VELOCITY, encode_floats(side * j.max_velocity))

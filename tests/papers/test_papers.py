@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 import yaml
 
-from uvms_jax import evo, kin, papers
+from uvms_jax import evo, kin, papers, sched
 from uvms_jax.papers import docking, thesis
 from uvms_jax.settings import from_mapping
 
@@ -49,6 +49,13 @@ def test_configs_repeat_the_paper_data():
     assert from_mapping(evo.SceneSettings, scene) == evo.SceneSettings()
     arm_defaults = inspect.signature(kin.docking_arm).parameters
     assert tuple(arm_defaults[n].default for n in ("l0", "l1", "l2")) == papers.D11_ARM_LENGTHS
+
+
+def test_stage_literals_repeat_the_thesis_times():
+    """The scheduling stage prints the thesis's Table 5.5 solver times beside its own: its literals
+    (``sched.THESIS_SOLVER_MS``) are the table's, row by row (Dijkstra is our greedy)."""
+    names = {"Dijkstra": "greedy", "GRASP": "grasp", "A*": "astar"}
+    assert {names[alg]: ms for alg, path, K, N, C, ms in papers.T22_TABLES["5.5"]} == sched.THESIS_SOLVER_MS
 
 
 def test_heading_and_distance():
@@ -189,12 +196,27 @@ def _record() -> dict:
 
 
 def test_reproduction_is_the_record_of_its_run():
-    """docs/reproduction.md is exactly its templates filled from docs/reproduction.json, the
-    fields `make papers` computed and recorded: every number the document quotes has that file
-    (and the command in its footer) behind it, and an edit by hand fails here."""
+    """docs/reproduction.md and its pages (docs/reproduction/) are exactly their templates filled
+    from docs/reproduction.json, the fields `make papers` computed and recorded: every number the
+    documents quote has that file (and the command in the footer) behind it, an edit by hand
+    fails here, and no page is left over from an earlier split."""
     entry, record = _entry(), _record()
     assert list(record["sections"]) == list(entry.SECTIONS)
-    assert entry.document(record) == (ROOT / "docs" / "reproduction.md").read_text(encoding="utf-8")
+    documents = entry.documents(record)
+    assert sorted(documents) == ["reproduction.md"] + sorted(
+        p.relative_to(ROOT / "docs").as_posix() for p in (ROOT / "docs" / entry.PAGE_DIR).glob("*.md"))
+    for path, text in documents.items():
+        assert text == (ROOT / "docs" / path).read_text(encoding="utf-8"), path
+
+
+def test_every_section_is_on_one_page():
+    """Each section of the record is on exactly one paper's page, and the index links every page."""
+    entry = _entry()
+    placed = [n for names in entry.PAGES.values() for n in names]
+    assert sorted(placed) == sorted(entry.SECTIONS)
+    documents = entry.documents(_record())
+    for page in entry.PAGES:
+        assert f"]({entry.PAGE_DIR}/{page}.md)" in documents["reproduction.md"]
 
 
 def test_size_search_is_quoted_from_its_result_file():
@@ -269,7 +291,8 @@ def test_only_recomputes_the_sections_named(tmp_path, monkeypatch):
     assert all(written[n] == record["sections"][n] for n in entry.SECTIONS if n != "docking")
     assert written["docking"]["command"] == "python experiments/papers.py --preset tiny --only docking"
     assert written["docking"]["seconds"] == 1.0 and written["docking"]["device"]
-    assert "Computed by `python experiments/papers.py --preset tiny --only docking`" in (tmp_path / "reproduction.md").read_text()
+    page = (tmp_path / entry.PAGE_DIR / "docking.md").read_text()
+    assert "Computed by `python experiments/papers.py --preset tiny --only docking`" in page
 
 
 #: Every table and figure of the three papers, counted from their texts (the thesis's chapters

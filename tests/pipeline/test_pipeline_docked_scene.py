@@ -12,7 +12,7 @@ from scipy.spatial.transform import Rotation
 
 from _pipeline_helpers import CONFIG_DIR
 from uvms_jax import evo, plan
-from uvms_jax.pipeline import docked_scene
+from uvms_jax.plan import docked_scene
 from uvms_jax.settings import from_mapping
 from uvms_jax.robot import load_arm  # noqa: E402
 

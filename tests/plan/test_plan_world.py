@@ -19,7 +19,7 @@ from omegaconf import OmegaConf
 from uvms_jax import evo, kin
 from uvms_jax import plan
 from uvms_jax.evo import _world_gpu
-from uvms_jax.pipeline import docked_scene
+from uvms_jax.plan import docked_scene
 from uvms_jax.robot import load_arm
 from uvms_jax.settings import from_mapping
 

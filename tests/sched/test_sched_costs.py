@@ -97,3 +97,16 @@ def test_path_metric_sums_and_goal_mirror():
     m[:, 5, 9] = np.nan
     mirrored = sched.mirror_goal(m, start=0, goal=9)
     np.testing.assert_array_equal(mirrored[:, 5, 9], m[:, 5, 0])
+
+
+def test_path_totals_sum_and_bound_the_raw_metrics_of_each_move():
+    """Along 0 → 2 → 1, written out move by move: the sums, the smallest clearance, the largest torque."""
+    m = np.random.default_rng(3).random((5, 3, 3))  # every move allowed
+    legs = [(0, 2), (2, 1)]
+    k = {name: i for i, name in enumerate(sched.METRICS)}
+    totals = sched.path_totals(m, [0, 2, 1])
+    assert totals["planning_time_s"] == pytest.approx(m[k["planning_time"], 0, 2] + m[k["planning_time"], 2, 1])
+    assert totals["joint_movement_rad"] == pytest.approx(m[k["joint_movement"], 0, 2] + m[k["joint_movement"], 2, 1])
+    assert totals["ee_distance_m"] == pytest.approx(m[k["ee_distance"], 0, 2] + m[k["ee_distance"], 2, 1])
+    assert totals["min_clearance_m"] == min(m[k["security"], a, b] for a, b in legs)
+    assert totals["max_torque_Nm"] == max(m[k["max_torque"], a, b] for a, b in legs)

@@ -21,6 +21,7 @@ from uvms_jax.evo._arm import arm_tool_poses
 from uvms_jax.evo._arm import arm_solutions_jit
 from uvms_jax.evo._arm import evaluate_arm
 from uvms_jax.evo._arm import evaluate_arm_traced
+from uvms_jax.evo._arm import fixed_base_M_a
 from uvms_jax.evo._arm import make_arm_docking_problem
 from uvms_jax.evo._arm import target_w
 from uvms_jax.evo._arm import vehicle_clear

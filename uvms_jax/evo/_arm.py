@@ -202,6 +202,11 @@ def _checked_world(world: SphereWorld, chain: Chain, n_groups: int, dtype) -> Sp
     return jax.tree_util.tree_map(lambda x: x.astype(dtype) if jnp.issubdtype(x.dtype, jnp.floating) else x, world)
 
 
+# A vehicle frame is level when its z axis is within this of the world's (a rotation's rounding
+# error): only then does a fixed base match a docking pose, whose vehicle only yaws.
+LEVEL_ATOL = 1e-6
+
+
 def arm_tool_poses(problem: ArmDockingProblem, pose: Array) -> tuple[Array, Array, Array]:
     """The demanded tool poses seen from the arm at vehicle poses ``(..., 4)`` (traceable).
 
@@ -292,6 +297,21 @@ def evaluate_arm(problem: ArmDockingProblem, pose) -> DockingEval:
       :class:`~uvms_jax.evo.DockingEval` with fields of shape ``(...)``.
     """
     return _evaluate_arm_jit(problem, _check_poses(problem, pose))
+
+
+def fixed_base_M_a(problem: ArmDockingProblem, T_world_base) -> float | None:
+    """M_a (eq. 1) of the docking task with the arm's base fixed at ``T_world_base (4, 4)`` and
+    no vehicle hull (a fixed mount, e.g. the thesis's cage top): the problem at the vehicle pose
+    that puts the base there, when that pose is level (the docking problem's vehicle only yaws);
+    None otherwise."""
+    T = np.asarray(T_world_base, dtype=float) @ np.linalg.inv(np.asarray(problem.T_vehicle_base, dtype=float))
+    if not np.allclose(T[2, :3], (0, 0, 1), atol=LEVEL_ATOL):
+        return None
+    pose = np.array([*T[:3, 3], np.arctan2(T[1, 0], T[0, 0])])
+    dtype = problem.T_vehicle_box.dtype
+    no_hull = problem.replace(T_vehicle_box=jnp.zeros((0, 4, 4), dtype), vehicle_half=jnp.zeros((0, 3), dtype),
+                              world=problem.world.without_vehicle())
+    return float(evaluate_arm(no_hull, pose).M_a)
 
 
 class ArmReport(NamedTuple):

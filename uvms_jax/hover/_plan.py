@@ -21,7 +21,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from uvms_jax import frames, kin
-from uvms_jax.hw import HwConfig, HwRun, SimConfig, run_plan
+from uvms_jax.hw import ExecutorSettings, HwRun, SimSettings, run_plan
 from uvms_jax.planfile import Plan
 from uvms_jax.robot import TOOL_SITE, Robot
 
@@ -327,8 +327,9 @@ def _run_whole_body(sim: HoverSim, robot: Robot, controller: ControllerSettings,
 
 def execute_plan_hovering(robot: Robot, plan: Plan, pose, vehicle: VehicleSettings = VehicleSettings(),
                           controller: ControllerSettings = ControllerSettings(),
-                          current: CurrentSettings = CurrentSettings(), *, config: HwConfig = HwConfig(),
-                          sim: SimConfig = SimConfig(), tool_tolerance_m: float = 0.01) -> HoverRun:
+                          current: CurrentSettings = CurrentSettings(), *,
+                          config: ExecutorSettings = ExecutorSettings(), sim: SimSettings = SimSettings(),
+                          tool_tolerance_m: float = 0.01) -> HoverRun:
     """Execute ``plan`` with the BPL executor on the simulated arm mounted on the vehicle
     hovering at the docked ``pose`` ``(4,) = [x, y, z, ψ]`` [m, rad]: the executor, its gates and
     its safety checks are the fixed base's (:func:`uvms_jax.hw.run_plan` over the loopback link),

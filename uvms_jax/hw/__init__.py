@@ -25,7 +25,10 @@ the simulator server, the executor loop, :func:`write_run` and the CLI):
 * simulation: :class:`SimArm` (MuJoCo, :func:`sim_spec` on the robot's own model; answers every request of the
   protocol listing, one packet per datagram), :class:`SimServer` (UDP),
   :class:`LoopbackTransport` on a :class:`VirtualClock`, with fault injection
-  (:class:`SimConfig`);
+  (:class:`SimSettings`);
+* settings: :class:`HwSettings` (the ``hw`` config group: :class:`ExecutorSettings`, executor,
+  safety and link; :class:`SimSettings`, the simulated arm and its faults), built from a plain
+  mapping by ``uvms_jax.settings.from_mapping`` like every stage's settings;
 * the stage: :func:`run_plan` (arm check and dry run, then execution on a simulated or real link) →
   :class:`HwRun`; :func:`write_run` writes ``run.csv``, ``run.png`` and ``results.json``;
 * entry point: ``uvms-hw`` (:mod:`uvms_jax.hw.cli`).
@@ -59,10 +62,9 @@ from ._codec import decode_floats
 from ._codec import decode_frame
 from ._codec import encode_floats
 from ._codec import encode_packet
-from ._config import HwConfig
-from ._config import HwSettings
-from ._config import SimConfig
-from ._config import config_from_mapping
+from ._settings import ExecutorSettings
+from ._settings import HwSettings
+from ._settings import SimSettings
 from ._executor import AbortRun
 from ._executor import Executor
 from ._executor import GateRecord
@@ -115,8 +117,8 @@ __all__ = [
     "AnswerFormat",
     "Executor",
     "GateRecord",
+    "ExecutorSettings",
     "HardwareStatus",
-    "HwConfig",
     "HwRun",
     "HwSettings",
     "JointSpec",
@@ -141,16 +143,15 @@ __all__ = [
     "SerialTransport",
     "ArmWorld",
     "SimArm",
-    "SimConfig",
     "SimCounts",
     "SimLink",
     "SimServer",
+    "SimSettings",
     "Transport",
     "UdpTransport",
     "VirtualClock",
     "check_arm",
     "check_plan",
-    "config_from_mapping",
     "crc8",
     "decode_answer",
     "decode_float",

@@ -16,7 +16,7 @@ import numpy as np
 from uvms_jax.motion import synchronised_move
 from uvms_jax.planfile import Plan, PlanError
 
-from ._config import HwConfig
+from ._settings import ExecutorSettings
 from ._joints import JointSpec, joint_specs
 
 __all__ = ["PlanSummary", "check_arm", "check_plan", "specs_of"]
@@ -116,7 +116,7 @@ def _jaws_problems(where: str, jaws_mm: float, jaws) -> list[str]:
 def check_plan(
     plan: Plan,
     robot,
-    config: HwConfig = HwConfig(),
+    config: ExecutorSettings = ExecutorSettings(),
     max_problems: int = 20,
 ) -> PlanSummary:
     """Dry-run check: refuse a bad plan before any motion.

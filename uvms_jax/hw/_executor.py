@@ -11,7 +11,7 @@ jaws in its joint table (its plans hold still where a gripper would move: dwells
 moves to where the arm stands) and takes no gripper step.
 
 The state comes from a request every tick, or from the joints' heartbeat stream
-(``HwConfig.stream_hz``); answers lost on the way are made up from ones under
+(``ExecutorSettings.stream_hz``); answers lost on the way are made up from ones under
 ``max_state_age_s`` old. A state that implies a joint moved faster than it can
 (``plausible_speed_factor``) is a corrupted frame that passed the CRC: it is skipped and counted.
 
@@ -36,7 +36,7 @@ from uvms_jax.planfile import Plan
 
 from ._check import PlanSummary, check_plan
 from ._client import JointState, ReachArm
-from ._config import HwConfig
+from ._settings import ExecutorSettings
 from ._ids import HardwareStatus, Mode
 from ._joints import LimitError
 from ._runlog import RunLog
@@ -149,7 +149,7 @@ class Executor:
     def __init__(
         self,
         client: ReachArm,
-        config: HwConfig = HwConfig(),
+        config: ExecutorSettings = ExecutorSettings(),
         *,
         sleep: Callable[[float], None] = time.sleep,
         log: RunLog | None = None,
@@ -388,7 +388,7 @@ class Executor:
 
     def _plausible(self, pos: np.ndarray, vel: np.ndarray, ref: np.ndarray, ref_t: float) -> bool:
         """Whether a state could follow ``ref`` (positions at time ``ref_t``): no joint moved or
-        moves faster than ``plausible_speed_factor`` × its limit (see :class:`HwConfig`)."""
+        moves faster than ``plausible_speed_factor`` × its limit (see :class:`ExecutorSettings`)."""
         if not (np.all(np.isfinite(pos)) and np.all(np.isfinite(vel))):
             return False
         if np.any(np.abs(vel) > self._vlimit):

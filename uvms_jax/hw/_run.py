@@ -20,7 +20,7 @@ from uvms_jax.planfile import Plan
 
 from ._check import PlanSummary, check_arm, check_plan
 from ._client import ReachArm
-from ._config import HwConfig, SimConfig
+from ._settings import ExecutorSettings, SimSettings
 from ._executor import Executor, RunInterrupted, RunResult
 from ._joints import joint_specs
 from ._runlog import RunLog
@@ -102,8 +102,8 @@ def run_plan(
     robot,
     *,
     link: str | ReachArm = "loopback",
-    config: HwConfig = HwConfig(),
-    sim: SimConfig = SimConfig(),
+    config: ExecutorSettings = ExecutorSettings(),
+    sim: SimSettings = SimSettings(),
     progress: Callable[[int, int, str], None] | None = None,
     world: ArmWorld | None = None,
 ) -> HwRun:
@@ -177,7 +177,7 @@ def run_plan(
 
 
 @contextlib.contextmanager
-def _simulated(link: str, plan: Plan, robot, config: HwConfig, sim: SimConfig,
+def _simulated(link: str, plan: Plan, robot, config: ExecutorSettings, sim: SimSettings,
                world: ArmWorld | None) -> Iterator[tuple[ReachArm, Callable[[float], None], SimLink]]:
     """A client of a simulated ``robot`` at the plan's start: ``(client, sleep, link)``."""
     start = next(s.q[0] for s in plan.segments if s.q)  # the dry run ensured there is one

@@ -3,7 +3,7 @@
 The physics model is the robot's own (:func:`~uvms_jax.hw.sim_spec`, built on
 :func:`uvms_jax.robot.mjcf_body`): its joints, links and mass properties under gravity and
 buoyancy (docs/hardware.md §3), the jaws as one slide joint. The physics runs in the arm's base
-frame; the base's orientation in the world (``SimConfig.base_rpy``: upright, or hanging under a
+frame; the base's orientation in the world (``SimSettings.base_rpy``: upright, or hanging under a
 vehicle) turns gravity and buoyancy. An arm whose description has no mass properties is
 simulated weightless (gravity compensated, no buoyancy): servoed kinematically.
 The device firmware is modelled as a servo that turns the demand into a joint speed every
@@ -30,7 +30,7 @@ from typing import TYPE_CHECKING, Protocol
 import numpy as np
 
 from ._codec import Packet, decode_float, encode_floats, encode_packet
-from ._config import SimConfig
+from ._settings import SimSettings
 from ._ids import BASE_COMPUTER, BASE_ROUTER, BROADCAST, HardwareStatus, Mode, PacketID
 from ._joints import MM_PER_M, joint_specs
 from ._sim_model import GRAVITY, add_drives, massive_bodies, sim_spec, world_up
@@ -90,7 +90,7 @@ def _joint_index(names: Sequence[str], name: str, what: str) -> int:
         return list(names).index(name)
     folded = [k for k, n in enumerate(names) if n.lower() == name.lower()]
     if len(folded) != 1:
-        raise ValueError(f"SimConfig.{what} {name!r} is not a joint of the arm ({', '.join(names)})")
+        raise ValueError(f"SimSettings.{what} {name!r} is not a joint of the arm ({', '.join(names)})")
     return folded[0]
 
 
@@ -111,7 +111,7 @@ class SimArm:
         too, and ``base_rpy`` is not used).
     """
 
-    def __init__(self, robot, config: SimConfig = SimConfig(), q0: Sequence[float] | None = None,
+    def __init__(self, robot, config: SimSettings = SimSettings(), q0: Sequence[float] | None = None,
                  world: ArmWorld | None = None) -> None:
         import mujoco  # imported here: the protocol layer must not need MuJoCo
 

@@ -17,7 +17,7 @@ import time
 from typing import TYPE_CHECKING
 
 from ._codec import PacketReader
-from ._config import SimConfig
+from ._settings import SimSettings
 
 if TYPE_CHECKING:
     from ._sim import SimArm
@@ -42,7 +42,7 @@ class SimLink:
     flood of requests costs bounded memory, as on a device with fixed buffers.
     """
 
-    def __init__(self, arm: SimArm, config: SimConfig | None = None, *, queue_limit: int = QUEUE_LIMIT) -> None:
+    def __init__(self, arm: SimArm, config: SimSettings | None = None, *, queue_limit: int = QUEUE_LIMIT) -> None:
         if queue_limit < 1:
             raise ValueError(f"queue_limit must be at least 1, got {queue_limit}")
         self.queue_limit = queue_limit
@@ -171,7 +171,7 @@ class SimServer:
             transport = UdpTransport(*server.address)
     """
 
-    def __init__(self, arm: SimArm, config: SimConfig | None = None, host: str = "127.0.0.1",
+    def __init__(self, arm: SimArm, config: SimSettings | None = None, host: str = "127.0.0.1",
                  port: int = 0, poll_s: float = 0.002) -> None:
         self.link = SimLink(arm, config)
         self.arm = arm

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ._config import SimConfig
+from ._settings import SimSettings
 from ._joints import MM_PER_M, JointSpec, joint_specs
 
 if TYPE_CHECKING:
@@ -37,7 +37,7 @@ GRAVITY = 9.81  # [m/s²]
 JAWS_BODY = "jaws"  # the body the jaws' slide joint moves
 
 
-def world_up(base_rpy: Sequence[float] = SimConfig.base_rpy) -> np.ndarray:
+def world_up(base_rpy: Sequence[float] = SimSettings.base_rpy) -> np.ndarray:
     """(3,) unit vector of the world's up (+z) in the arm's base frame, ``R^T e_z`` for the base
     orientation R = Rz(yaw) Ry(pitch) Rx(roll) of ``base_rpy`` (URDF roll, pitch, yaw [rad]).
 
@@ -59,8 +59,8 @@ def massive_bodies(robot) -> set[int]:
     return {b.body for b in robot.inertials if b.mass > 0}
 
 
-def sim_spec(robot, kv: float = KV, physics_dt: float = SimConfig.physics_dt, dynamics: bool = True,
-             base_rpy: Sequence[float] = SimConfig.base_rpy) -> mujoco.MjSpec:
+def sim_spec(robot, kv: float = KV, physics_dt: float = SimSettings.physics_dt, dynamics: bool = True,
+             base_rpy: Sequence[float] = SimSettings.base_rpy) -> mujoco.MjSpec:
     """MuJoCo model of the simulated ``robot`` with its base fixed: its body tree
     (:func:`uvms_jax.robot.mjcf_body`) with the drives of :func:`add_drives`.
 
@@ -75,7 +75,7 @@ def sim_spec(robot, kv: float = KV, physics_dt: float = SimConfig.physics_dt, dy
       physics_dt: time step [s].
       dynamics: the robot's mass properties, gravity on.
       base_rpy: orientation of the base in the world, URDF roll, pitch, yaw [rad]
-        (:attr:`SimConfig.base_rpy`); it sets the gravity vector.
+        (:attr:`SimSettings.base_rpy`); it sets the gravity vector.
 
     Returns:
       an uncompiled ``mujoco.MjSpec`` (``.compile()`` gives the ``MjModel``).

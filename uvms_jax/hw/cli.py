@@ -22,7 +22,7 @@ SIGTERM. Outputs in ``--out``
 ``--overwrite``): ``run.csv`` (commanded vs measured), ``results.json`` and ``run.png``, each
 written atomically; the folder carries a ``RUNNING`` marker until they are written, so a run
 killed outright (SIGKILL) is recognisable.
-Defaults come from :class:`~uvms_jax.hw.HwConfig` / ``SimConfig`` (or ``--config``, a YAML
+Defaults come from :class:`~uvms_jax.hw.ExecutorSettings` / ``SimSettings`` (or ``--config``, a YAML
 file shaped like ``configs/hw/default.yaml``); flags override them. ``run`` is
 :func:`~uvms_jax.hw.run_plan` + :func:`~uvms_jax.hw.write_run`, as in the pipeline.
 """
@@ -40,11 +40,11 @@ from pathlib import Path
 from uvms_jax import __version__, progress
 from uvms_jax.files import EXIT_INTERRUPTED, EXIT_TERMINATED, clear_running, sigterm_as_interrupt, write_atomic
 from uvms_jax.planfile import PlanError, load_plan, save_plan
-from uvms_jax.settings import SettingsError, read_yaml
+from uvms_jax.settings import SettingsError, from_mapping, read_yaml
 
 from ._check import check_plan
 from ._client import ReachArm
-from ._config import HwConfig, SimConfig, config_from_mapping
+from ._settings import ExecutorSettings, HwSettings, SimSettings
 from ._executor import RunInterrupted
 from ._run import HwRun, prepare_out, refuse_out, run_plan, write_run
 from ._joints import joint_specs
@@ -76,8 +76,8 @@ class _HelpFormatter(argparse.ArgumentDefaultsHelpFormatter, argparse.RawDescrip
 
 
 def _hw_default(name: str) -> str:
-    """``(default: X)`` for a flag that overrides HwConfig field ``name``."""
-    return f"(default: {getattr(HwConfig, name)}, or --config)"
+    """``(default: X)`` for a flag that overrides ExecutorSettings field ``name``."""
+    return f"(default: {getattr(ExecutorSettings, name)}, or --config)"
 
 
 def _speed_scale(text: str) -> float:
@@ -92,7 +92,7 @@ def _speed_scale(text: str) -> float:
 
 
 def _parse_fault(text: str) -> dict:
-    """``X:BITS[@T]`` → SimConfig fields (joint name, status bits, onset time [s])."""
+    """``X:BITS[@T]`` → SimSettings fields (joint name, status bits, onset time [s])."""
     try:
         joint, rest = text.split(":", 1)
         bits, _, after = rest.partition("@")
@@ -178,14 +178,15 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
-def _configs(args: argparse.Namespace) -> tuple[HwConfig, SimConfig]:
-    hw, sim = HwConfig(), SimConfig()
+def _configs(args: argparse.Namespace) -> tuple[ExecutorSettings, SimSettings]:
+    hw, sim = ExecutorSettings(), SimSettings()
     if args.config is not None:
         mapping = read_yaml(args.config, "--config")  # SettingsError naming the file and line
         try:
-            hw, sim = config_from_mapping(mapping)
+            settings = from_mapping(HwSettings, mapping, "hw")
         except ValueError as e:
             raise SettingsError(f"--config {args.config}: {' '.join(str(e).split())}") from None
+        hw, sim = settings.executor, settings.sim
     over = {k: v for k, v in {
         "rate_hz": getattr(args, "rate", None), "gate_threshold_rad": getattr(args, "threshold", None),
         "gate_timeout_s": getattr(args, "gate_timeout", None),

@@ -4,8 +4,8 @@ On a GPU, XLA splits the few thousand scalar operations of w or KCI of a 12-join
 several fusions and passes the intermediates through GPU memory (eight kernels for the 12-DOF
 UVMS). Written as one Pallas kernel, every intermediate of a configuration stays in
 registers: the same expression (``uvms_jax.kin.jacobian_rows`` → ``*_from_rows``) runs as one
-thread per configuration, reading n joint values and writing one number. BENCHMARKS.md has the
-figures and the roofline.
+thread per configuration, reading n joint values and writing one number. docs/benchmarks/kinematics.md
+has the figures and the roofline.
 
 The chain's numbers are constants of the kernel (they fold into the arithmetic), so one
 compiled kernel serves one geometry; a chain whose geometry is traced (``jax.grad`` with

@@ -92,7 +92,7 @@ def executed_tool_paths(task_plan, run, img: Path) -> tuple[str, dict]:
     scene = task_plan.scene
     path = run.solved["exact"].path if "exact" in run.solved else run.best.path
     the_plan = P.plan_for_schedule(task_plan, "RRTConnect", path)
-    sim = hw.SimConfig() if the_plan.base_rpy is None else dataclasses.replace(hw.SimConfig(), base_rpy=the_plan.base_rpy)
+    sim = hw.SimSettings() if the_plan.base_rpy is None else hw.SimSettings(base_rpy=the_plan.base_rpy)
     done = hw.run_plan(the_plan, scene.robot, link="loopback", sim=sim)
     _, q_run = done.log.measured(scene.robot.joint_names)
     q_plan = np.concatenate([P.densify(np.asarray(s.q), 0.01) for s in the_plan.segments if len(s.q)])

@@ -142,7 +142,7 @@ def _runner_problems(s: PipelineSettings, robot: robots.Robot) -> list[str]:
     return problems
 
 
-def _plan_file_problems(path: str, robot: robots.Robot, config: hw.HwConfig) -> list[str]:
+def _plan_file_problems(path: str, robot: robots.Robot, config: hw.ExecutorSettings) -> list[str]:
     """``hw.plan``: made for this arm, within its limits; gripper steps need a gripper."""
     try:
         the_plan = planfile.load_plan(path)

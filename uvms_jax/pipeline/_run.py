@@ -14,7 +14,7 @@ from uvms_jax.files import RUNNING, clear_running, mark_running, refuse_used_fol
 from uvms_jax.pipeline._precheck import Checked, check_stages
 from uvms_jax.pipeline._report import write_summary
 from uvms_jax.pipeline._settings import STAGES, PipelineSettings
-from uvms_jax.pipeline._stages import STAGE_FNS, Flow, chain
+from uvms_jax.pipeline.stages import STAGE_FNS, Flow, chain
 
 log = logging.getLogger(__name__)
 

@@ -29,8 +29,8 @@ class HwStageSettings:
     link: Literal["loopback", "udp"] = "loopback"
     plan: str | None = setting(None, file=True)
     plot: bool = True
-    executor: hw.HwConfig = hw.HwConfig()
-    sim: hw.SimConfig = hw.SimConfig()
+    executor: hw.ExecutorSettings = hw.ExecutorSettings()
+    sim: hw.SimSettings = hw.SimSettings()
 
 
 @dataclasses.dataclass(frozen=True)

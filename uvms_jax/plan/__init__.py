@@ -21,7 +21,8 @@ as the thesis's test cage (thesis ch. 4–5).
   :class:`NodeTarget`, :data:`STEPS`; :func:`docking_task` (the grasp and place poses as a
   docking optimiser's task, ``uvms_jax.evo.ArmTask``, with the planner's collision world of the
   arm on its vehicle, :func:`docking_world`: the sphere checker's model as a
-  ``uvms_jax.evo.SphereWorld``; :func:`vehicle_obstacles`: the vehicle's boxes in a scene);
+  ``uvms_jax.evo.SphereWorld``; :func:`vehicle_obstacles`: the vehicle's boxes in a scene;
+  :func:`docked_scene`: the scenario with the arm's base on the docked vehicle and its hull);
 * batches on a GPU: :func:`plan_batch` (many problems in one jitted call, :class:`BatchSettings`
   → :class:`BatchPlan`) on the sphere checker in JAX (:func:`sphere_arm`, :func:`sphere_worlds`:
   the robot's spheres and a padded batch of worlds);
@@ -101,6 +102,7 @@ from uvms_jax.plan._video import VideoInfo
 from uvms_jax.plan._video import render_run_video
 from uvms_jax.plan._video import scene_camera
 from uvms_jax.plan._world import VEHICLE_PREFIX
+from uvms_jax.plan._world import docked_scene
 from uvms_jax.plan._world import docking_task
 from uvms_jax.plan._world import docking_world
 from uvms_jax.plan._world import sphere_world

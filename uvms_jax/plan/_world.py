@@ -22,12 +22,12 @@ from uvms_jax import evo, frames
 from uvms_jax.plan._collision import CollisionChecker
 from uvms_jax.plan._scene import Context, Scene
 from uvms_jax.plan._settings import PlanSettings
-from uvms_jax.plan._spec import Obstacle
+from uvms_jax.plan._spec import Obstacle, SceneSpec
 from uvms_jax.plan._spheres import MESH_CELL, SphereChecker, _pair_filter
 from uvms_jax.plan._targets import node_contexts, tool_poses
 from uvms_jax.robot import SPHERE_SPACING
 
-__all__ = ["VEHICLE_PREFIX", "docking_task", "docking_world", "sphere_world", "vehicle_obstacles"]
+__all__ = ["VEHICLE_PREFIX", "docked_scene", "docking_task", "docking_world", "sphere_world", "vehicle_obstacles"]
 
 #: Name prefix of the vehicle's boxes as obstacles of a planning scene (``vehicle0``, …).
 VEHICLE_PREFIX = "vehicle"
@@ -42,6 +42,22 @@ def vehicle_obstacles(T_world_vehicle, T_vehicle_box, half) -> tuple[Obstacle, .
         out.append(Obstacle(f"{VEHICLE_PREFIX}{i}", "box", tuple(W[:3, 3].tolist()),
                             tuple(frames.matrix_rpy(W[:3, :3]).tolist()), tuple((2 * h).tolist())))
     return tuple(out)
+
+
+def docked_scene(scenario, problem: evo.ArmDockingProblem, pose) -> tuple[np.ndarray, np.ndarray, SceneSpec]:
+    """The planning scene of a docked vehicle: the scenario (a mapping or a :class:`SceneSpec`)
+    with the arm's base on the vehicle at ``pose (4,) = [x, y, z, ψ]`` [m, rad] (the docking
+    problem's mount) and the vehicle's boxes as obstacles.
+
+    Returns:
+      ``(T_world_vehicle (4, 4), T_world_base (4, 4), scene spec)``.
+    """
+    T_world_vehicle, T_world_base, _ = (np.asarray(a, dtype=float) for a in
+                                        evo.arm_tool_poses(problem, np.asarray(pose, problem.pose_low.dtype)))
+    spec = scenario if isinstance(scenario, SceneSpec) else SceneSpec.from_mapping(scenario)
+    spec = spec.with_base(T_world_base)
+    vehicle = vehicle_obstacles(T_world_vehicle, problem.T_vehicle_box, problem.vehicle_half)
+    return T_world_vehicle, T_world_base, dataclasses.replace(spec, obstacles=spec.obstacles + vehicle)
 
 
 def _row(checker: SphereChecker, contexts, polys, static) -> tuple:

@@ -27,6 +27,7 @@ from uvms_jax.sched._costs import metric_tensor
 from uvms_jax.sched._costs import mirror_goal
 from uvms_jax.sched._costs import normalise_metrics
 from uvms_jax.sched._costs import path_metric_sums
+from uvms_jax.sched._costs import path_totals
 from uvms_jax.sched._edges import ScheduleEdge
 from uvms_jax.sched._edges import schedule_edges
 from uvms_jax.sched._exact import exact
@@ -72,6 +73,7 @@ from uvms_jax.sched._thesis import THESIS_COMPAT
 from uvms_jax.sched._thesis import THESIS_EQ41
 from uvms_jax.sched._thesis import THESIS_EQ41_GREEDY_PATH
 from uvms_jax.sched._thesis import THESIS_NODE_NAMES
+from uvms_jax.sched._thesis import THESIS_SOLVER_MS
 from uvms_jax.sched._thesis import thesis_problem
 from uvms_jax.sched._write import schedule_results
 from uvms_jax.sched._write import write_schedule
@@ -90,6 +92,7 @@ __all__ = [
     "THESIS_EQ41_GREEDY_PATH",
     "THESIS_NEIGHBOURHOOD",
     "THESIS_NODE_NAMES",
+    "THESIS_SOLVER_MS",
     "GraspBatch",
     "GraspOptions",
     "GraspSettings",
@@ -119,6 +122,7 @@ __all__ = [
     "normalise_metrics",
     "path_cost",
     "path_metric_sums",
+    "path_totals",
     "problem_from_metrics",
     "random_metrics",
     "random_problem",

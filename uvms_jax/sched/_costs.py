@@ -111,6 +111,18 @@ def path_metric_sums(normalised, path: Sequence[int]) -> np.ndarray:
     return n[:, p[:-1], p[1:]].sum(axis=1)
 
 
+def path_totals(metrics, path: Sequence[int]) -> dict[str, float]:
+    """Raw metrics ``(5, n, n)`` (:data:`METRICS` order, not normalised, so that two scenes
+    compare) along a schedule's moves: sums of planning time [s], joint movement [rad] and tool
+    path [m], the smallest clearance [m] and the largest joint torque [N·m]."""
+    p = list(path)
+    legs = dict(zip(METRICS, np.asarray(metrics)[:, p[:-1], p[1:]]))  # each (moves,)
+    return {"planning_time_s": float(np.sum(legs["planning_time"])),
+            "joint_movement_rad": float(np.sum(legs["joint_movement"])),
+            "ee_distance_m": float(np.sum(legs["ee_distance"])), "min_clearance_m": float(np.min(legs["security"])),
+            "max_torque_Nm": float(np.max(legs["max_torque"]))}
+
+
 def mirror_goal(metrics, start: int, goal: int) -> np.ndarray:
     """Copies the metrics of moves into ``start`` to the same moves into ``goal`` where the
     latter are missing (the thesis's goal is the start position, Table 5.1)."""

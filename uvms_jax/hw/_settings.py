@@ -1,10 +1,10 @@
 """Settings of the hardware runner, in one place.
 
-:class:`HwConfig` (executor and link) and :class:`SimConfig` (simulated arm and its faults)
-are the single source of the defaults; :class:`HwSettings` holds both, shaped like
+:class:`ExecutorSettings` (executor and link) and :class:`SimSettings` (simulated arm and its
+faults) are the single source of the defaults; :class:`HwSettings` holds both, shaped like
 ``configs/hw/default.yaml`` (a test keeps the two equal), so that
-``uvms_jax.settings.from_mapping(HwSettings, d)`` or :func:`config_from_mapping` builds them
-from a plain dict.
+``uvms_jax.settings.from_mapping(HwSettings, d, "hw")`` builds them from a plain dict, as every
+stage's settings are built.
 """
 
 from __future__ import annotations
@@ -12,16 +12,14 @@ from __future__ import annotations
 import dataclasses
 import math
 import numbers
-from collections.abc import Mapping
-from typing import Any
 
-from uvms_jax.settings import check_fields, from_mapping, setting
+from uvms_jax.settings import check_fields, setting
 
-__all__ = ["HwConfig", "HwSettings", "SimConfig", "config_from_mapping"]
+__all__ = ["ExecutorSettings", "HwSettings", "SimSettings"]
 
 
 @dataclasses.dataclass(frozen=True)
-class HwConfig:
+class ExecutorSettings:
     """Executor, safety and link settings.
 
     Attributes:
@@ -83,7 +81,7 @@ class HwConfig:
 
 
 @dataclasses.dataclass(frozen=True)
-class SimConfig:
+class SimSettings:
     """Simulated arm: servo, physics and fault injection.
 
     Attributes:
@@ -135,13 +133,13 @@ class SimConfig:
         check_fields(self)
         for name in ("stuck_joint", "fault_joint"):
             if not isinstance(getattr(self, name), str):
-                raise ValueError(f"SimConfig.{name} must be a joint name or empty, got {getattr(self, name)!r}")
+                raise ValueError(f"SimSettings.{name} must be a joint name or empty, got {getattr(self, name)!r}")
         try:
             rpy = tuple(float(v) if isinstance(v, numbers.Real) else math.nan for v in self.base_rpy)
         except TypeError:  # not a sequence
             rpy = ()
         if len(rpy) != 3 or not all(map(math.isfinite, rpy)):
-            raise ValueError(f"SimConfig.base_rpy must be 3 finite angles (roll, pitch, yaw) [rad], "
+            raise ValueError(f"SimSettings.base_rpy must be 3 finite angles (roll, pitch, yaw) [rad], "
                              f"got {self.base_rpy!r}")
         object.__setattr__(self, "base_rpy", rpy)  # a list or numpy array given: a tuple of floats
 
@@ -155,17 +153,6 @@ class HwSettings:
       sim: simulated arm and its faults (used only on a simulated link).
     """
 
-    executor: HwConfig = HwConfig()
-    sim: SimConfig = SimConfig()
+    executor: ExecutorSettings = ExecutorSettings()
+    sim: SimSettings = SimSettings()
 
-
-def config_from_mapping(cfg: Mapping[str, Any] | None) -> tuple[HwConfig, SimConfig]:
-    """``(executor, sim)`` settings from a mapping with optional ``executor`` and ``sim`` sections.
-
-    Raises:
-      uvms_jax.settings.SettingsError: (a ValueError) an unknown section or key, or a value of
-        the wrong type, named by its path (a typo must not silently fall back to a default).
-      ValueError: a value out of range (see :class:`HwConfig`, :class:`SimConfig`).
-    """
-    settings = from_mapping(HwSettings, cfg, "hw")
-    return settings.executor, settings.sim
