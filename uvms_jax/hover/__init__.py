@@ -30,6 +30,10 @@ from uvms_jax.hover._batch import fluid_bodies
 from uvms_jax.hover._batch import fluid_xfrc
 from uvms_jax.hover._batch import hover_mjx
 from uvms_jax.hover._batch import plot_robustness
+from uvms_jax.hover._batch_control import CONTROLS
+from uvms_jax.hover._batch_control import ControlledResult
+from uvms_jax.hover._batch_control import batch_controlled
+from uvms_jax.hover._batch_control import nav_schedule
 from uvms_jax.hover._control import allocate_thrust
 from uvms_jax.hover._control import control_steps
 from uvms_jax.hover._control import hold_pose

@@ -191,6 +191,13 @@ def _commands(controllers: dict, mode, k, p, R, velocity, omega, q_ref, integral
     return cmd
 
 
+def _slack(limit):
+    """The rounding allowed on a value computed onto ``limit`` before it counts as beyond it:
+    :data:`LIMIT_SLACK` in float64; in float32 a few units of its last place (the scaled
+    allocation puts a thruster at its limit ±1 ulp, 40 N ± 4e-6 N)."""
+    return LIMIT_SLACK + 4 * jnp.finfo(limit.dtype).eps * jnp.abs(limit)
+
+
 # -- one scenario ---------------------------------------------------------------------------------
 class _Carry(NamedTuple):
     data: mjx.Data
@@ -264,10 +271,10 @@ class _Rollout:
             q = d.qpos[sim.qadr]
             at_gate = self.gate_rows == row
             joint = jnp.max(jnp.abs(q - gate_q), axis=-1)
+            outside = lambda x: (x < lower - _slack(lower)) | (x > upper + _slack(upper))  # noqa: E731
             counts = carry.counts + jnp.stack([
-                cmd.thrust_limited, cmd.joint_limited, jnp.any(jnp.abs(cmd.thrust) > limits + LIMIT_SLACK),
-                jnp.any((q < lower - LIMIT_SLACK) | (q > upper + LIMIT_SLACK)
-                        | (cmd.target < lower - LIMIT_SLACK) | (cmd.target > upper + LIMIT_SLACK))]).astype(jnp.int32)
+                cmd.thrust_limited, cmd.joint_limited, jnp.any(jnp.abs(cmd.thrust) > limits + _slack(limits)),
+                jnp.any(outside(q) | outside(cmd.target))]).astype(jnp.int32)
             carry = _Carry(d, cmd.integral, cmd.reference, nav, jnp.where(at_gate, error, carry.gate_error),
                            jnp.where(at_gate, angle, carry.gate_angle), jnp.where(at_gate, joint, carry.gate_joint),
                            jnp.maximum(carry.worst, jnp.stack([error, angle, drift])),
