@@ -83,12 +83,12 @@ from uvms_jax.hover._wholebody import NavigationEstimate
 from uvms_jax.hover._wholebody import WholeBody
 from uvms_jax.hover._wholebody import WholeBodyCommand
 
-__all__ = ["allocate_thrust", "apply_buoyancy", "arm_motion", "batch_candidates", "batch_plan",
+__all__ = ["allocate_thrust", "apply_buoyancy", "arm_motion", "batch_candidates", "batch_controlled", "batch_plan",
            "batch_scenarios", "BatchResult", "buoyancy_bodies", "buoyancy_xfrc", "control_steps",
-           "ControllerSettings", "current_at", "currents_grid", "CurrentSettings", "DEFAULT_THRUSTERS",
+           "ControlledResult", "CONTROLS", "ControllerSettings", "current_at", "currents_grid", "CurrentSettings", "DEFAULT_THRUSTERS",
            "docked_tool", "execute_plan_hovering", "fluid_bodies", "fluid_xfrc", "follow_tool_path",
            "GRAVITY", "hold_pose", "hover_mjcf", "hover_mjx", "hover_model", "HoverFilm", "hover_frame", "HoverLog", "HoverMJX",
-           "HoverRun", "HoverSim", "HoverState", "HoverWorld", "HULL_GEOM", "level_attitude", "NavigationEstimate",
+           "HoverRun", "HoverSim", "HoverState", "HoverWorld", "HULL_GEOM", "level_attitude", "nav_schedule", "NavigationEstimate",
            "NavigationSettings", "PeriodRecord",
            "plan_targets", "plot_robustness", "run_plan_hovering", "SERVO_KP", "SERVO_KV", "servo_name",
            "station_keeping", "thrust_layout", "thrust_matrix", "Thruster", "thruster_name", "trimmed",

@@ -31,7 +31,6 @@ import copy
 import dataclasses
 import time as _time
 import types
-from collections.abc import Sequence
 from typing import NamedTuple
 
 import jax
@@ -207,7 +206,7 @@ class _Carry(NamedTuple):
     gate_error: jax.Array  # (g,) [m]
     gate_angle: jax.Array  # (g,) [rad]
     gate_joint: jax.Array  # (g,) [rad]
-    worst: jax.Array  # (3,): tool error [m], tool angle [rad], drift [m]
+    worst: jax.Array  # (4,): tool error [m], tool angle [rad], drift [m], joint angle past a limit [rad]
     peak_thrust: jax.Array  # [N]
     counts: jax.Array  # (4,) int: thrust-limited, joint-limited periods, thrust and joint violations
 
@@ -239,7 +238,7 @@ class _Rollout:
         nav = None if self.navigation is None else _nav_start(d.qpos[:3], d.xmat[sim.vehicle_id], self.history)
         g = self.gate_rows.size
         carry = _Carry(d, state.integral, q_plan[0], nav, jnp.zeros(g, dtype), jnp.zeros(g, dtype), jnp.zeros(g, dtype),
-                       jnp.zeros(3, dtype), jnp.zeros((), dtype), jnp.zeros(4, jnp.int32))
+                       jnp.zeros(4, dtype), jnp.zeros((), dtype), jnp.zeros(4, jnp.int32))
         period, steps, dt = sim.period, sim.physics_steps, sim.model.opt.timestep
         lower, upper, limits = c(sim.robot.lower, dtype), c(sim.robot.upper, dtype), c(sim.limits, dtype)
 
@@ -269,6 +268,7 @@ class _Rollout:
             angle = jnp.linalg.norm(_rotvec(R_goal[row].T @ tool_R))
             drift = jnp.linalg.norm(d.qpos[:3] - pose[:3])
             q = d.qpos[sim.qadr]
+            excess = jnp.max(jnp.maximum(jnp.maximum(lower - q, q - upper), 0.0))
             at_gate = self.gate_rows == row
             joint = jnp.max(jnp.abs(q - gate_q), axis=-1)
             outside = lambda x: (x < lower - _slack(lower)) | (x > upper + _slack(upper))  # noqa: E731
@@ -277,7 +277,7 @@ class _Rollout:
                 jnp.any(outside(q) | outside(cmd.target))]).astype(jnp.int32)
             carry = _Carry(d, cmd.integral, cmd.reference, nav, jnp.where(at_gate, error, carry.gate_error),
                            jnp.where(at_gate, angle, carry.gate_angle), jnp.where(at_gate, joint, carry.gate_joint),
-                           jnp.maximum(carry.worst, jnp.stack([error, angle, drift])),
+                           jnp.maximum(carry.worst, jnp.stack([error, angle, drift, excess])),
                            jnp.maximum(carry.peak_thrust, jnp.max(jnp.abs(cmd.thrust))), counts)
             out = (d.qpos[:3], d.qpos[3:7], q, d.site_xpos[sim.tool_site], cmd.thrust, error, angle) if record else None
             return carry, out
@@ -300,7 +300,9 @@ class ControlledResult:
       gate_times: ``(g,)`` [s]; gate_tool_error ``(K, N, g)`` [m] and gate_tool_angle [rad]: the
         tool's world pose from its planned one at each gate; gate_joint_error: the joints from
         the plan's at each gate [rad].
-      max_tool_error, max_tool_angle, max_drift: ``(K, N)`` over the run [m, rad, m].
+      max_tool_error, max_tool_angle, max_drift: ``(K, N)`` over the run [m, rad, m];
+        max_joint_excess: ``(K, N)`` the farthest a joint went past a limit [rad] (0: none;
+        the MJX model has no joint stops, :mod:`~uvms_jax.hover._batch`).
       thrust_limited_periods, joint_limited_periods: ``(K, N)`` periods in which the allocation
         scaled the demand to the thrusters' limits / a joint rate bound was active;
         thrust_violations, joint_violations: periods with a thrust beyond its limit / a joint
@@ -323,6 +325,7 @@ class ControlledResult:
     max_tool_error: np.ndarray
     max_tool_angle: np.ndarray
     max_drift: np.ndarray
+    max_joint_excess: np.ndarray
     thrust_limited_periods: np.ndarray
     joint_limited_periods: np.ndarray
     thrust_violations: np.ndarray
@@ -460,8 +463,9 @@ def batch_controlled(robot: Robot, plan, poses, currents, *, controls="whole_bod
         poses=poses, current_times=times, currents=knots, controls=np.asarray(controls, dtype=str), noisy=noisy.copy(),
         gate_times=np.asarray(gate_times, dtype=float), gate_tool_error=a(gate_error), gate_tool_angle=a(gate_angle),
         gate_joint_error=a(gate_joint), max_tool_error=a(worst[..., 0]), max_tool_angle=a(worst[..., 1]),
-        max_drift=a(worst[..., 2]), thrust_limited_periods=counts[..., 0], joint_limited_periods=counts[..., 1],
-        thrust_violations=counts[..., 2], joint_violations=counts[..., 3], peak_thrust=a(peak),
+        max_drift=a(worst[..., 2]), max_joint_excess=a(worst[..., 3]), thrust_limited_periods=counts[..., 0],
+        joint_limited_periods=counts[..., 1], thrust_violations=counts[..., 2], joint_violations=counts[..., 3], peak_thrust=a(peak),
         tool_tolerance_m=float(tool_tolerance_m), tool_tolerance_rad=float(np.radians(tool_tolerance_deg)),
         records=dict(zip(_RECORDS, map(a, recs))) if record else None,
         env_steps=int(K * len(knots) * P * sim.physics_steps), compile_s=t1 - t0, run_s=t2 - t1)
+
