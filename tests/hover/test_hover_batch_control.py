@@ -121,3 +121,22 @@ def test_bad_input_is_refused():
         batch_controlled(ARM, _plan(), POSE, [[0.0, 0.0, 0.0]], noisy=True)
     with pytest.raises(ValueError, match="currents must be"):
         batch_controlled(ARM, _plan(), POSE, [[0.0, 0.0]])
+
+
+def test_docking_poses_ranked_by_the_current_they_tolerate():
+    """The plan's pose, one nearby (the same tool path by IK) and one 3 m away (out of reach: not
+    run). Still water and 0.3 m/s are held by the whole-body controller (the CPU runs above);
+    1.3 m/s is beyond the thrusters from every direction: the hull's own drag there,
+    ½ ρ A v² = 237 N in surge and 304 N in sway (A = 0.28, 0.36 m²), exceeds the largest
+    pure effort, 113 N (docs/hover.md). So both poses tolerate 0.3 m/s, the tie keeps the order
+    given, and the far pose ranks last."""
+    from uvms_jax.hover import rank_by_current
+
+    poses = np.stack([POSE, POSE + [0.05, -0.03, 0.02, 0.2], POSE + [3.0, 0.0, 0.0, 0.0]])
+    ranking = rank_by_current(ARM, _plan(), poses, [0.0, 0.3, 1.3], directions=4, noisy=False, navigation=None)
+    assert ranking.path_share[:2].tolist() == [1.0, 1.0] and ranking.path_share[2] < 1.0
+    np.testing.assert_array_equal(ranking.tolerated[:2], [0.3, 0.3])
+    assert np.isnan(ranking.tolerated[2]) and ranking.order.tolist() == [0, 1, 2] and ranking.chosen == 0
+    assert np.all(ranking.worst_gate_tool_error[:2, :2] <= 0.01) and np.all(ranking.worst_gate_tool_error[:2, 2] > 0.01)
+    with pytest.raises(ValueError, match="speeds must increase from 0"):
+        rank_by_current(ARM, _plan(), poses, [0.3, 0.5])

@@ -43,12 +43,12 @@ from ._batch import HoverMJX, hover_mjx, mjx
 from ._control import LIMIT_SLACK
 from ._hydro import current_at
 from ._model import buoyancy_bodies, trimmed
-from ._plan import plan_targets
+from ._plan import follow_tool_path, plan_targets
 from ._settings import ControllerSettings, NavigationSettings, VehicleSettings, WholeBodySettings
 from ._wbc import pose_error
 from ._wholebody import WholeBody
 
-__all__ = ["CONTROLS", "ControlledResult", "batch_controlled", "nav_schedule"]
+__all__ = ["CONTROLS", "ControlledResult", "CurrentRanking", "batch_controlled", "nav_schedule", "rank_by_current"]
 
 CONTROLS = ("pid", "feed_forward", "whole_body")  # a scenario's controller: its index here
 # The plan's per-period tables of WholeBody that vary with the plan (traced in the batch).
@@ -469,3 +469,76 @@ def batch_controlled(robot: Robot, plan, poses, currents, *, controls="whole_bod
         records=dict(zip(_RECORDS, map(a, recs))) if record else None,
         env_steps=int(K * len(knots) * P * sim.physics_steps), compile_s=t1 - t0, run_s=t2 - t1)
 
+
+# -- docking poses by the current they tolerate ---------------------------------------------------
+@dataclasses.dataclass(frozen=True)
+class CurrentRanking:
+    """Docking poses ranked by the current they tolerate (:func:`rank_by_current`).
+
+    Attributes:
+      poses: ``(K, 4)`` the poses given (the docked one first); path_share: ``(K,)`` the share
+        of the tool's path each follows (a pose is run when it is 1).
+      speeds: ``(S,)`` [m/s]; worst_gate_tool_error: ``(K, S)`` the worst over the directions
+        of a run's largest gate tool error [m] (NaN: not run).
+      tolerated: ``(K,)`` the largest speed up to which every gate of every direction is
+        reached, at that speed and every slower one [m/s] (NaN: not in still water, or not run).
+      order: ``(K,)`` the poses, most tolerant first (ties: in the order given); chosen: the
+        first of them.
+      result: the batch over the poses that were run.
+    """
+
+    poses: np.ndarray
+    path_share: np.ndarray
+    speeds: np.ndarray
+    worst_gate_tool_error: np.ndarray
+    tolerated: np.ndarray
+    order: np.ndarray
+    result: ControlledResult
+
+    @property
+    def chosen(self) -> int:
+        return int(self.order[0])
+
+
+def rank_by_current(robot: Robot, plan, poses, speeds, directions: int = 8, *, control: str = "whole_body",
+                    noisy: bool = True, navigation: NavigationSettings | None = NavigationSettings(),
+                    vehicle: VehicleSettings = VehicleSettings(), controller: ControllerSettings = ControllerSettings(),
+                    dwell_s: float = 0.5, gripper_s: float = 1.0, **kwargs) -> CurrentRanking:
+    """Rank docking ``poses`` ``(K, 4)`` by the current they tolerate, in one
+    :func:`batch_controlled` call: the plan at its docked pose ``poses[0]`` and the same tool
+    motion from each other pose (:func:`~uvms_jax.hover.follow_tool_path`, as
+    :func:`~uvms_jax.hover.batch_candidates`), with ``control``, in currents of every speed in
+    ``speeds`` [m/s] from ``directions`` evenly spread horizontal directions. A pose from which
+    the tool cannot follow the whole path is not run. ``kwargs`` go to :func:`batch_controlled`.
+
+    Raises:
+      ValueError: speeds not increasing from 0, fewer than one direction, and as
+        :func:`batch_controlled`.
+    """
+    speeds = np.asarray(speeds, dtype=float).reshape(-1)
+    if speeds.size == 0 or speeds[0] != 0.0 or np.any(np.diff(speeds) <= 0) or directions < 1:
+        raise ValueError(f"speeds must increase from 0 and directions be >= 1, got {speeds} and {directions}")
+    poses = np.atleast_2d(np.asarray(poses, dtype=float))
+    targets, _, duration = plan_targets(plan, dwell_s, gripper_s)
+    period = controller.period
+    docked = np.array([targets(t) for t in period * np.arange(round(duration / period) + 2)])
+    tables, share = [docked], [1.0]
+    for p in poses[1:]:
+        q, reached = follow_tool_path(robot, vehicle, docked, poses[0], p)
+        share.append(float(np.mean(reached)))
+        tables.append(q)
+    share = np.array(share)
+    run = share == 1.0
+    angle = 2 * np.pi * np.arange(directions) / directions
+    currents = (speeds[:, None, None] * np.stack([np.cos(angle), np.sin(angle), 0 * angle], axis=-1)).reshape(-1, 3)
+    res = batch_controlled(robot, plan, poses[run], currents, controls=control, noisy=noisy, navigation=navigation,
+                           vehicle=vehicle, controller=controller, joint_plans=np.stack(tables)[run], dwell_s=dwell_s,
+                           gripper_s=gripper_s, **kwargs)
+    reached = res.gate_reached.all(axis=-1).reshape(-1, speeds.size, directions).all(axis=-1)  # (kept, S)
+    ok = np.cumprod(reached, axis=-1).astype(bool)
+    tolerated, worst = np.full(len(poses), np.nan), np.full((len(poses), speeds.size), np.nan)
+    tolerated[run] = np.where(ok.any(axis=-1), speeds[np.maximum(ok.sum(axis=-1) - 1, 0)], np.nan)
+    worst[run] = res.worst_gate_tool_error.reshape(-1, speeds.size, directions).max(axis=-1)
+    order = np.lexsort((np.arange(len(poses)), -np.nan_to_num(tolerated, nan=-1.0)))
+    return CurrentRanking(poses=poses, path_share=share, speeds=speeds, worst_gate_tool_error=worst,
+                          tolerated=tolerated, order=order, result=res)
