@@ -33,7 +33,10 @@ _CPU_FLAG = "--xla_cpu_use_fusion_emitters"  # MJX on jax 0.10's CPU backend: ~4
 
 
 def _platform() -> str:
-    device = sys.argv[sys.argv.index("--device") + 1] if "--device" in sys.argv else "cpu"
+    """Before jax is imported: ``--device cpu`` (the default) pins JAX to the CPU, with the flag above."""
+    pre = argparse.ArgumentParser(add_help=False)
+    pre.add_argument("--device", choices=("cpu", "gpu"), default="cpu")
+    device = pre.parse_known_args()[0].device
     if device == "cpu":
         os.environ["JAX_PLATFORMS"] = "cpu"
         if _CPU_FLAG not in os.environ.get("XLA_FLAGS", ""):
@@ -123,6 +126,8 @@ def main() -> None:
                                                              "cpu.json, or _<gpu>.json)")
     ap.add_argument("--plot", type=Path, default=None)
     args = ap.parse_args()
+    if args.device == "gpu" and jax.devices()[0].platform != "gpu":
+        raise SystemExit(f"--device gpu: JAX sees no GPU, only {jax.devices()}")
     t0 = time.perf_counter()
     full = planfile.load_plan(args.run / "schedule" / "plan.json")
     plan = Plan(full.joint_names, full.segments[: args.segments]) if args.segments else full
