@@ -155,6 +155,8 @@ def _traced(template: WholeBody, pose, tables, volume, cob, feed_forward: bool) 
     wb.pose = pose
     wb.T_dock = jnp.eye(4, dtype=pose.dtype).at[:3, :3].set(R).at[:3, 3].set(pose[:3])
     for name, value in zip(_PLAN_TABLES, tables):
+        if not hasattr(template, name):  # a renamed table would leave the template's in place
+            raise AttributeError(f"WholeBody has no plan table {name!r} (_PLAN_TABLES)")
         setattr(wb, name, value)
     wb.vehicle = types.SimpleNamespace(**{**vars(template.vehicle), "volume": volume, "cob": cob})
     wb.settings = dataclasses.replace(template.settings, feed_forward=feed_forward)
