@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from uvms_jax.text import md_table
-from blocks._format import _load, _rate
+from blocks._format import RESULTS, _load, _rate
 
 __all__ = ["hover_mjx", "hover_robustness", "hover_vehicle", "hover_levelling", "hover_controllers"]
 
@@ -31,23 +31,52 @@ def hover_mjx() -> str:
                      rows) + "\n")
 
 
+def _mm(v: float) -> str:
+    return f"{1e3 * v:.1f}" if v < 0.1 else f"{1e3 * v:.0f}"
+
+
 def hover_robustness() -> str:
+    """Gate tool error against current speed per controller (docs/hover.md), from
+    ``benchmarks/hover_robustness.py``'s CPU run, and its GPU run where there is one."""
     d = _load("hover_robustness_cpu.json")
-    poses = d["per_pose"]
-    names = ["docked pose" if p["docked"] else f"candidate {k}" for k, p in enumerate(poses)]
-    listing = "; ".join(f"{n}: ({', '.join(f'{v:.3f}' for v in p['pose'])}), fitness {p['fitness']:.3f}"
-                        for n, p in zip(names, poses))
-    rows = [[f"{r['speed_m_s']:.1f}"] + [f"{p['per_speed'][i]['gate_share_worst']:.2f} / "
-                                         f"{1e3 * p['per_speed'][i]['max_tool_error_m']:.0f}" for p in poses]
-            for i, r in enumerate(poses[0]["per_speed"])]
-    left = "".join(f" Left out: ({', '.join(f'{v:.3f}' for v in p['pose'])}), fitness {p['fitness']:.3f}: from there "
-                   f"the tool follows {p['path_share_followed']:.0%} of the path continuously." for p in d["left_out"])
-    return (f"`{d['command']}` (the run of `benchmarks/results/demo_cpu.json`; 2-core CPU, jax {d['jax']}): "
-            f"{len(poses)} poses × {d['currents']} currents = {d['scenarios']} scenarios, {d['simulated_s']:.0f} s "
-            f"each, {d['gates']} gates, in one MJX call ({d['compile_s']:.1f} s compile, {d['run_s']:.1f} s run). "
-            f"Poses [x, y, z, ψ]: {listing}.{left}\n\n"
-            + md_table(["current [m/s]"] + [f"{n}: gates reached (worst direction) / worst tool error [mm]" for n in names],
-                     rows) + "\n")
+    variants = d["variants"]
+    rows = [[f"{r['speed_m_s']:.1f}"] + [f"{_mm(v['per_speed'][i]['worst_gate_tool_error_m'])} / "
+                                         f"{_mm(v['per_speed'][i]['p95_gate_tool_error_m'])}" for v in variants]
+            for i, r in enumerate(variants[0]["per_speed"])]
+    top = f"{max(d['speeds_m_s']):g}"
+    rows.append(["first loses 10 mm"] + [f"{v['first_speed_losing_10mm_m_s']:g} m/s"
+                                         if v["first_speed_losing_10mm_m_s"] is not None else f"not up to {top} m/s"
+                                         for v in variants])
+    thrust_bad = sum(r["thrust_violations"] for v in variants for r in v["per_speed"])
+    past = [r for v in variants for r in v["per_speed"] if r["joint_violations"]]
+    joints = ("no joint past a limit" if not past else
+              f"joints past a limit only from {min(r['speed_m_s'] for r in past):g} m/s, beyond the thrusters, by up to "
+              f"{max(r['max_joint_excess_rad'] for r in past):.3f} rad (the MJX model has no joint stops; the "
+              "controller's targets stay within the limits)")
+    n = d["navigation"]
+    text = (f"`{d['command']}` (the demo's plan at its docked pose; 2-core CPU, jax {d['jax']}, {d['dtype']}): "
+            f"{d['reduction']}. {d['scenarios']} scenarios (3 controllers × exact or noisy navigation × "
+            f"{len(d['speeds_m_s'])} speeds × {d['directions']} directions), {d['simulated_s']:.0f} s and {d['gates']} "
+            f"gates each, in one MJX call ({d['compile_s']:.0f} s compile, {d['run_s']:.0f} s run, "
+            f"{_rate(d['env_steps_per_s'])} env-steps/s). Navigation noise: fixes at {n['rate_hz']:g} Hz, "
+            f"{1e3 * n['latency_s']:.0f} ms late, {1e3 * n['position_noise_m']:g} mm and {n['angle_noise_deg']:g}°. "
+            f"Each cell: the largest gate tool error of a scenario, worst / 95th percentile over the directions [mm]; "
+            f"{thrust_bad} periods with a thrust past its limit; {joints}.\n\n"
+            + md_table(["current [m/s]"] + [v["name"] for v in variants], rows) + "\n")
+    if (RESULTS / "hover_robustness_whole_body_cpu.json").exists():
+        w = _load("hover_robustness_whole_body_cpu.json")
+        cells = "; ".join(f"{r['speed_m_s']:g} m/s: {_mm(r['worst_gate_tool_error_m'])} / "
+                          f"{_mm(next(x for x in w['variants'] if x['navigation_noise'])['per_speed'][i]['worst_gate_tool_error_m'])}"
+                          for i, r in enumerate(next(x for x in w['variants'] if not x['navigation_noise'])['per_speed']))
+        text += (f"\nThe whole plan ({w['gates']} gates, {w['simulated_s']:.0f} s), whole-body controller, "
+                 f"{w['directions']} directions (`{w['command']}`): worst-direction gate tool error, exact / noisy "
+                 f"navigation [mm]: {cells}.\n")
+    if (RESULTS / "hover_robustness_h100.json").exists():
+        g = _load("hover_robustness_h100.json")
+        text += (f"\nOn the {g['device']} (`{g['command']}`, jax {g['jax']}, {g['dtype']}): {g['scenarios']} scenarios "
+                 f"in one call, {_rate(g['env_steps_per_s'])} env-steps/s with the controller in the loop "
+                 f"({g['compile_s']:.0f} s compile, {g['run_s']:.0f} s run).\n")
+    return text
 
 
 def hover_vehicle() -> str:

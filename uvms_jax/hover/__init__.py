@@ -30,6 +30,12 @@ from uvms_jax.hover._batch import fluid_bodies
 from uvms_jax.hover._batch import fluid_xfrc
 from uvms_jax.hover._batch import hover_mjx
 from uvms_jax.hover._batch import plot_robustness
+from uvms_jax.hover._batch_control import CONTROLS
+from uvms_jax.hover._batch_control import ControlledResult
+from uvms_jax.hover._batch_control import CurrentRanking
+from uvms_jax.hover._batch_control import batch_controlled
+from uvms_jax.hover._batch_control import nav_schedule
+from uvms_jax.hover._batch_control import rank_by_current
 from uvms_jax.hover._control import allocate_thrust
 from uvms_jax.hover._control import control_steps
 from uvms_jax.hover._control import hold_pose
@@ -79,14 +85,14 @@ from uvms_jax.hover._wholebody import NavigationEstimate
 from uvms_jax.hover._wholebody import WholeBody
 from uvms_jax.hover._wholebody import WholeBodyCommand
 
-__all__ = ["allocate_thrust", "apply_buoyancy", "arm_motion", "batch_candidates", "batch_plan",
+__all__ = ["allocate_thrust", "apply_buoyancy", "arm_motion", "batch_candidates", "batch_controlled", "batch_plan",
            "batch_scenarios", "BatchResult", "buoyancy_bodies", "buoyancy_xfrc", "control_steps",
-           "ControllerSettings", "current_at", "currents_grid", "CurrentSettings", "DEFAULT_THRUSTERS",
+           "ControlledResult", "CONTROLS", "ControllerSettings", "CurrentRanking", "current_at", "currents_grid", "CurrentSettings", "DEFAULT_THRUSTERS",
            "docked_tool", "execute_plan_hovering", "fluid_bodies", "fluid_xfrc", "follow_tool_path",
            "GRAVITY", "hold_pose", "hover_mjcf", "hover_mjx", "hover_model", "HoverFilm", "hover_frame", "HoverLog", "HoverMJX",
-           "HoverRun", "HoverSim", "HoverState", "HoverWorld", "HULL_GEOM", "level_attitude", "NavigationEstimate",
+           "HoverRun", "HoverSim", "HoverState", "HoverWorld", "HULL_GEOM", "level_attitude", "nav_schedule", "NavigationEstimate",
            "NavigationSettings", "PeriodRecord",
-           "plan_targets", "plot_robustness", "run_plan_hovering", "SERVO_KP", "SERVO_KV", "servo_name",
+           "plan_targets", "plot_robustness", "rank_by_current", "run_plan_hovering", "SERVO_KP", "SERVO_KV", "servo_name",
            "station_keeping", "thrust_layout", "thrust_matrix", "Thruster", "thruster_name", "trimmed",
            "vehicle_arm_chain", "VEHICLE_BODY", "vehicle_displacement", "VehicleSettings", "WholeBody",
            "WholeBodyCommand", "WholeBodySettings", "wrap_angle", "write_hover_video",
