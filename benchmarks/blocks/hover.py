@@ -63,20 +63,31 @@ def hover_robustness() -> str:
             f"Each cell: the largest gate tool error of a scenario, worst / 95th percentile over the directions [mm]; "
             f"{thrust_bad} periods with a thrust past its limit; {joints}.\n\n"
             + md_table(["current [m/s]"] + [v["name"] for v in variants], rows) + "\n")
-    if (RESULTS / "hover_robustness_whole_body_cpu.json").exists():
-        w = _load("hover_robustness_whole_body_cpu.json")
-        cells = "; ".join(f"{r['speed_m_s']:g} m/s: {_mm(r['worst_gate_tool_error_m'])} / "
-                          f"{_mm(next(x for x in w['variants'] if x['navigation_noise'])['per_speed'][i]['worst_gate_tool_error_m'])}"
-                          for i, r in enumerate(next(x for x in w['variants'] if not x['navigation_noise'])['per_speed']))
-        text += (f"\nThe whole plan ({w['gates']} gates, {w['simulated_s']:.0f} s), whole-body controller, "
-                 f"{w['directions']} directions (`{w['command']}`): worst-direction gate tool error, exact / noisy "
-                 f"navigation [mm]: {cells}.\n")
-    if (RESULTS / "hover_robustness_h100.json").exists():
-        g = _load("hover_robustness_h100.json")
-        text += (f"\nOn the {g['device']} (`{g['command']}`, jax {g['jax']}, {g['dtype']}): {g['scenarios']} scenarios "
-                 f"in one call, {_rate(g['env_steps_per_s'])} env-steps/s with the controller in the loop "
-                 f"({g['compile_s']:.0f} s compile, {g['run_s']:.0f} s run).\n")
+    for name, where in (("hover_robustness_whole_body_cpu.json", "2-core CPU"),
+                        ("hover_robustness_whole_body_h200.json", None)):
+        if (RESULTS / name).exists():
+            text += _whole_plan(_load(name), where)
+    if (RESULTS / "hover_robustness_throughput_h200.json").exists():
+        g = _load("hover_robustness_throughput_h200.json")
+        text += (f"\nThroughput on the {g['device']} (`{g['command']}`, jax {g['jax']}, {g['dtype']}; "
+                 f"{g['reduction']}): {g['scenarios']} scenarios in one call, {_rate(g['env_steps_per_s'])} "
+                 f"env-steps/s with the controller in the loop ({g['compile_s']:.0f} s compile, {g['run_s']:.0f} s run).\n")
     return text
+
+
+def _whole_plan(w: dict, where: str | None) -> str:
+    """One sentence: the whole plan's worst-direction gate tool error per speed, exact / noisy
+    navigation, with the gates reached and the thrust-limited periods of the worst speed."""
+    exact = next(x for x in w["variants"] if not x["navigation_noise"])["per_speed"]
+    noisy = next(x for x in w["variants"] if x["navigation_noise"])["per_speed"]
+    cells = "; ".join(f"{a['speed_m_s']:g} m/s: {_mm(a['worst_gate_tool_error_m'])} / {_mm(b['worst_gate_tool_error_m'])}"
+                      f" (gates reached in the worst direction {a['gates_reached_worst']:.2f} / {b['gates_reached_worst']:.2f})"
+                      for a, b in zip(exact, noisy))
+    bad = sum(r["thrust_violations"] + r["joint_violations"] for r in exact + noisy)
+    return (f"\nThe whole plan ({w['gates']} gates, {w['simulated_s']:.0f} s), whole-body controller, "
+            f"{w['directions']} directions, on the {where or w['device']} (`{w['command']}`, jax {w['jax']}): "
+            f"worst-direction gate tool error, exact / noisy navigation [mm]: {cells}; {bad} thrust or joint-limit "
+            "violations.\n")
 
 
 def hover_vehicle() -> str:
