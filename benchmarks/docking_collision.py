@@ -145,13 +145,11 @@ def sphere_test(problem: evo.ArmDockingProblem, T_world_base, K_joint):
     return evo.world_collides(problem.world, problem.group, T_world_base, K_joint)
 
 
-def mjx_time(scene_xml: str, Q: np.ndarray, repeat: int) -> dict:
-    """MJX kinematics + collision of the planner's scene (its base fixed) over ``Q (B, n)``."""
-    import mujoco
-
+def mjx_time(m, Q: np.ndarray, repeat: int) -> dict:
+    """MJX kinematics + collision of the planner's scene (its base fixed; ``m``: the scene's
+    ``mujoco.MjModel``) over ``Q (B, n)``."""
     with contextlib.redirect_stdout(io.StringIO()):  # "Failed to import warp"
         from mujoco import mjx
-    m = mujoco.MjModel.from_xml_string(scene_xml)
     mx = mjx.put_model(m)
     dx = mjx.make_data(mx)
 
@@ -238,7 +236,7 @@ def main() -> None:
         out["agreement"] = agreement(settings, problem, robot, poses_agree, args.agree, args.seed + 1)
     if args.mjx:
         _, _, spec = docked_scene(settings.scenario, problem, np.asarray(poses[0]))
-        out["mjx"] = mjx_time(planning.build_scene(robot, spec).xml, np.asarray(q[0].reshape(-1, n)), args.repeat)
+        out["mjx"] = mjx_time(planning.build_scene(robot, spec).model, np.asarray(q[0].reshape(-1, n)), args.repeat)
         out["mjx"]["spheres_same_count_s"] = sph_s * out["mjx"]["configurations"] / B
     print(json.dumps(out, indent=1))
 

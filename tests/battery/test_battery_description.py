@@ -7,7 +7,6 @@ from __future__ import annotations
 import dataclasses
 import logging
 import time
-import xml.etree.ElementTree as ET
 
 import numpy as np
 import pytest
@@ -15,9 +14,8 @@ from _battery import CASE_LIMIT_S, ROOT, USAGE_EXIT
 
 from uvms_jax import robot
 from uvms_jax.hw import cli
-from uvms_jax.robot import load_arm
+from uvms_jax.robot import load_arm, robot_spec
 from uvms_jax.robot._geometry import Shape
-from uvms_jax.robot._mjcf import mjcf_assets
 from uvms_jax.robot._parse import read_urdf
 
 LIMIT = '<limit lower="-3" upper="3" effort="1" velocity="1"/>'
@@ -86,9 +84,8 @@ def test_full_rank_chains_load_quietly(caplog, axes):
     assert not caplog.records
 
 
-def test_mesh_file_names_are_escaped_in_mjcf():
+def test_mesh_file_names_reach_mujoco_as_written():
     robot = load_arm("bravo7")
     odd = Shape(body=0, kind="mesh", pose=tuple(np.eye(4).ravel()), file='/x/a"b<c>&d.stl', link=robot.link_names[1])
-    assets = mjcf_assets(dataclasses.replace(robot, shapes=(odd,)))
-    [asset] = [a for a in assets if "file=" in a]
-    assert ET.fromstring(asset).get("file") == '/x/a"b<c>&d.stl'  # one attribute, read back as written
+    spec = robot_spec(dataclasses.replace(robot, shapes=(odd,)))
+    assert [m.file for m in spec.meshes] == ['/x/a"b<c>&d.stl']  # one name, as written

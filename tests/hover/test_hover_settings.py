@@ -88,7 +88,9 @@ def test_model_names_limits_and_pose(bravo7):
     R = frames.rpy_matrix(rpy)
     np.testing.assert_allclose(R.T @ (data.xpos[model.body("base_link").id] - xyz), vehicle.mount_xyz, atol=1e-12)
     assert (R.T @ (data.site_xpos[model.site(TOOL_SITE).id] - xyz))[2] < 0
-    assert hover_mjcf(None).count("<motor") == 8 and "<position" not in hover_mjcf(None)
+    hull = mujoco.MjModel.from_xml_string(hover_mjcf(None))  # the hull alone, written as MJCF and read back
+    assert hull.nu == 8 and np.all(hull.actuator_trntype == mujoco.mjtTrn.mjTRN_SITE)
+    assert np.all(hull.actuator_biastype == mujoco.mjtBias.mjBIAS_NONE)  # motors, no servo
 
 
 def test_simulator_refuses_what_it_cannot_do(bravo7):

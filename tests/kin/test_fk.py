@@ -144,7 +144,7 @@ def test_mjcf_loads_in_mujoco_and_matches_fk():
     chain = kin.bravo7()
     from uvms_jax import robot
 
-    model = mujoco.MjModel.from_xml_string(robot.robot_mjcf(robot.load_arm("bravo7")))
+    model = robot.robot_spec(robot.load_arm("bravo7")).compile()
     data = mujoco.MjData(model)
     site = model.site("tool").id
     q = random_q(chain, 50, seed=6)

@@ -20,7 +20,7 @@ from uvms_jax import frames
 from uvms_jax import plan as P
 from uvms_jax.plan import _vector_kernels as K
 from uvms_jax.plan._collision import densify
-from uvms_jax.robot import load_robot, robot_mjcf
+from uvms_jax.robot import load_robot, robot_spec
 
 DATA = Path(__file__).parent / "data" / "mbm"
 FAMILIES = ("box", "bookshelf_thin", "cage", "table_pick")
@@ -44,7 +44,7 @@ def problems(panda):
 
 
 def test_body_poses_match_mujoco(panda):
-    model = mujoco.MjModel.from_xml_string(robot_mjcf(panda))
+    model = robot_spec(panda).compile()
     data = mujoco.MjData(model)
     side = P.VectorChecker(panda, P.World(), OPENING).side
     R, t = np.empty((panda.n_joints, 3, 3)), np.empty((panda.n_joints, 3))

@@ -65,7 +65,7 @@ def test_bravo7_description_matches_the_manufacturers_tables():
 
 
 def _mujoco_tool(r: robot.Robot, q: np.ndarray) -> np.ndarray:
-    model = mujoco.MjModel.from_xml_string(robot.robot_mjcf(r))
+    model = robot.robot_spec(r).compile()
     data = mujoco.MjData(model)
     out = []
     for row in q:

@@ -21,7 +21,7 @@ from uvms_jax.robot._geometry import resolve_mesh
 ROBOTS = importlib.metadata.distribution("example-robot-data").locate_file("cmeel.prefix/share/example-robot-data/robots")
 PANDA = ROBOTS / "panda_description/urdf/panda.urdf"
 SCENARIO = yaml.safe_load((Path(__file__).parents[2] / "configs" / "scenario" / "thesis_cage.yaml").read_text())
-ATOL = 1e-8  # numbers written with 10 significant digits and read back by MuJoCo
+ATOL = 1e-8  # [m] float64 round-off of MuJoCo's and the hand-computed poses (and of numbers written in URDF text)
 
 # A unit cube's corners, offset from the file's origin (MuJoCo re-centres meshes: the oracle
 # compares vertices, not frames).
@@ -85,7 +85,7 @@ def _write(tmp_path, text=URDF) -> Path:
 
 
 def _model(arm: robot.Robot):
-    model = mujoco.MjModel.from_xml_string(robot.robot_mjcf(arm))
+    model = robot.robot_spec(arm).compile()
     return model, mujoco.MjData(model)
 
 
@@ -261,8 +261,8 @@ def test_capsules_on_request_and_for_the_bravo7(tmp_path):
     with pytest.raises(ValueError, match="collision must be"):
         robot.load_robot(_write(tmp_path), tip="tool", link_radius=0.05, collision="meshes")
     bravo = robot.load_arm("bravo7")  # its URDF has no collision geometry: capsules, as before
-    assert bravo.shapes == () and robot.mjcf_assets(bravo) == []
-    model = mujoco.MjModel.from_xml_string(robot.robot_mjcf(bravo))
+    model = robot.robot_spec(bravo).compile()
+    assert bravo.shapes == () and model.nmesh == 0
     names = [model.geom(g).name for g in range(model.ngeom)]
     assert names == ["geom_base", *(f"geom_{j}" for j in bravo.joint_names), "geom_jaw_left", "geom_jaw_right"]
 
@@ -333,7 +333,7 @@ def test_panda_fingers_load_from_its_urdf(panda):
                             gripper={"joint": "jaws", "lower": 0.0, "upper": 0.1, "velocity": 0.1})
     assert jaws.fingers == ()
     with pytest.raises(ValueError, match="outside the gripper's limits"):
-        robot.robot_mjcf(panda, jaws_open=0.05)
+        robot.robot_spec(panda, jaws_open=0.05)
 
 
 def test_panda_fingers_sit_where_yourdfpy_puts_them(panda):
@@ -368,5 +368,5 @@ def test_panda_fingers_sit_where_yourdfpy_puts_them(panda):
 
 
 def _model_at(arm: robot.Robot, opening: float):
-    model = mujoco.MjModel.from_xml_string(robot.robot_mjcf(arm, jaws_open=opening))
+    model = robot.robot_spec(arm, jaws_open=opening).compile()
     return model, mujoco.MjData(model)

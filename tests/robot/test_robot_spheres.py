@@ -82,7 +82,7 @@ def _fibonacci(n: int) -> np.ndarray:
 def _panda_hulls(arm):
     """Per body, the vertices of each of its geoms' hulls in the body frame (MuJoCo's model of
     the arm at q = 0, fingers at joint value 0)."""
-    model = mujoco.MjModel.from_xml_string(robot.robot_mjcf(arm, jaws_open=0.0))
+    model = robot.robot_spec(arm, jaws_open=0.0).compile()
     data = mujoco.MjData(model)
     mujoco.mj_kinematics(model, data)
     frames = _body_frames(arm, model, data)
@@ -118,7 +118,7 @@ def test_capsule_arm_spheres_cover_its_capsules(cache):
     arm = robot.load_arm("bravo7")
     assert arm.shapes == ()
     spheres = robot.collision_spheres(arm, BOUND)
-    model = mujoco.MjModel.from_xml_string(robot.robot_mjcf(arm))
+    model = robot.robot_spec(arm).compile()
     data = mujoco.MjData(model)
     mujoco.mj_kinematics(model, data)
     frames = _body_frames(arm, model, data)

@@ -1,7 +1,7 @@
 """A hovering vehicle carrying an arm, in MuJoCo: the physics core of the hover feature.
 
 The vehicle is a hull on a free joint with the arm fixed under it at its mount
-(:func:`hover_mjcf`, :func:`hover_model`). MuJoCo gives the coupled rigid-body dynamics,
+(:func:`hover_spec`, :func:`hover_model`). MuJoCo gives the coupled rigid-body dynamics,
 gravity, and the drag of its inertia-box fluid model, with the water current as its ``wind``.
 This package adds the buoyancy of every body at its centre of buoyancy (:func:`buoyancy_xfrc`
 on :func:`buoyancy_bodies`, set into ``MjData`` by :func:`apply_buoyancy`), thrusters
@@ -55,6 +55,7 @@ from uvms_jax.hover._model import apply_buoyancy
 from uvms_jax.hover._model import buoyancy_bodies
 from uvms_jax.hover._model import hover_mjcf
 from uvms_jax.hover._model import hover_model
+from uvms_jax.hover._model import hover_spec
 from uvms_jax.hover._model import servo_name
 from uvms_jax.hover._model import thruster_name
 from uvms_jax.hover._model import trimmed
@@ -89,7 +90,7 @@ __all__ = ["allocate_thrust", "apply_buoyancy", "arm_motion", "batch_candidates"
            "batch_scenarios", "BatchResult", "buoyancy_bodies", "buoyancy_xfrc", "control_steps",
            "ControlledResult", "CONTROLS", "ControllerSettings", "CurrentRanking", "current_at", "currents_grid", "CurrentSettings", "DEFAULT_THRUSTERS",
            "docked_tool", "execute_plan_hovering", "fluid_bodies", "fluid_xfrc", "follow_tool_path",
-           "GRAVITY", "hold_pose", "hover_mjcf", "hover_mjx", "hover_model", "HoverFilm", "hover_frame", "HoverLog", "HoverMJX",
+           "GRAVITY", "hold_pose", "hover_mjcf", "hover_mjx", "hover_model", "hover_spec", "HoverFilm", "hover_frame", "HoverLog", "HoverMJX",
            "HoverRun", "HoverSim", "HoverState", "HoverWorld", "HULL_GEOM", "level_attitude", "nav_schedule", "NavigationEstimate",
            "NavigationSettings", "PeriodRecord",
            "plan_targets", "plot_robustness", "rank_by_current", "run_plan_hovering", "SERVO_KP", "SERVO_KV", "servo_name",

@@ -15,7 +15,7 @@ Names in the model: the vehicle body and its free joint ``vehicle``, the hull bo
 one site and one actuator per thruster ``thruster_<k>`` (a motor along the thruster's
 direction, control = thrust [N] within ±max), a position servo ``servo_<joint>`` per arm joint
 (control = the joint target [rad]) and the arm's bodies, joints and tool site as
-:func:`uvms_jax.robot.mjcf_body` names them. Nothing collides.
+:func:`uvms_jax.robot.add_robot` names them. Nothing collides.
 """
 
 from __future__ import annotations
@@ -27,14 +27,13 @@ import mujoco
 import numpy as np
 
 from uvms_jax import frames
-from uvms_jax.robot import BASE, Robot, base_body, mjcf_assets, mjcf_body
-from uvms_jax.text import numbers
+from uvms_jax.robot import BASE, Robot, add_robot, base_body
 
 from ._hydro import buoyancy_xfrc
 from ._settings import VehicleSettings
 
 __all__ = ["HULL_GEOM", "SERVO_KP", "SERVO_KV", "VEHICLE_BODY", "apply_buoyancy", "buoyancy_bodies", "hover_mjcf",
-           "hover_model", "servo_name", "thruster_name", "trimmed"]
+           "hover_model", "hover_spec", "servo_name", "thruster_name", "trimmed"]
 
 VEHICLE_BODY = "vehicle"  # the hull's body and its free joint
 HULL_GEOM = "hull"
@@ -68,10 +67,11 @@ def _hull_inertia(vehicle: VehicleSettings) -> np.ndarray:
     return vehicle.mass / 12.0 * np.array([b * b + c * c, a * a + c * c, a * a + b * b])
 
 
-def hover_mjcf(robot: Robot | None, vehicle: VehicleSettings = VehicleSettings(), *,
+def hover_spec(robot: Robot | None, vehicle: VehicleSettings = VehicleSettings(), *,
                xyz: Sequence[float] = (0.0, 0.0, 0.0), rpy: Sequence[float] = (0.0, 0.0, 0.0),
-               current: Sequence[float] = (0.0, 0.0, 0.0), physics_dt: float = 0.002, servos: bool = True) -> str:
-    """MJCF of the vehicle hovering in open water, the arm (if any) hanging at its mount.
+               current: Sequence[float] = (0.0, 0.0, 0.0), physics_dt: float = 0.002,
+               servos: bool = True) -> mujoco.MjSpec:
+    """The model of the vehicle hovering in open water, the arm (if any) hanging at its mount.
 
     Args:
       robot: the arm (its mass properties go in; an arm without them gets capsules at the
@@ -86,54 +86,55 @@ def hover_mjcf(robot: Robot | None, vehicle: VehicleSettings = VehicleSettings()
         own drives (the hardware runner's simulated arm, :class:`~uvms_jax.hover.HoverWorld`).
 
     Returns:
-      the model as an MJCF string (``mujoco.MjModel.from_xml_string``; :func:`hover_model`).
+      an uncompiled ``mujoco.MjSpec`` (``.compile()``: :func:`hover_model`; ``.to_xml()``:
+      :func:`hover_mjcf`).
     """
     if not physics_dt > 0:
         raise ValueError(f"physics_dt must be > 0 [s], got {physics_dt}")
-    quat = frames.matrix_quat(frames.rpy_matrix(rpy))
-    half = np.asarray(vehicle.size, dtype=float) / 2.0
-    gravity = (0.0, 0.0, -vehicle.gravity)
-    lines = [f'<mujoco model="hover_{robot.name if robot is not None else "hull"}">',
-             '  <compiler angle="radian"/>',
-             f'  <option timestep="{physics_dt!r}" integrator="implicitfast" gravity="{numbers(gravity)}" '
-             f'density="{vehicle.water_density!r}" viscosity="{vehicle.viscosity!r}" wind="{numbers(current)}"/>',
-             '  <default>',
-             f'    <geom contype="0" conaffinity="0" density="{_GEOM_DENSITY!r}"/>',
-             f'    <joint armature="{_ARMATURE!r}" damping="{_DAMPING!r}"/>',
-             '  </default>']
-    assets = mjcf_assets(robot) if robot is not None else []
-    if assets:
-        lines += ["  <asset>", *[f"    {a}" for a in assets], "  </asset>"]
-    lines += ['  <worldbody>',
-              f'    <body name="{VEHICLE_BODY}" pos="{numbers(xyz)}" quat="{numbers(quat)}">',
-              # the free joint gets none of the arm joints' armature and damping
-              f'      <joint name="{VEHICLE_BODY}" type="free" armature="0" damping="0"/>',
-              f'      <inertial pos="0 0 0" mass="{vehicle.mass!r}" diaginertia="{numbers(_hull_inertia(vehicle))}"/>',
-              f'      <geom name="{HULL_GEOM}" type="box" size="{numbers(half)}" rgba="0.9 0.8 0.2 0.4"/>',
-              f'      <site name="cob" pos="{numbers(vehicle.cob)}" size="0.02"/>']
+    spec = mujoco.MjSpec()
+    spec.modelname = f"hover_{robot.name if robot is not None else 'hull'}"
+    spec.compiler.degree = False
+    o = spec.option
+    o.timestep, o.integrator, o.gravity = physics_dt, mujoco.mjtIntegrator.mjINT_IMPLICITFAST, [0.0, 0.0, -vehicle.gravity]
+    o.density, o.viscosity, o.wind = vehicle.water_density, vehicle.viscosity, current
+    spec.default.geom.contype, spec.default.geom.conaffinity, spec.default.geom.density = 0, 0, _GEOM_DENSITY
+    spec.default.joint.armature = _ARMATURE
+    spec.default.joint.damping[0] = _DAMPING  # [linear, (polynomial terms)]
+    body = spec.worldbody.add_body(name=VEHICLE_BODY, pos=xyz, quat=frames.matrix_quat(frames.rpy_matrix(rpy)),
+                                   mass=vehicle.mass, ipos=[0.0, 0.0, 0.0], inertia=_hull_inertia(vehicle),
+                                   explicitinertial=True)
+    # the free joint gets none of the arm joints' armature and damping
+    body.add_joint(name=VEHICLE_BODY, type=mujoco.mjtJoint.mjJNT_FREE, armature=0.0, damping=[0.0, 0.0, 0.0])
+    body.add_geom(name=HULL_GEOM, type=mujoco.mjtGeom.mjGEOM_BOX, size=np.asarray(vehicle.size, dtype=float) / 2.0,
+                  rgba=[0.9, 0.8, 0.2, 0.4])
+    body.add_site(name="cob", pos=vehicle.cob).size[0] = 0.02
     for k, t in enumerate(vehicle.thrusters):
-        lines.append(f'      <site name="{thruster_name(k)}" pos="{numbers(t.pos)}" size="0.03"/>')
+        body.add_site(name=thruster_name(k), pos=t.pos).size[0] = 0.03
     if robot is not None:
-        mount_quat = frames.matrix_quat(frames.rpy_matrix(vehicle.mount_rpy))
-        body = mjcf_body(robot, pos=vehicle.mount_xyz, quat=mount_quat, inertial=True)
-        lines += ["      " + line for line in body.splitlines()]
-    lines += ['    </body>', '  </worldbody>', '  <actuator>']
+        add_robot(spec, robot, body, pos=vehicle.mount_xyz, quat=frames.matrix_quat(frames.rpy_matrix(vehicle.mount_rpy)),
+                  inertial=True)
     for k, t in enumerate(vehicle.thrusters):
         d = np.asarray(t.direction, dtype=float)
-        d = d / np.linalg.norm(d)
-        lines.append(f'    <motor name="{thruster_name(k)}" site="{thruster_name(k)}" gear="{numbers(d)} 0 0 0" '
-                     f'ctrllimited="true" ctrlrange="{-t.max_thrust!r} {t.max_thrust!r}"/>')
+        spec.add_actuator(name=thruster_name(k), target=thruster_name(k), trntype=mujoco.mjtTrn.mjTRN_SITE,
+                          gear=[*(d / np.linalg.norm(d)), 0.0, 0.0, 0.0], ctrllimited=mujoco.mjtLimited.mjLIMITED_TRUE,
+                          ctrlrange=[-t.max_thrust, t.max_thrust]).set_to_motor()
     if robot is not None and servos:
         for j, lo, hi in zip(robot.joint_names, robot.lower, robot.upper):
-            lines.append(f'    <position name="{servo_name(j)}" joint="{j}" kp="{SERVO_KP!r}" kv="{SERVO_KV!r}" '
-                         f'ctrllimited="true" ctrlrange="{float(lo)!r} {float(hi)!r}"/>')
-    lines += ['  </actuator>', '</mujoco>', '']
-    return "\n".join(lines)
+            spec.add_actuator(name=servo_name(j), target=j, trntype=mujoco.mjtTrn.mjTRN_JOINT,
+                              ctrllimited=mujoco.mjtLimited.mjLIMITED_TRUE,
+                              ctrlrange=[float(lo), float(hi)]).set_to_position(kp=SERVO_KP, kv=SERVO_KV)
+    return spec
+
+
+def hover_mjcf(robot: Robot | None, vehicle: VehicleSettings = VehicleSettings(), **kwargs) -> str:
+    """:func:`hover_spec` (same arguments) as MJCF text, a file for other tools (MuJoCo writes
+    its numbers with 6 significant digits: build models from :func:`hover_spec`)."""
+    return hover_spec(robot, vehicle, **kwargs).to_xml()
 
 
 def hover_model(robot: Robot | None, vehicle: VehicleSettings = VehicleSettings(), **kwargs) -> mujoco.MjModel:
-    """The compiled :func:`hover_mjcf` (same arguments)."""
-    return mujoco.MjModel.from_xml_string(hover_mjcf(robot, vehicle, **kwargs))
+    """The compiled :func:`hover_spec` (same arguments)."""
+    return hover_spec(robot, vehicle, **kwargs).compile()
 
 
 def buoyancy_bodies(model: mujoco.MjModel, robot: Robot | None,
@@ -155,7 +156,7 @@ def buoyancy_bodies(model: mujoco.MjModel, robot: Robot | None,
         for body, name in names.items():
             b = model.body(name).id
             parts = [p for p in robot.inertials if p.body == body and p.mass > 0]
-            if not parts:  # no mass properties: a capsule of water (hover_mjcf's geom density)
+            if not parts:  # no mass properties: a capsule of water (hover_spec's geom density)
                 volume, cob = model.body_mass[b] / _GEOM_DENSITY, np.array(model.body_ipos[b])
             else:
                 volume = sum(p.volume for p in parts)

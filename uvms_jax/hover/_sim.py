@@ -24,7 +24,7 @@ from uvms_jax.robot import TOOL_SITE, Robot
 
 from ._control import LIMIT_SLACK, control_steps, hold_pose, thrust_layout
 from ._hydro import current_at
-from ._model import VEHICLE_BODY, apply_buoyancy, buoyancy_bodies, hover_mjcf, servo_name, thruster_name
+from ._model import VEHICLE_BODY, apply_buoyancy, buoyancy_bodies, hover_spec, servo_name, thruster_name
 from ._settings import ControllerSettings, CurrentSettings, VehicleSettings
 
 __all__ = ["HoverLog", "HoverSim", "HoverWorld", "arm_motion"]
@@ -132,12 +132,11 @@ class HoverWorld:
 
     # -- the model -----------------------------------------------------------------------------
     def spec(self, robot: Robot | None, physics_dt: float = 0.002, servos: bool = False) -> mujoco.MjSpec:
-        """The vehicle's model carrying ``robot`` at its mount (:func:`hover_mjcf`; ``servos``:
+        """The vehicle's model carrying ``robot`` at its mount (:func:`hover_spec`; ``servos``:
         position servos on the arm's joints), at the starting pose and current."""
         self.robot = robot
-        spec = mujoco.MjSpec.from_string(hover_mjcf(robot, self.vehicle, xyz=self.xyz, rpy=self.rpy,
-                                                    current=self.current_velocity(0.0), physics_dt=physics_dt,
-                                                    servos=servos))
+        spec = hover_spec(robot, self.vehicle, xyz=self.xyz, rpy=self.rpy, current=self.current_velocity(0.0),
+                          physics_dt=physics_dt, servos=servos)
         # The hull's outline at the starting pose, fixed in the world: what a video measures the
         # drift against. Drawn only (no mass, no contact, in no body: no force).
         spec.worldbody.add_geom(name=START_OUTLINE, type=mujoco.mjtGeom.mjGEOM_BOX, contype=0, conaffinity=0,

@@ -1,7 +1,7 @@
 """Simulated Reach arm speaking BPL, backed by MuJoCo joint-space physics, with device faults.
 
 The physics model is the robot's own (:func:`~uvms_jax.hw.sim_spec`, built on
-:func:`uvms_jax.robot.mjcf_body`): its joints, links and mass properties under gravity and
+:func:`uvms_jax.robot.add_robot`): its joints, links and mass properties under gravity and
 buoyancy (docs/hardware.md §3), the jaws as one slide joint. The physics runs in the arm's base
 frame; the base's orientation in the world (``SimSettings.base_rpy``: upright, or hanging under a
 vehicle) turns gravity and buoyancy. An arm whose description has no mass properties is
@@ -71,7 +71,7 @@ class ArmWorld(Protocol):
     """
 
     def spec(self, robot, physics_dt: float) -> mujoco.MjSpec:
-        """The world's model holding ``robot``'s body tree as :func:`uvms_jax.robot.mjcf_body`
+        """The world's model holding ``robot``'s body tree as :func:`uvms_jax.robot.add_robot`
         names it, with no actuators on the arm's joints; time step ``physics_dt`` [s]."""
 
     def prepare(self, model: mujoco.MjModel, data: mujoco.MjData) -> None:

@@ -1,6 +1,6 @@
 """The simulated arm's MuJoCo model: the robot's one MuJoCo body tree plus drives.
 
-The bodies, joints, capsules and the tool site are :func:`uvms_jax.robot.mjcf_body`'s (with the
+The bodies, joints, capsules and the tool site are :func:`uvms_jax.robot.add_robot`'s (with the
 robot's mass properties where ``dynamics`` is on); this module adds what only the simulator
 needs: gravity along the world's -z turned into the base frame (:func:`world_up`), no contacts,
 rotor inertia and damping on every joint, the jaws (an arm with a gripper: the description's
@@ -32,6 +32,7 @@ _MM = 1.0 / MM_PER_M  # jaws: mm on the wire, m in MuJoCo
 _HINGE_ARMATURE, _HINGE_DAMPING = 0.05, 0.1
 _JAWS_ARMATURE, _JAWS_DAMPING = 0.5, 1.0
 _JAWS_HALF_SIZE, _JAWS_MASS = (0.01, 0.02, 0.02), 0.2
+_GEOM_DENSITY = 1000.0  # [kg/m³] links without mass properties: capsules of water
 KV = 30.0  # velocity servo gain [N·m·s/rad; N·s/m]
 GRAVITY = 9.81  # [m/s²]
 JAWS_BODY = "jaws"  # the body the jaws' slide joint moves
@@ -62,7 +63,7 @@ def massive_bodies(robot) -> set[int]:
 def sim_spec(robot, kv: float = KV, physics_dt: float = SimSettings.physics_dt, dynamics: bool = True,
              base_rpy: Sequence[float] = SimSettings.base_rpy) -> mujoco.MjSpec:
     """MuJoCo model of the simulated ``robot`` with its base fixed: its body tree
-    (:func:`uvms_jax.robot.mjcf_body`) with the drives of :func:`add_drives`.
+    (:func:`uvms_jax.robot.add_robot`) with the drives of :func:`add_drives`.
 
     MuJoCo's world is the arm's base frame; nothing collides. With ``dynamics`` each link
     carries the robot's mass properties (``robot.inertials``, summed per body) under gravity
@@ -82,14 +83,13 @@ def sim_spec(robot, kv: float = KV, physics_dt: float = SimSettings.physics_dt, 
     """
     import mujoco  # imported here: the protocol layer must not need MuJoCo
 
-    from uvms_jax.robot import mjcf_assets, mjcf_body
+    from uvms_jax.robot import add_robot
 
-    inertial = bool(massive_bodies(robot)) and dynamics
-    xml = (f'<mujoco model="{robot.name}_hw_sim"><compiler angle="radian"/>'
-           '<default><geom contype="0" conaffinity="0" density="1000"/></default>'
-           f"<asset>{''.join(mjcf_assets(robot))}</asset>"
-           f"<worldbody>{mjcf_body(robot, inertial=inertial, finger_joints=bool(robot.fingers))}</worldbody></mujoco>")
-    spec = mujoco.MjSpec.from_string(xml)
+    spec = mujoco.MjSpec()
+    spec.modelname = f"{robot.name}_hw_sim"
+    spec.compiler.degree = False
+    spec.default.geom.contype, spec.default.geom.conaffinity, spec.default.geom.density = 0, 0, _GEOM_DENSITY
+    add_robot(spec, robot, inertial=bool(massive_bodies(robot)) and dynamics, finger_joints=bool(robot.fingers))
     spec.option.timestep = physics_dt
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
     spec.option.gravity = -GRAVITY * world_up(base_rpy)
@@ -98,10 +98,10 @@ def sim_spec(robot, kv: float = KV, physics_dt: float = SimSettings.physics_dt, 
 
 def add_drives(spec: mujoco.MjSpec, robot, kv: float = KV, dynamics: bool = True) -> mujoco.MjSpec:
     """Add what the simulated device needs to the model ``spec`` holding ``robot``'s body tree
-    (as :func:`uvms_jax.robot.mjcf_body` names it; anywhere in the world, e.g. under a vehicle):
+    (as :func:`uvms_jax.robot.add_robot` names it; anywhere in the world, e.g. under a vehicle):
     the jaws' slide joint (an arm with a gripper), and a velocity actuator and an integral-torque
     motor on every joint. Where the body tree holds the description's fingers on their joints
-    (``mjcf_body(..., finger_joints=True)``), the gripper joint's finger is the jaws and each mimic
+    (``add_robot(..., finger_joints=True)``), the gripper joint's finger is the jaws and each mimic
     follows it by a joint equality (``finger = multiplier · opening + offset``); otherwise the
     jaws are a slide body at the tool frame.
 

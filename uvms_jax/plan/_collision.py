@@ -58,11 +58,12 @@ def densify(path: np.ndarray, resolution: float) -> np.ndarray:
     return np.concatenate(out)
 
 
-def _compile(xml: str, margin: float) -> tuple[mujoco.MjModel, mujoco.MjData]:
-    tag = '<compiler angle="radian"/>'
-    if tag not in xml:
-        raise ValueError("scene XML lacks <compiler angle=\"radian\"/>")
-    m = mujoco.MjModel.from_xml_string(xml.replace(tag, f'{tag}\n  <default><geom margin="{margin!r}"/></default>', 1))
+def _compile(spec: mujoco.MjSpec, margin: float) -> tuple[mujoco.MjModel, mujoco.MjData]:
+    """A copy of the scene's model with every geom's ``margin`` [m]."""
+    spec = spec.copy()
+    for g in spec.geoms:
+        g.margin = margin
+    m = spec.compile()
     return m, mujoco.MjData(m)
 
 
@@ -90,9 +91,9 @@ class CollisionChecker:
         self.upper = scene.model.jnt_range[:, 1].copy()
         # MuJoCo adds the two geoms' margins of a pair: half each gives the pair margin. The
         # margin must be compiled in (not set afterwards): broad-phase bounds include it.
-        self._m, self._d = _compile(scene.xml, self.margin / 2)
-        self._m0, self._d0 = _compile(scene.xml, 0.0)
-        self._mc, self._dc = _compile(scene.xml, self.clearance_max / 2)
+        self._m, self._d = _compile(scene.mjspec, self.margin / 2)
+        self._m0, self._d0 = _compile(scene.mjspec, 0.0)
+        self._mc, self._dc = _compile(scene.mjspec, self.clearance_max / 2)
         self.n_checks = 0
         # The context the models' geom bits are set for: a private cache of MuJoCo state that
         # spares the switch when consecutive queries share a context, never an input.

@@ -26,8 +26,6 @@ MuJoCo keeps them in its bounding volumes — until a :class:`Context` turns one
 from __future__ import annotations
 
 import dataclasses
-import xml.etree.ElementTree as ET
-from xml.sax.saxutils import quoteattr  # file names in XML: quoted and escaped
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -38,7 +36,6 @@ import numpy as np
 from uvms_jax import frames
 from uvms_jax import robot as robots
 from uvms_jax.plan._spec import SceneSpec, box_vertices
-from uvms_jax.text import numbers
 
 __all__ = ["Context", "Scene", "build_scene"]
 
@@ -80,7 +77,7 @@ class Scene:
     Attributes:
       spec: the :class:`SceneSpec`.
       robot: the arm (:class:`uvms_jax.robot.Robot`).
-      xml: the MJCF text.
+      mjspec: the ``mujoco.MjSpec`` the model is compiled from (:attr:`xml`: as MJCF text).
       model: ``mujoco.MjModel`` (its contype/conaffinity are switched by the collision checker).
       T_world_base: ``(4, 4)`` pose of the arm's base link in the world.
       self_collision: the arm's skipped self-collision pairs
@@ -115,8 +112,8 @@ class Scene:
         self.T_base_world = np.linalg.inv(self.T_world_base)
         self.self_collision = robots.self_collision_pairs(robot, self_collision_samples, jaws_open=spec.jaws_open,
                                                           margin=SELF_COLLISION_MARGIN)
-        self.xml, self.finger_length = self._build_xml()
-        self.model = mujoco.MjModel.from_xml_string(self.xml)
+        self.mjspec, self.finger_length = self._build_spec()
+        self.model = self.mjspec.compile()
         m = self.model
         bid = lambda n: mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, n)  # noqa: E731
         link_ids = [bid(n) for n in robot.link_names]
@@ -198,7 +195,7 @@ class Scene:
           ValueError: none of them is clear (then give the scenario a ``start_q``).
         """
         robot = self.robot
-        model = mujoco.MjModel.from_xml_string(self.xml)
+        model = self.mjspec.compile()
         model.geom_margin[:] = clearance / 2  # a pair's margins add up
         data = mujoco.MjData(model)
         lower, upper = robot.lower, robot.upper
@@ -254,151 +251,129 @@ class Scene:
         o, s = self.objects[node], self.spec
         return np.array([0.0, 0.0, s.water_density * s.gravity * o.volume - self.mass(node) * s.gravity])
 
-    # -- MJCF ----------------------------------------------------------------------------
-    def _build_xml(self) -> tuple[str, float]:
-        """The scene's MJCF and the jaw fingers' reach beyond the tool point [m]."""
-        parts = _MjcfParts()
-        self._cage_xml(parts)
-        self._items_xml(parts)
-        arm, finger_length = self._arm_xml(parts)
-        base = robots.base_body(self.robot)
-        excludes = "".join(f'<exclude body1="{a}" body2="{b}"/>' for a, b in self.self_collision["always"]
-                           if base not in (a, b))
-        xml = (
-            '<mujoco model="thesis_cage">\n  <compiler angle="radian"/>\n  <option gravity="0 0 0"/>\n'
-            '  <visual><global offwidth="960" offheight="720"/></visual>\n'
-            f"  <asset>\n    {chr(10).join(parts.assets)}\n  </asset>\n"
-            f"  <worldbody>\n    <light pos=\"0 0 3\" dir=\"0 0 -1\"/>\n    {chr(10).join(parts.world)}\n"
-            f"{ET.tostring(arm, encoding='unicode')}\n  </worldbody>\n"
-            f"  <contact>{excludes}</contact>\n</mujoco>\n"
-        )
-        return xml, finger_length
+    # -- the MuJoCo model -------------------------------------------------------------------
+    @property
+    def xml(self) -> str:
+        """The scene's model as MJCF text, a file for other tools (MuJoCo writes its numbers
+        with 6 significant digits: build models from :attr:`mjspec`)."""
+        return self.mjspec.to_xml()
 
-    def _cage_xml(self, parts: "_MjcfParts") -> None:
+    def _build_spec(self) -> tuple[mujoco.MjSpec, float]:
+        """The scene's model and the jaw fingers' reach beyond the tool point [m]."""
+        spec = mujoco.MjSpec()
+        spec.modelname = "thesis_cage"
+        spec.compiler.degree = False
+        spec.option.gravity = [0.0, 0.0, 0.0]
+        spec.visual.global_.offwidth, spec.visual.global_.offheight = 960, 720
+        spec.worldbody.add_light(pos=[0.0, 0.0, 3.0], dir=[0.0, 0.0, -1.0])
+        self._add_cage(spec)
+        self._add_items(spec)
+        finger_length = self._add_arm(spec)
+        base = robots.base_body(self.robot)
+        for a, b in self.self_collision["always"]:
+            if base not in (a, b):
+                spec.add_exclude(bodyname1=a, bodyname2=b)
+        return spec, finger_length
+
+    def _add_cage(self, spec: mujoco.MjSpec) -> None:
         """The ceiling and the table under everything (half-spaces), the cage's frame, the mount."""
         s = self.spec
+        # The ceiling and the table under everything are half-spaces (MuJoCo planes): exact,
+        # cheap against every shape, and they also forbid slipping past their edges.
         if s.cage_size is not None:
             L, W, H = s.cage_size
-            # The ceiling and the table under everything are half-spaces (MuJoCo planes): exact,
-            # cheap against every shape, and they also forbid slipping past their edges.
-            parts.world.append(
-                f'<geom name="ceiling" type="plane" pos="0 0 {H}" quat="0 1 0 0" size="{L / 2} {W / 2} 0.05" '
-                f'rgba="0.7 0.7 0.7 0.2" contype="{SCENE_BITS[0]}" conaffinity="{SCENE_BITS[1]}"/>'
-            )
+            _add_geom(spec, "ceiling", frames.pose(np.diag([1.0, -1.0, -1.0]), (0.0, 0.0, H)), (0.7, 0.7, 0.7, 0.2),
+                      type=mujoco.mjtGeom.mjGEOM_PLANE, size=[L / 2, W / 2, 0.05])
         under = s.tables[0]
-        top = under.T_world_top
-        parts.world.append(
-            f'<geom name="{under.name}" type="plane" pos="{numbers(top[:3, 3])}" quat="{numbers(frames.matrix_quat(top[:3, :3]))}" '
-            f'size="{under.size[0] / 2} {under.size[1] / 2} 0.05" rgba="0.6 0.55 0.5 1" '
-            f'contype="{SCENE_BITS[0]}" conaffinity="{SCENE_BITS[1]}"/>'
-        )
+        _add_geom(spec, under.name, under.T_world_top, (0.6, 0.55, 0.5, 1.0), type=mujoco.mjtGeom.mjGEOM_PLANE,
+                  size=[under.size[0] / 2, under.size[1] / 2, 0.05])
         if s.cage_size is not None:
-            p = s.profile
+            p, frame = s.profile, (0.6, 0.6, 0.65, 1.0)
             k = 0
             for sx in (-1, 1):
                 for sy in (-1, 1):
-                    parts.box(f"cage:post{k}", frames.pose(p=(sx * (L - p) / 2, sy * (W - p) / 2, H / 2)), (p, p, H),
-                              "0.6 0.6 0.65 1")
+                    _add_box(spec, f"cage:post{k}", frames.pose(p=(sx * (L - p) / 2, sy * (W - p) / 2, H / 2)), (p, p, H),
+                             frame)
                     k += 1
             for z in (p / 2, H - p / 2):
                 for sx in (-1, 1):
-                    parts.box(f"cage:x{k}", frames.pose(p=(sx * (L - p) / 2, 0, z)), (p, W - 2 * p, p), "0.6 0.6 0.65 1")
-                    parts.box(f"cage:y{k}", frames.pose(p=(0, sx * (W - p) / 2, z)), (L - 2 * p, p, p), "0.6 0.6 0.65 1")
+                    _add_box(spec, f"cage:x{k}", frames.pose(p=(sx * (L - p) / 2, 0, z)), (p, W - 2 * p, p), frame)
+                    _add_box(spec, f"cage:y{k}", frames.pose(p=(0, sx * (W - p) / 2, z)), (L - 2 * p, p, p), frame)
                     k += 1
         ms = s.mount_size
-        parts.box("mount", self.T_world_base @ frames.pose(p=(0, 0, -ms[2] / 2)), ms, "0.3 0.3 0.3 1", MOUNT_BITS)
+        _add_box(spec, "mount", self.T_world_base @ frames.pose(p=(0, 0, -ms[2] / 2)), ms, (0.3, 0.3, 0.3, 1.0),
+                 MOUNT_BITS)
 
-    def _items_xml(self, parts: "_MjcfParts") -> None:
+    def _add_items(self, spec: mujoco.MjSpec) -> None:
         """The tables on the floor, the obstacles, the base plates and the objects."""
         s = self.spec
         for t in s.tables[1:]:
-            parts.box(t.name, t.T_world_box, t.size, "0.75 0.8 0.9 0.6")
-        bits = f'contype="{SCENE_BITS[0]}" conaffinity="{SCENE_BITS[1]}" rgba="0.55 0.6 0.7 0.8"'
+            _add_box(spec, t.name, t.T_world_box, t.size, (0.75, 0.8, 0.9, 0.6))
+        rgba = (0.55, 0.6, 0.7, 0.8)
         for o in s.obstacles:
-            T = o.T_world
-            pose = f'pos="{numbers(T[:3, 3])}" quat="{numbers(frames.matrix_quat(T[:3, :3]))}"'
             if o.shape == "sphere":
-                parts.world.append(f'<geom name="{o.name}" type="sphere" size="{o.dims[0]!r}" {pose} {bits}/>')
+                _add_geom(spec, o.name, o.T_world, rgba, type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[o.dims[0], 0.0, 0.0])
             elif o.shape == "capsule":  # primitive: arm capsule vs capsule is exact in MuJoCo
-                parts.world.append(f'<geom name="{o.name}" type="capsule" size="{o.dims[0]!r} {o.dims[1] / 2!r}" '
-                                   f'{pose} {bits}/>')
-            elif o.shape == "mesh" and not o.vertices:  # MuJoCo reads the file and collides with its convex hull
-                mname = f"m_obstacle_{o.name}"
-                parts.assets.append(f'<mesh name="{mname}" file={quoteattr(str(Path(o.file).resolve()))} '
-                                    f'scale="{numbers([o.scale] * 3)}"/>')
-                parts.world.append(f'<geom name="{o.name}" type="mesh" mesh="{mname}" {pose} {bits}/>')
-            else:  # boxes and cylinders as convex meshes (see the module docstring), meshes of vertices
-                mname = parts.mesh(f"m_obstacle_{o.name}", o.hull_vertices())
-                parts.world.append(f'<geom name="{o.name}" type="mesh" mesh="{mname}" {pose} {bits}/>')
+                _add_geom(spec, o.name, o.T_world, rgba, type=mujoco.mjtGeom.mjGEOM_CAPSULE,
+                          size=[o.dims[0], o.dims[1] / 2, 0.0])
+            else:  # MuJoCo collides with a mesh file's convex hull; boxes and cylinders as convex meshes
+                mesh = spec.add_mesh(name=f"m_obstacle_{o.name}")
+                if o.shape == "mesh" and not o.vertices:
+                    mesh.file, mesh.scale = str(Path(o.file).resolve()), [o.scale] * 3
+                else:
+                    mesh.uservert = o.hull_vertices().reshape(-1)
+                _add_geom(spec, o.name, o.T_world, rgba, type=mujoco.mjtGeom.mjGEOM_MESH, meshname=mesh.name)
         for b in s.bases:
             T = self.T_world_base_top(b.node) @ frames.pose(p=(0, 0, -b.size[2] / 2))
-            parts.box(f"n{b.node}:{b.name}", T, b.size, "0.9 0.3 0.2 1")
+            _add_box(spec, f"n{b.node}:{b.name}", T, b.size, (0.9, 0.3, 0.2, 1.0))
         for o in s.objects:
-            T = self.T_world_object(o.node)
-            mname = parts.mesh(f"m_{o.name}", o.vertices())
-            parts.world.append(
-                f'<geom name="n{o.node}:{o.name}" type="mesh" mesh="{mname}" pos="{numbers(T[:3, 3])}" '
-                f'quat="{numbers(frames.matrix_quat(T[:3, :3]))}" rgba="1 0.55 0.1 1" contype="{SCENE_BITS[0]}" conaffinity="{SCENE_BITS[1]}"/>'
-            )
+            spec.add_mesh(name=f"m_{o.name}", uservert=o.vertices().reshape(-1))
+            _add_geom(spec, f"n{o.node}:{o.name}", self.T_world_object(o.node), (1.0, 0.55, 0.1, 1.0),
+                      type=mujoco.mjtGeom.mjGEOM_MESH, meshname=f"m_{o.name}")
 
-    def _arm_xml(self, parts: "_MjcfParts") -> tuple[ET.Element, float]:
+    def _add_arm(self, spec: mujoco.MjSpec) -> float:
         """The arm's body tree with each geom's collision bits, its jaw fingers as convex
-        meshes and in-hand copies of the objects (off by default); and the fingers' reach
+        meshes and in-hand copies of the objects (off by default); returns the fingers' reach
         beyond the tool point [m]."""
         s, robot = self.spec, self.robot
-        arm = ET.fromstring(robots.mjcf_body(robot, s.mount_pos, frames.matrix_quat(self.T_world_base[:3, :3]), s.jaws_open))
-        parts.assets += robots.mjcf_assets(robot)  # the description's meshes, boxes and cylinders of the arm
-        last = arm.find(".//site[@name='tool']/..")
-        tool_site = last.find("site[@name='tool']")
-        T_link_tool = frames.pose(frames.quat_matrix(tool_site.get("quat")), [float(v) for v in tool_site.get("pos").split()])
-        base = robots.base_body(robot)
+        base = robots.add_robot(spec, robot, pos=s.mount_pos, quat=frames.matrix_quat(self.T_world_base[:3, :3]),
+                                jaws_open=s.jaws_open)
+        tool = spec.site(robots.TOOL_SITE)
+        T_link_tool = frames.pose(frames.quat_matrix(tool.quat), tool.pos)
         shoulder = {b for _, b in self._base_pairs()}
         finger_length = 0.0
-        for body in arm.iter("body"):
-            name = body.get("name")
-            for g in body.findall("geom"):
-                bits = (BASE_BITS if name == base else FIRST_BITS if name == robot.link_names[0]
-                        else SHOULDER_BITS if name in shoulder else ARM_BITS)
-                g.set("contype", str(bits[0]))
-                g.set("conaffinity", str(bits[1]))
-                if g.get("type") == "box":  # jaw fingers → convex meshes (see the module docstring)
-                    size = np.array([float(v) for v in g.get("size").split()]) * 2
-                    pos = np.array([float(v) for v in g.get("pos").split()])
-                    tip = np.linalg.inv(T_link_tool) @ np.r_[pos, 1.0]
+        for body in [base, *base.find_all(mujoco.mjtObj.mjOBJ_BODY)]:
+            bits = (BASE_BITS if body.name == base.name else FIRST_BITS if body.name == robot.link_names[0]
+                    else SHOULDER_BITS if body.name in shoulder else ARM_BITS)
+            for g in body.geoms:
+                g.contype, g.conaffinity = bits
+                if g.type == mujoco.mjtGeom.mjGEOM_BOX:  # jaw fingers → convex meshes (see the module docstring)
+                    size = np.array(g.size) * 2
+                    tip = np.linalg.inv(T_link_tool) @ np.r_[g.pos, 1.0]
                     finger_length = max(finger_length, tip[2] + size[2] / 2)
-                    g.set("type", "mesh")
-                    g.set("mesh", parts.mesh(f"m_{g.get('name')}", box_vertices(size)))
-                    del g.attrib["size"]
+                    spec.add_mesh(name=f"m_{g.name}", uservert=box_vertices(size).reshape(-1))
+                    g.type, g.meshname, g.size = mujoco.mjtGeom.mjGEOM_MESH, f"m_{g.name}", [0.0, 0.0, 0.0]
         # In-hand copies of the objects, fixed to the last link at the grasp (off by default).
+        last = tool.parent
         for o in s.objects:
             T = T_link_tool @ self.T_tool_obj_for(o.node)
-            ET.SubElement(last, "geom", {
-                "name": f"held_{o.name}", "type": "mesh", "mesh": f"m_{o.name}", "pos": numbers(T[:3, 3]),
-                "quat": numbers(frames.matrix_quat(T[:3, :3])), "rgba": "1 0.55 0.1 0.8", "contype": str(HELD_BITS[0]),
-                "conaffinity": str(HELD_BITS[1]),
-            })
-        return arm, finger_length
+            last.add_geom(name=f"held_{o.name}", type=mujoco.mjtGeom.mjGEOM_MESH, meshname=f"m_{o.name}",
+                          pos=T[:3, 3], quat=frames.matrix_quat(T[:3, :3]), rgba=[1.0, 0.55, 0.1, 0.8],
+                          contype=HELD_BITS[0], conaffinity=HELD_BITS[1])
+        return finger_length
 
 
-class _MjcfParts:
-    """The scene's MJCF as it is built: ``<asset>`` lines and ``<worldbody>`` geom lines."""
+def _add_geom(spec: mujoco.MjSpec, name: str, T: np.ndarray, rgba, bits=SCENE_BITS, **kwargs) -> None:
+    """A world geom named ``name`` at ``T (4, 4)`` with colour ``rgba`` and collision ``bits``."""
+    spec.worldbody.add_geom(name=name, pos=T[:3, 3], quat=frames.matrix_quat(T[:3, :3]), rgba=rgba, contype=bits[0],
+                            conaffinity=bits[1], **kwargs)
 
-    def __init__(self):
-        self.assets: list[str] = []
-        self.world: list[str] = []
 
-    def mesh(self, name: str, verts: np.ndarray) -> str:
-        """Add a mesh asset of vertices ``(v, 3)`` [m]; returns its name."""
-        self.assets.append(f'<mesh name="{name}" vertex="{numbers(verts)}"/>')
-        return name
+def _add_box(spec: mujoco.MjSpec, label: str, T: np.ndarray, size, rgba, bits=SCENE_BITS) -> None:
+    """A box of full ``size`` [m] at ``T (4, 4)`` as a convex mesh geom (mesh ``m_<label>``)."""
+    spec.add_mesh(name=f"m_{label}", uservert=box_vertices(size).reshape(-1))
+    _add_geom(spec, label, T, rgba, bits, type=mujoco.mjtGeom.mjGEOM_MESH, meshname=f"m_{label}")
 
-    def box(self, label: str, T: np.ndarray, size, rgba: str, bits=SCENE_BITS) -> None:
-        """Add a box of full ``size`` [m] at ``T (4, 4)`` as a convex mesh geom."""
-        mname = self.mesh(f"m_{label}", box_vertices(size))
-        self.world.append(
-            f'<geom name="{label}" type="mesh" mesh="{mname}" pos="{numbers(T[:3, 3])}" '
-            f'quat="{numbers(frames.matrix_quat(T[:3, :3]))}" rgba="{rgba}" contype="{bits[0]}" conaffinity="{bits[1]}"/>'
-        )
 
 def build_scene(robot: robots.Robot, spec: SceneSpec | Mapping[str, Any], T_world_base=None) -> Scene:
     """Build the MuJoCo scene of a robot in a scenario.

@@ -33,7 +33,7 @@ from uvms_jax.plan._vector_kernels import (make_scratch, motion_free, pairs_touc
                                            states_status, without_exact, without_tables)
 from uvms_jax.plan._worlds import World, add_obstacles, obstacle_rows
 from uvms_jax.robot import (BASE, Robot, RobotSpheres, Shape, base_body, card_jaws, collision_spheres, inscribed_spheres,
-                            robot_mjcf)
+                            robot_spec)
 
 __all__ = ["LIMIT_TOL", "ExactChecker", "RobotSpheresModel", "VectorChecker", "check_in_limits", "robot_spheres_model"]
 
@@ -163,7 +163,7 @@ def _posed(robot: Robot, spheres: RobotSpheres, opening: float) -> np.ndarray:
 def _opening(robot: Robot, opening: float | None) -> float:
     """The opening [m] the hand is posed at: the gripper joint's value for the description's
     fingers (within its limits), the gap between the boxes for the card's jaws (any length
-    >= 0, as :func:`uvms_jax.robot.mjcf_body` takes it: a scene's ``jaws_open``)."""
+    >= 0, as :func:`uvms_jax.robot.add_robot` takes it: a scene's ``jaws_open``)."""
     g = robot.gripper
     if g is None:
         if opening not in (None, 0.0):
@@ -246,7 +246,7 @@ def robot_spheres_model(robot: Robot, opening: float | None = None, spheres: Rob
 
 
 def _part_of(side: RobotSpheresModel):
-    """``part(geom name) -> int``: the part of the exact model's geom (robot_mjcf's names: a
+    """``part(geom name) -> int``: the part of the exact model's geom (robot_spec's names: a
     finger's ``geom_<finger joint>_<k>``, a jaw's or attached shape's ``geom_<link>``), ``-1``
     for a body's own geoms and ``-2`` for the world's."""
     robot = side.robot
@@ -273,8 +273,7 @@ class ExactChecker:
 
     def __init__(self, side: RobotSpheresModel, world: World):
         robot = side.robot
-        spec = mujoco.MjSpec.from_string(robot_mjcf(robot, jaws_open=side.opening if robot.gripper else None,
-                                                    attached=side.attached))
+        spec = robot_spec(robot, jaws_open=side.opening if robot.gripper else None, attached=side.attached)
         add_obstacles(spec, world.obstacles, _OBSTACLE)
         # The fingers are geoms of their arm body in this model, fixed at the opening: a body
         # pair is left out only where every group pair between the two bodies is.

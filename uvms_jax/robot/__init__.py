@@ -9,8 +9,9 @@ none or they cannot be read), the gripper and its fingers (:class:`Finger`, wher
 has a hand) and, for a real arm, its hardware profile. ``collision_spheres`` fits few spheres to
 that collision model (:class:`RobotSpheres`) for a sphere collision checker. An arm card (YAML: the description file and what no
 description format holds) names the rest: ``load_arm("bravo7")`` loads a shipped card
-(:func:`shipped_arms`), ``robot_from_config`` a card with overrides or settings alone. ``mjcf_body`` (with ``mjcf_assets``, the meshes its geoms use) builds the one MuJoCo model of the arm that the
-planning scene and the simulated arm both use; ``self_collision_pairs`` finds the link pairs
+(:func:`shipped_arms`), ``robot_from_config`` a card with overrides or settings alone. ``add_robot`` adds
+the one MuJoCo model of the arm, which the planning scene and the simulated arm both use, to a
+``mujoco.MjSpec`` (``robot_spec``: the arm alone; ``robot_mjcf``: as a file); ``self_collision_pairs`` finds the link pairs
 to leave out of self-collision checks. See docs/robots.md.
 """
 
@@ -26,8 +27,8 @@ from uvms_jax.robot._mjcf import base_body
 from uvms_jax.robot._mjcf import card_jaws
 from uvms_jax.robot._mjcf import geom_name
 from uvms_jax.robot._mjcf import link_capsules
-from uvms_jax.robot._mjcf import mjcf_assets
-from uvms_jax.robot._mjcf import mjcf_body
+from uvms_jax.robot._mjcf import add_robot
+from uvms_jax.robot._mjcf import robot_spec
 from uvms_jax.robot._mjcf import robot_mjcf
 from uvms_jax.robot._mjcf import self_collision_pairs
 from uvms_jax.robot._model import BASE

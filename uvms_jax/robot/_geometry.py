@@ -28,7 +28,6 @@ import logging
 import os
 from collections.abc import Mapping
 from pathlib import Path
-from xml.sax.saxutils import quoteattr  # file names in XML: quoted and escaped
 
 import mujoco
 import numpy as np
@@ -141,10 +140,13 @@ def _mesh_error(file: str, scale: tuple[float, float, float]) -> str | None:
     """Why MuJoCo cannot use a mesh file in a moving body (None: it can)."""
     if not file.lower().endswith(_MESH_SUFFIXES + (".msh",)):
         return f"MuJoCo reads STL and OBJ meshes, not {Path(file).suffix or 'a file without suffix'} ({file})"
-    xml = (f'<mujoco><asset><mesh name="m" file={quoteattr(file)} scale="{" ".join(map(repr, scale))}"/></asset>'
-           '<worldbody><body><joint/><geom type="mesh" mesh="m"/></body></worldbody></mujoco>')
+    spec = mujoco.MjSpec()
+    spec.add_mesh(name="m", file=file, scale=scale)
+    body = spec.worldbody.add_body()
+    body.add_joint()
+    body.add_geom(type=mujoco.mjtGeom.mjGEOM_MESH, meshname="m")
     try:
-        mujoco.MjModel.from_xml_string(xml)
+        spec.compile()
     except ValueError as err:
         return f"MuJoCo cannot read mesh {file}: {str(err).strip().splitlines()[0]}"
     return None

@@ -14,7 +14,6 @@ import dataclasses
 import hashlib
 import logging
 import os
-import xml.etree.ElementTree as ET
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -106,11 +105,9 @@ def _urdf_robot(urdf, folder: Path | None, base: str | None, tip: str | None, gr
 
 
 def _mjcf_robot(source, base: str | None, tip: str | None, gripper: str | None):
-    text = source.read_text() if isinstance(source, Path) else source
-    sites = {s.get("name") for s in ET.fromstring(text).iter("site")}
-    tip_site, tip_body = (tip, None) if tip in sites else (None, tip)
-    joints, T_base_tool, name = mjcf_path_joints(source, base, tip_body, tip_site)
     spec = mujoco.MjSpec.from_file(str(source)) if isinstance(source, Path) else mujoco.MjSpec.from_string(source)
+    tip_site, tip_body = (tip, None) if tip in {s.name for s in spec.sites} else (None, tip)
+    joints, T_base_tool, name = mjcf_path_joints(source, base, tip_body, tip_site)
     model = spec.compile()
     data = mujoco.MjData(model)
     data.qpos[:] = 0.0

@@ -1,4 +1,5 @@
-"""The one MuJoCo model of a robot (its collision model), and the self-collision pairs to skip.
+"""The one MuJoCo model of a robot (its collision model), built with ``mujoco.MjSpec``
+(:func:`add_robot` into any model, :func:`robot_spec` alone), and the self-collision pairs to skip.
 
 Bodies follow the chain: the base link, then one body per joint in its frame at ``q = 0``
 (``chain.T_base_joint0``), named as the description names them. Each link is a capsule of the
@@ -6,9 +7,8 @@ robot's ``link_radius`` from its joint's origin to the next joint's origin (the 
 tool frame; a sphere where the two coincide); the base link a capsule from its origin to the
 first joint's. A robot whose description gives collision geometry (``robot.shapes``) has those
 shapes instead of the capsules: spheres and capsules as MuJoCo primitives, boxes and cylinders
-as convex meshes (8 vertices; a prism of 32 sides around the cylinder), mesh files as ``<mesh
-file=...>`` assets (:func:`mjcf_assets` gives the ``<asset>`` entries every model of the arm
-needs). A site ``tool`` marks the tool frame. The hand: a robot whose description has fingers
+as convex meshes (8 vertices; a prism of 32 sides around the cylinder), mesh files as mesh
+assets of the model (named ``m_<geom name>``). A site ``tool`` marks the tool frame. The hand: a robot whose description has fingers
 (``robot.fingers``) gets their shapes, named ``geom_<finger joint>_<k>``: fixed to the body they
 hang from at the opening asked for (a kinematic model: the planning scene, the self-collision
 pairs), or, with ``finger_joints``, as finger bodies named as the description names them, each
@@ -21,8 +21,6 @@ one use of its model (an object in the hand) come as ``attached`` shapes.
 from __future__ import annotations
 
 import itertools
-from xml.sax.saxutils import quoteattr  # file names in XML: quoted and escaped
-
 import mujoco
 import numpy as np
 
@@ -30,9 +28,8 @@ from uvms_jax import frames
 from uvms_jax.kin import REVOLUTE
 from uvms_jax.robot._geometry import Shape
 from uvms_jax.robot._model import BASE, Robot
-from uvms_jax.text import numbers
 
-__all__ = ["TOOL_SITE", "base_body", "card_jaws", "geom_name", "link_capsules", "mjcf_assets", "mjcf_body", "robot_mjcf",
+__all__ = ["TOOL_SITE", "add_robot", "base_body", "card_jaws", "geom_name", "link_capsules", "robot_mjcf", "robot_spec",
            "self_collision_pairs"]
 
 TOOL_SITE = "tool"
@@ -40,7 +37,8 @@ _COINCIDENT = 1e-9  # [m] joint origins closer than this make a sphere, not a ca
 _DISTMAX = 1.0  # [m] mj_geomDistance reports distances up to this (and this beyond it)
 _CYLINDER_SIDES = 32  # a cylinder shape is the prism of this many sides around it
 # A moving body without shapes still needs mass in MuJoCo (a collision model needs none).
-_NO_MASS = '<inertial pos="0 0 0" mass="1e-06" diaginertia="1e-10 1e-10 1e-10"/>'
+_NO_MASS, _NO_INERTIA = 1e-6, 1e-10  # [kg, kg·m²]
+_TOOL_SITE_SIZE = 0.01  # [m] the tool site's drawn radius
 
 
 def base_body(robot: Robot) -> str:
@@ -118,67 +116,80 @@ def _attached_named(robot: Robot, attached) -> list[tuple[Shape, str]]:
     return named
 
 
-def mjcf_assets(robot: Robot, attached: tuple[Shape, ...] = ()) -> list[str]:
-    """The ``<mesh>`` entries of an ``<asset>`` element that :func:`mjcf_body`'s geoms use
-    (none for a robot of capsules), its fingers' and the ``attached`` shapes' included. Mesh
-    names are ``m_<geom name>``."""
-    assets = []
+def _add_meshes(spec: mujoco.MjSpec, robot: Robot, attached: tuple[Shape, ...]) -> None:
+    """Add the meshes that :func:`add_robot`'s geoms use to ``spec`` (none for a robot of
+    capsules), its fingers' and the ``attached`` shapes' included, named ``m_<geom name>``."""
     for s, name in _all_shapes(robot) + _attached_named(robot, attached):
         if s.kind == "mesh" and s.file:
-            assets.append(f'<mesh name="m_{name}" file={quoteattr(s.file)} scale="{numbers(s.scale)}"/>')
+            spec.add_mesh(name=f"m_{name}", file=s.file, scale=s.scale)
         elif s.kind == "mesh":
-            assets.append(f'<mesh name="m_{name}" vertex="{numbers(s.vertices)}"/>')
+            spec.add_mesh(name=f"m_{name}", uservert=np.asarray(s.vertices, dtype=float).reshape(-1))
         elif s.kind in ("box", "cylinder"):
-            assets.append(f'<mesh name="m_{name}" vertex="{numbers(_hull_vertices(s))}"/>')
-    return assets
+            spec.add_mesh(name=f"m_{name}", uservert=_hull_vertices(s).reshape(-1))
 
 
-def _shape_geom(shape: Shape, name: str, T_move: np.ndarray | None = None) -> str:
-    T = shape.T if T_move is None else T_move @ shape.T
-    pose = f'pos="{numbers(T[:3, 3])}" quat="{numbers(frames.matrix_quat(T[:3, :3]))}"'
+def _pose(T: np.ndarray) -> dict:
+    """``pos`` and ``quat`` (w, x, y, z) keywords of a pose ``T (4, 4)``."""
+    return dict(pos=T[:3, 3], quat=frames.matrix_quat(T[:3, :3]))
+
+
+def _add_shape(body: mujoco.MjsBody, shape: Shape, name: str, T_move: np.ndarray | None = None) -> None:
+    """The shape as a geom of ``body``: spheres and capsules as primitives, the rest as the mesh
+    ``m_<name>``; at its pose, moved by ``T_move (4, 4)`` where given."""
+    pose = _pose(shape.T if T_move is None else T_move @ shape.T)
     if shape.kind == "sphere":
-        return f'<geom name="{name}" type="sphere" size="{shape.size[0]!r}" {pose}/>'
-    if shape.kind == "capsule":
-        return f'<geom name="{name}" type="capsule" size="{shape.size[0]!r} {shape.size[1] / 2!r}" {pose}/>'
-    return f'<geom name="{name}" type="mesh" mesh="m_{name}" {pose}/>'
+        body.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[shape.size[0], 0.0, 0.0], **pose)
+    elif shape.kind == "capsule":
+        body.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_CAPSULE, size=[shape.size[0], shape.size[1] / 2, 0.0],
+                      **pose)
+    else:
+        body.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_MESH, meshname=f"m_{name}", **pose)
 
 
-def _body_geoms(robot: Robot, body: int, end: np.ndarray) -> list[str]:
-    """The body's geoms: its capsule (to ``end`` in its frame), or its shapes."""
-    if not robot.shapes:
-        return [_link_geom(geom_name(robot, body), end, robot.link_radius)]
-    return [_shape_geom(s, n) for s, n in zip(robot.shapes, _shape_names(robot)) if s.body == body]
+def _add_body_geoms(body: mujoco.MjsBody, robot: Robot, k: int, end: np.ndarray) -> None:
+    """Body ``k``'s geoms: its link capsule (to ``end`` in its frame), or its shapes."""
+    if robot.shapes:
+        for s, n in zip(robot.shapes, _shape_names(robot)):
+            if s.body == k:
+                _add_shape(body, s, n)
+    elif np.linalg.norm(end) < _COINCIDENT:
+        body.add_geom(name=geom_name(robot, k), type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[robot.link_radius, 0.0, 0.0])
+    else:
+        body.add_geom(name=geom_name(robot, k), type=mujoco.mjtGeom.mjGEOM_CAPSULE, fromto=[0.0, 0.0, 0.0, *end],
+                      size=[robot.link_radius, 0.0, 0.0])
 
 
-def _finger_lines(robot: Robot, body: int, opening: float, finger_joints: bool) -> list[str]:
-    """The fingers hanging from ``body``: their geoms at ``opening`` [m] fixed to it, or (with
+def _add_fingers(body: mujoco.MjsBody, robot: Robot, k: int, opening: float, finger_joints: bool) -> None:
+    """The fingers hanging from body ``k``: their geoms at ``opening`` [m] fixed to it, or (with
     ``finger_joints``) finger bodies on slide joints whose range the gripper's limits give."""
-    lines = []
     g = robot.gripper
     for f, names in zip(robot.fingers, _finger_shape_names(robot)):
-        if f.body != body:
+        if f.body != k:
             continue
         if not finger_joints:
-            lines += [_shape_geom(s, n, f.T(opening)) for s, n in zip(f.shapes, names)]
+            for s, n in zip(f.shapes, names):
+                _add_shape(body, s, n, f.T(opening))
             continue
         lo, hi = sorted((f.value(g.lower), f.value(g.upper)))
-        lines += [f'<body name="{f.link}">', "  " + _NO_MASS,
-                  f'  <joint name="{f.joint}" type="slide" axis="{numbers(f.axis)}" range="{lo!r} {hi!r}" limited="true"/>',
-                  *["  " + _shape_geom(s, n) for s, n in zip(f.shapes, names)], "</body>"]
-    return lines
+        child = body.add_body(name=f.link)
+        _set_no_mass(child)
+        child.add_joint(name=f.joint, type=mujoco.mjtJoint.mjJNT_SLIDE, axis=f.axis, range=[lo, hi],
+                        limited=mujoco.mjtLimited.mjLIMITED_TRUE)
+        for s, n in zip(f.shapes, names):
+            _add_shape(child, s, n)
 
 
-def _link_geom(name: str, end: np.ndarray, radius: float) -> str:
-    if np.linalg.norm(end) < _COINCIDENT:
-        return f'<geom name="{name}" type="sphere" size="{radius!r}"/>'
-    return f'<geom name="{name}" type="capsule" fromto="0 0 0 {numbers(end)}" size="{radius!r}"/>'
+def _set_no_mass(body: mujoco.MjsBody) -> None:
+    """A moving body without shapes still needs mass in MuJoCo (a collision model needs none)."""
+    body.mass, body.ipos, body.inertia, body.explicitinertial = _NO_MASS, [0.0, 0.0, 0.0], [_NO_INERTIA] * 3, True
 
 
-def _inertial(robot: Robot, body: int) -> str:
-    """The body's summed mass properties as an MJCF ``<inertial>`` (empty when it has none)."""
-    parts = [b for b in robot.inertials if b.body == body and b.mass > 0]
+def _set_inertial(body: mujoco.MjsBody, robot: Robot, k: int) -> bool:
+    """Give body ``k`` the robot's summed mass properties of it; False (nothing set) when it
+    has none."""
+    parts = [b for b in robot.inertials if b.body == k and b.mass > 0]
     if not parts:
-        return ""
+        return False
     mass = sum(b.mass for b in parts)
     com = sum(b.mass * np.asarray(b.com) for b in parts) / mass
     I = np.zeros((3, 3))
@@ -186,28 +197,41 @@ def _inertial(robot: Robot, body: int) -> str:
         xx, yy, zz, xy, xz, yz = b.inertia
         d = np.asarray(b.com) - com
         I += np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]]) + b.mass * (d @ d * np.eye(3) - np.outer(d, d))
-    return (f'<inertial pos="{numbers(com)}" mass="{mass!r}" '
-            f'fullinertia="{numbers([I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2]])}"/>')
+    body.mass, body.ipos, body.explicitinertial = mass, com, True
+    body.fullinertia = [I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2]]
+    return True
 
 
-def mjcf_body(robot: Robot, pos=(0.0, 0.0, 0.0), quat=(1.0, 0.0, 0.0, 0.0), jaws_open: float | None = None,
-              inertial: bool = False, finger_joints: bool = False, attached: tuple[Shape, ...] = ()) -> str:
-    """MJCF ``<body>`` tree of the robot (radians), for a ``<worldbody>`` whose
-    ``<compiler angle="radian"/>`` is set.
+def _add_attached(body: mujoco.MjsBody, named: list[tuple[Shape, str]], k: int) -> None:
+    for s, name in named:
+        if s.body == k:
+            _add_shape(body, s, name)
+
+
+def add_robot(spec: mujoco.MjSpec, robot: Robot, parent: mujoco.MjsBody | None = None, pos=(0.0, 0.0, 0.0),
+              quat=(1.0, 0.0, 0.0, 0.0), jaws_open: float | None = None, inertial: bool = False,
+              finger_joints: bool = False, attached: tuple[Shape, ...] = ()) -> mujoco.MjsBody:
+    """Add the robot's body tree to ``spec`` under ``parent`` (default: the world body), with
+    the meshes its geoms use. ``spec`` must take angles in radians
+    (``spec.compiler.degree = False``): the joint ranges are.
 
     Args:
+      spec: the model to add to (changed in place).
       robot: the arm.
+      parent: the body the base link hangs from (e.g. a vehicle), default ``spec.worldbody``.
       pos, quat: the base link's pose in the parent frame [m], ``(w, x, y, z)``.
       jaws_open: the gripper's opening [m], its joint's value (the gap between the finger
         boxes; the description's fingers slide by :meth:`~uvms_jax.robot.Finger.value` of it);
         default: the gripper's largest; ignored without a gripper.
-      inertial: write the bodies' mass properties (a simulation needs them; collision
+      inertial: give the bodies their mass properties (a simulation needs them; collision
         queries do not). The fingers' masses stay folded into the body they hang from.
       finger_joints: the description's fingers as bodies on their slide joints (at value 0:
         ``jaws_open`` is not used) rather than fixed at ``jaws_open``.
       attached: shapes fixed to the arm's bodies for this model (e.g. an object in the hand;
-        ``Shape.body`` the body, its pose in that body's frame), geoms named ``geom_<link>``
-        (their meshes: :func:`mjcf_assets` with the same shapes).
+        ``Shape.body`` the body, its pose in that body's frame), geoms named ``geom_<link>``.
+
+    Returns:
+      the base link's body.
 
     Raises:
       ValueError: ``jaws_open`` outside the gripper's limits for a robot with fingers, or an
@@ -218,54 +242,48 @@ def mjcf_body(robot: Robot, pos=(0.0, 0.0, 0.0), quat=(1.0, 0.0, 0.0, 0.0), jaws
     opening = None if g is None else (g.upper if jaws_open is None else float(jaws_open))
     if robot.fingers and not g.lower <= opening <= g.upper:
         raise ValueError(f"jaws_open {opening} m is outside the gripper's limits [{g.lower}, {g.upper}] m")
+    if spec.compiler.degree:
+        raise ValueError("add_robot: the spec takes angles in degrees; set spec.compiler.degree = False")
+    _add_meshes(spec, robot, attached)
     chain = robot.chain
     T_joint = np.asarray(chain.T_base_joint0, dtype=np.float64)
     twists = np.asarray(chain.twists, dtype=np.float64)
-    tool = np.asarray(chain.T_base_tool0, dtype=np.float64)
-    n = robot.n_joints
     ends = dict(link_capsules(robot))
-    lines = [f'<body name="{base_body(robot)}" pos="{numbers(pos)}" quat="{numbers(quat)}">']
-    if inertial and _inertial(robot, BASE):
-        lines.append("  " + _inertial(robot, BASE))
-    lines += ["  " + g for g in _body_geoms(robot, BASE, ends[BASE])]
-    lines += ["  " + g for g in _finger_lines(robot, BASE, opening, finger_joints)]
-    lines += ["  " + _shape_geom(s, name) for s, name in named if s.body == BASE]
-    previous = np.eye(4)
-    for i in range(n):
-        pad = "  " * (i + 1)
-        local = np.linalg.inv(previous) @ T_joint[i]
-        R = T_joint[i, :3, :3]
-        axis = R.T @ (twists[i, 3:] if chain.kinds[i] == REVOLUTE else twists[i, :3])
-        lines.append(f'{pad}<body name="{robot.link_names[i]}" pos="{numbers(local[:3, 3])}" '
-                     f'quat="{numbers(frames.matrix_quat(local[:3, :3]))}">')
-        geoms = _body_geoms(robot, i, ends[i])
-        if inertial and _inertial(robot, i):
-            lines.append(f"{pad}  " + _inertial(robot, i))
-        elif not geoms:
-            lines.append(f"{pad}  " + _NO_MASS)
-        kind = "hinge" if chain.kinds[i] == REVOLUTE else "slide"
-        lines.append(f'{pad}  <joint name="{robot.joint_names[i]}" type="{kind}" axis="{numbers(axis)}" '
-                     f'range="{float(chain.lower[i])!r} {float(chain.upper[i])!r}" limited="true"/>')
-        lines += [f"{pad}  " + g for g in geoms + _finger_lines(robot, i, opening, finger_joints)]
-        lines += [f"{pad}  " + _shape_geom(s, name) for s, name in named if s.body == i]
+    base = (spec.worldbody if parent is None else parent).add_body(name=base_body(robot), pos=pos, quat=quat)
+    if inertial:
+        _set_inertial(base, robot, BASE)
+    _add_body_geoms(base, robot, BASE, ends[BASE])
+    _add_fingers(base, robot, BASE, opening, finger_joints)
+    _add_attached(base, named, BASE)
+    body, previous = base, np.eye(4)
+    for i in range(robot.n_joints):
+        body = body.add_body(name=robot.link_names[i], **_pose(np.linalg.inv(previous) @ T_joint[i]))
+        revolute = chain.kinds[i] == REVOLUTE
+        if not (inertial and _set_inertial(body, robot, i)) and not _has_geoms(robot, i):
+            _set_no_mass(body)
+        body.add_joint(name=robot.joint_names[i], type=mujoco.mjtJoint.mjJNT_HINGE if revolute else mujoco.mjtJoint.mjJNT_SLIDE,
+                       axis=T_joint[i, :3, :3].T @ (twists[i, 3:] if revolute else twists[i, :3]),
+                       range=[float(chain.lower[i]), float(chain.upper[i])], limited=mujoco.mjtLimited.mjLIMITED_TRUE)
+        _add_body_geoms(body, robot, i, ends[i])
+        _add_fingers(body, robot, i, opening, finger_joints)
+        _add_attached(body, named, i)
         previous = T_joint[i]
-    pad = "  " * (n + 1)
-    T_link_tool = np.linalg.inv(T_joint[-1]) @ tool
-    tool_quat = numbers(frames.matrix_quat(T_link_tool[:3, :3]))
-    lines.append(f'{pad}<site name="{TOOL_SITE}" pos="{numbers(T_link_tool[:3, 3])}" quat="{tool_quat}" size="0.01"/>')
+    tool = body.add_site(name=TOOL_SITE, **_pose(np.linalg.inv(T_joint[-1]) @ np.asarray(chain.T_base_tool0, dtype=np.float64)))
+    tool.size[0] = _TOOL_SITE_SIZE
     for s in card_jaws(robot, opening):
-        T = s.T
-        lines.append(f'{pad}<geom name="geom_{s.link}" type="box" pos="{numbers(T[:3, 3])}" '
-                     f'quat="{numbers(frames.matrix_quat(T[:3, :3]))}" size="{numbers(np.array(s.size) / 2)}"/>')
-    for d in range(n, -1, -1):
-        lines.append("  " * d + "</body>")
-    return "\n".join(lines)
+        body.add_geom(name=f"geom_{s.link}", type=mujoco.mjtGeom.mjGEOM_BOX, size=np.array(s.size) / 2, **_pose(s.T))
+    return base
+
+
+def _has_geoms(robot: Robot, k: int) -> bool:
+    """Whether body ``k`` gets geoms of its own (its capsule, or shapes of the description)."""
+    return not robot.shapes or any(s.body == k for s in robot.shapes)
 
 
 def card_jaws(robot: Robot, opening: float | None = None) -> tuple[Shape, ...]:
     """The finger boxes that stand for the hand of an arm whose card gives a gripper but whose
     description has no fingers, as box shapes of :attr:`Gripper.finger_size` on the last body
-    (named ``jaw_left`` and ``jaw_right``; their geoms in :func:`mjcf_body`: ``geom_jaw_left``,
+    (named ``jaw_left`` and ``jaw_right``; their geoms in :func:`add_robot`: ``geom_jaw_left``,
     ``geom_jaw_right``): ``opening`` [m] apart along the tool's x axis (default: the gripper's
     largest), reaching forward along its z axis. Empty without a gripper or with fingers."""
     g = robot.gripper
@@ -280,15 +298,23 @@ def card_jaws(robot: Robot, opening: float | None = None) -> tuple[Shape, ...]:
         for side, sign in (("left", 1.0), ("right", -1.0)))
 
 
+def robot_spec(robot: Robot, jaws_open: float | None = None, inertial: bool = False,
+               attached: tuple[Shape, ...] = ()) -> mujoco.MjSpec:
+    """A complete model of the robot alone (:func:`add_robot` with these arguments), its base
+    link at the world origin, no gravity; ``.compile()`` gives the ``MjModel``."""
+    spec = mujoco.MjSpec()
+    spec.modelname = robot.name
+    spec.compiler.degree = False
+    spec.option.gravity = [0.0, 0.0, 0.0]
+    add_robot(spec, robot, jaws_open=jaws_open, inertial=inertial, attached=attached)
+    return spec
+
+
 def robot_mjcf(robot: Robot, jaws_open: float | None = None, inertial: bool = False,
                attached: tuple[Shape, ...] = ()) -> str:
-    """A complete MJCF model of the robot alone (with the ``attached`` shapes of
-    :func:`mjcf_body`), its base link at the world origin, no gravity."""
-    assets = "".join(f"\n    {a}" for a in mjcf_assets(robot, attached))
-    return (f'<mujoco model="{robot.name}">\n  <compiler angle="radian"/>\n  <option gravity="0 0 0"/>\n'
-            + (f"  <asset>{assets}\n  </asset>\n" if assets else "") +
-            f"  <worldbody>\n{mjcf_body(robot, jaws_open=jaws_open, inertial=inertial, attached=attached)}\n"
-            "  </worldbody>\n</mujoco>\n")
+    """:func:`robot_spec` as MJCF text, a file for other tools (MuJoCo writes its numbers with
+    6 significant digits: build models from :func:`robot_spec`, not from this text)."""
+    return robot_spec(robot, jaws_open, inertial, attached).to_xml()
 
 
 def self_collision_pairs(robot: Robot, n_samples: int = 200, seed: int = 0, jaws_open: float | None = None,
@@ -305,7 +331,7 @@ def self_collision_pairs(robot: Robot, n_samples: int = 200, seed: int = 0, jaws
     """
     if n_samples < 1:
         raise ValueError(f"n_samples must be >= 1, got {n_samples}")
-    model = mujoco.MjModel.from_xml_string(robot_mjcf(robot, jaws_open))
+    model = robot_spec(robot, jaws_open).compile()
     data = mujoco.MjData(model)
     names = [base_body(robot), *robot.link_names]
     adjacent = list(zip(names[:-1], names[1:]))

@@ -4,7 +4,7 @@ A compiled collision checker tests spheres, and its time grows with their number
 must also stay close to the shape it stands for, or the arm looks fatter than it is. Every
 shape is fitted on its own (:func:`collision_spheres`): the description's meshes (the vertices
 MuJoCo reads, scaled), boxes and cylinders (as MuJoCo collides with them: the convex mesh of
-:func:`~uvms_jax.robot.mjcf_body`), spheres, capsules, the fingers' shapes, and the capsules
+:func:`~uvms_jax.robot.add_robot`), spheres, capsules, the fingers' shapes, and the capsules
 along the links of an arm without shapes (:func:`~uvms_jax.robot.link_capsules`).
 
 The fit covers points of the shape's surface (its hull's vertices and samples of its faces at
@@ -90,9 +90,10 @@ def shape_vertices(shape: Shape) -> np.ndarray:
         raise ValueError(f"shape of {shape.link!r}: a {shape.kind} has no vertices")
     if not shape.file:
         return np.asarray(shape.vertices, dtype=float).reshape(-1, 3)
-    xml = (f'<mujoco><asset><mesh name="m" file="{shape.file}" scale="{" ".join(map(repr, shape.scale))}"/>'
-           '</asset><worldbody><geom type="mesh" mesh="m"/></worldbody></mujoco>')
-    model = mujoco.MjModel.from_xml_string(xml)
+    spec = mujoco.MjSpec()
+    spec.add_mesh(name="m", file=shape.file, scale=shape.scale)
+    spec.worldbody.add_geom(type=mujoco.mjtGeom.mjGEOM_MESH, meshname="m")
+    model = spec.compile()
     v = model.mesh_vert[model.mesh_vertadr[0]: model.mesh_vertadr[0] + model.mesh_vertnum[0]].astype(float)
     R = np.zeros(9)
     mujoco.mju_quat2Mat(R, model.mesh_quat[0])  # MuJoCo re-centres the file's vertices: undo it

@@ -154,9 +154,7 @@ def design_ffbn(
     if not (1 <= hidden_start <= max_hidden and hidden_step >= 1 and together >= 1):
         raise ValueError(f"need 1 <= hidden_start <= max_hidden, hidden_step >= 1 and together >= 1, got "
                          f"{hidden_start}, {max_hidden}, {hidden_step}, {together}")
-    t_all = time.perf_counter()
-    steps: list[DesignStep] = []
-    best = None
+    search = _Search(error_goal, callback)
     sizes = list(range(hidden_start, max_hidden + 1, hidden_step))
     keys = _size_keys(key, len(sizes))
     # The loop stops at the first size that meets the target: the bar's total is the most it can take.
@@ -173,19 +171,42 @@ def design_ffbn(
             errors = [float(max_relative_error(test.y, p)) for p in predictions]
             seconds = (time.perf_counter() - t0) / len(group)
             for (net, mse, epochs, history), err in zip(trained, errors):
-                step = DesignStep(net.hidden, float("nan"), err, mse, epochs, seconds)
-                steps.append(step)
-                bar.update()
                 log.info("FFBN-%s H=%d: max rel test error %.4f, train mse %.3g, %d epochs, %.2f s",
-                         train.index, net.hidden, err, mse, epochs, step.seconds)
-                if callback is not None:
-                    callback(step)
+                         train.index, net.hidden, err, mse, epochs, seconds)
+                bar.update()
                 history = np.asarray(history)
-                if best is None or err < best[1]:
-                    best = (net, err, history[np.isfinite(history)])
-                if err < error_goal:
-                    return Design(net, steps, True, time.perf_counter() - t_all, best[2])
-    return Design(best[0], steps, False, time.perf_counter() - t_all, best[2])
+                if search.add(DesignStep(net.hidden, float("nan"), err, mse, epochs, seconds), net,
+                              history[np.isfinite(history)]):
+                    break
+            if search.met:
+                break
+    return search.design()
+
+
+class _Search:
+    """The bookkeeping of a design loop: every step tried, the best network so far, whether one
+    met the error goal, the time since the loop began."""
+
+    def __init__(self, error_goal: float, callback: Callable[[DesignStep], None] | None):
+        self.error_goal, self.callback = error_goal, callback
+        self.t0 = time.perf_counter()
+        self.steps: list[DesignStep] = []
+        self.best: tuple | None = None  # (network, test error, its training history)
+        self.met = False
+
+    def add(self, step: DesignStep, net: FFBN | RBFN, history: np.ndarray) -> bool:
+        """Record a network tried; True once its test error meets the goal (the loop stops)."""
+        self.steps.append(step)
+        if self.callback is not None:
+            self.callback(step)
+        if self.best is None or step.test_error < self.best[1]:
+            self.best = (net, step.test_error, history)
+        self.met = step.test_error < self.error_goal  # then it is the best: none before met it
+        return self.met
+
+    def design(self) -> Design:
+        """The loop's result: the network that met the goal, else the best one."""
+        return Design(self.best[0], self.steps, self.met, time.perf_counter() - self.t0, self.best[2])
 
 
 def _groups(sizes: list[int], together: int) -> list[list[int]]:
@@ -226,24 +247,17 @@ def design_rbfn(
     if not (spread_start > 0 and spread_step > 0 and spread_max >= spread_start):
         raise ValueError(f"need 0 < spread_start <= spread_max and spread_step > 0, got "
                          f"{spread_start}, {spread_step}, {spread_max}")
-    t_all = time.perf_counter()
+    search = _Search(error_goal, callback)
     n_spreads = int(np.floor((spread_max - spread_start) / spread_step + 1e-9)) + 1
-    steps: list[DesignStep] = []
-    best = None
     with progress.bar(total=n_spreads, desc="RBFN design", unit="spread") as bar:
         for spread in spread_start + spread_step * np.arange(n_spreads):
             t0 = time.perf_counter()
             net, history = fit_rbfn(train, spread=float(spread), target_mse=target_mse, max_centres=max_centres)
             err = float(max_relative_error(test.y, net.predict(test.x)))
             step = DesignStep(net.n_centres, float(spread), err, float(history[-1]), net.n_centres, time.perf_counter() - t0)
-            steps.append(step)
-            bar.update()
             log.info("RBFN-%s spread %.3g: %d units, max rel test error %.4f, train mse %.3g, %.2f s",
                      train.index, spread, net.n_centres, err, step.train_mse, step.seconds)
-            if callback is not None:
-                callback(step)
-            if best is None or err < best[1]:
-                best = (net, err, np.asarray(history))
-            if err < error_goal:
-                return Design(net, steps, True, time.perf_counter() - t_all, np.asarray(history))
-    return Design(best[0], steps, False, time.perf_counter() - t_all, best[2])
+            bar.update()
+            if search.add(step, net, np.asarray(history)):
+                break
+    return search.design()
