@@ -125,7 +125,7 @@ def test_a_stronger_current_drifts_further(batch):
 def test_step_is_jittable_for_one_scenario():
     """The one-scenario control step runs under jit on its own (state in, state out)."""
     sim = hover_mjx(ARM, VehicleSettings(), ControllerSettings())
-    state = sim.init(POSES[0], Q_A)
+    state = jax.jit(sim.init)(POSES[0], Q_A)  # one program, not MJX's kinematics op by op
     state2, rec = jax.jit(sim.control_step)(state, Q_A, np.array([0.2, 0.0, 0.0]), POSES[0])
     assert np.all(np.isfinite(np.asarray(rec.position)))
     assert float(state2.data.time) == pytest.approx(PERIOD, rel=1e-5)
@@ -133,17 +133,18 @@ def test_step_is_jittable_for_one_scenario():
     np.testing.assert_allclose(np.asarray(state.data.xmat[sim.vehicle_id]), R, atol=1e-6)
 
 
-def test_float64_mjx_is_cpu_mujoco_given_the_same_fluid_wrench(monkeypatch):
+def test_float64_mjx_is_cpu_mujoco_given_the_same_fluid_wrench(batch, monkeypatch):
     """MuJoCo's fluid switched off on the CPU and ``fluid_xfrc`` applied instead, as MJX gets it
     (with buoyancy, between ``mj_step1`` and ``mj_step2``): MJX in float64 follows MuJoCo's C
     engine to rounding, controller and all. So the gap of the test above is the CPU's
-    implicitfast differentiating its own fluid force, which MJX cannot do."""
+    implicitfast differentiating its own fluid force, which MJX cannot do.
+
+    The MJX side is the batch's scenario (k, n) (float64: tests/conftest.py turns it on), over
+    its first ``periods`` control periods, which read only the first ``periods`` target rows."""
     k, n, periods = 1, 1, 20
+    assert jax.config.jax_enable_x64  # the batch computed in float64
     table = _targets()[:periods]
     pose, current = POSES[k], CURRENTS[n]
-    with jax.enable_x64(True):
-        mjx_run = batch_scenarios(ARM, VehicleSettings(), ControllerSettings(), pose[None], current[None], table,
-                                  periods * PERIOD)
     sim = HoverSim(ARM, trimmed(VehicleSettings(), ARM, table[0]), ControllerSettings(),
                    CurrentSettings(velocity=tuple(current)), xyz=pose[:3], rpy=(0.0, 0.0, pose[3]), q0=table[0])
     m = sim.model
@@ -160,9 +161,10 @@ def test_float64_mjx_is_cpu_mujoco_given_the_same_fluid_wrench(monkeypatch):
 
     monkeypatch.setattr(_sim, "apply_buoyancy", lift_and_drag)
     log = sim.run(periods * PERIOD, arm_trajectory=lambda t: table[min(round(t / PERIOD), periods - 1)])
-    np.testing.assert_allclose(mjx_run.position[0, 0], log.position, atol=EXACT_TOL)
-    np.testing.assert_allclose(mjx_run.tool[0, 0], log.tool, atol=EXACT_TOL)
-    np.testing.assert_allclose(mjx_run.thrust[0, 0], log.thrust, atol=1e-8)
+    assert len(log.position) == periods + 1
+    np.testing.assert_allclose(batch.position[k, n, :periods + 1], log.position, atol=EXACT_TOL)
+    np.testing.assert_allclose(batch.tool[k, n, :periods + 1], log.tool, atol=EXACT_TOL)
+    np.testing.assert_allclose(batch.thrust[k, n, :len(log.thrust)], log.thrust, atol=1e-8)
 
 
 def test_robustness_plot_is_written(batch, tmp_path):
@@ -181,7 +183,11 @@ def test_candidates_follow_the_docked_tool_path_and_the_unreachable_is_left_out(
 
     plan = Plan(ARM.joint_names, (Segment("there", (0.0, 0.4, 0.8), tuple(map(tuple, (Q_A, (Q_A + Q_B) / 2, Q_B)))),))
     poses = np.stack([POSES[0], POSES[0] + [0.05, -0.03, 0.02, 0.2], POSES[0] + [3.0, 0.0, 0.0, 0.0]])
-    res, reached = batch_candidates(ARM, plan, poses, CURRENTS[:1], dwell_s=0.2, gripper_s=0.0)
+    # The batch fixture's shapes (2 poses kept, both currents, DURATION with the plan's final
+    # period): the same compiled program, read from the compilation cache.
+    dwell = DURATION - PERIOD - 0.8
+    res, reached = batch_candidates(ARM, plan, poses, CURRENTS, dwell_s=dwell, gripper_s=0.0)
     assert reached[:2].tolist() == [1.0, 1.0] and reached[2] < 1.0 and res.poses.shape == (2, 4)
+    assert res.time.size == round(DURATION / PERIOD) + 1
     np.testing.assert_allclose(res.docked_tool[1], res.docked_tool[0], atol=2e-4)  # float32 IK tolerance 1e-4
-    assert np.all(res.gate_share == 1.0)  # still water: every gate, from both poses
+    assert np.all(res.gate_share[:, 0] == 1.0)  # still water: every gate, from both poses

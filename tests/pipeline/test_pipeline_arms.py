@@ -5,7 +5,8 @@ schedules, and runs the winner on its simulated arm with every gate reached; wit
 stages also hovering and the baseline from the thesis's fixed mount.
 
 docs/robots.md's command is run as the page writes it, card included (its ``gripper:`` line
-left out), for the Unitree Z1 as a bare MJCF file; the other combinations are slow."""
+left out), for the Unitree Z1 as a bare MJCF file: the one arm of the fast suite; the other
+arms and combinations are slow."""
 
 from __future__ import annotations
 
@@ -147,6 +148,7 @@ def test_robots_md_command_with_bare_arms(tmp_path, arm, gripper):
 ARMS = {"z1": 6, "ur5": 6}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("arm", list(ARMS))
 def test_pipeline_with_another_arm(tmp_path, arm):
     settings = dict(EXAMPLE_ARMS["arms"][arm], gripper=EXAMPLE_ARMS["jaws"])
