@@ -66,6 +66,7 @@ from ._config import config_from_mapping
 from ._executor import AbortRun
 from ._executor import Executor
 from ._executor import GateRecord
+from ._executor import JointController
 from ._executor import RunInterrupted
 from ._executor import RunResult
 from ._ids import BASE_COMPUTER
@@ -114,6 +115,7 @@ __all__ = [
     "AbortRun",
     "AnswerFormat",
     "Executor",
+    "JointController",
     "GateRecord",
     "HardwareStatus",
     "HwConfig",
