@@ -30,6 +30,8 @@ from uvms_jax.hover._batch import fluid_bodies
 from uvms_jax.hover._batch import fluid_xfrc
 from uvms_jax.hover._batch import hover_mjx
 from uvms_jax.hover._batch import plot_robustness
+from uvms_jax.hover._executed import ExecutorWholeBody
+from uvms_jax.hover._executed import executor_settings
 from uvms_jax.hover._control import allocate_thrust
 from uvms_jax.hover._control import control_steps
 from uvms_jax.hover._control import hold_pose
@@ -82,7 +84,7 @@ from uvms_jax.hover._wholebody import WholeBodyCommand
 __all__ = ["allocate_thrust", "apply_buoyancy", "arm_motion", "batch_candidates", "batch_plan",
            "batch_scenarios", "BatchResult", "buoyancy_bodies", "buoyancy_xfrc", "control_steps",
            "ControllerSettings", "current_at", "currents_grid", "CurrentSettings", "DEFAULT_THRUSTERS",
-           "docked_tool", "execute_plan_hovering", "fluid_bodies", "fluid_xfrc", "follow_tool_path",
+           "docked_tool", "execute_plan_hovering", "executor_settings", "ExecutorWholeBody", "fluid_bodies", "fluid_xfrc", "follow_tool_path",
            "GRAVITY", "hold_pose", "hover_mjcf", "hover_mjx", "hover_model", "HoverFilm", "hover_frame", "HoverLog", "HoverMJX",
            "HoverRun", "HoverSim", "HoverState", "HoverWorld", "HULL_GEOM", "level_attitude", "NavigationEstimate",
            "NavigationSettings", "PeriodRecord",
