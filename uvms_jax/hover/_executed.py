@@ -16,6 +16,7 @@ import math
 import numpy as np
 
 from uvms_jax import kin
+from uvms_jax.hw import joint_specs
 from uvms_jax.robot import Robot
 
 from ._model import VEHICLE_BODY
@@ -50,7 +51,7 @@ class ExecutorWholeBody:
       pose: ``(4,)`` the docked pose ``[x, y, z, ψ]`` [m, rad].
 
     Attributes (after a run):
-      rows: ``(physics time [s], plan row)`` of every demand; thrust_limited, joint_limited:
+      rows: the plan row of every demand, tick by tick; thrust_limited, joint_limited:
         the ticks in which the allocation scaled the thrust demand down, and in which a joint
         rate bound was active.
     """
@@ -61,8 +62,11 @@ class ExecutorWholeBody:
         self.robot, self.world, self.controller, self.settings = robot, world, controller, settings
         self.pose, self.navigation = np.asarray(pose, dtype=float), navigation
         self.tool_tolerance_m, self.tool_tolerance_rad = float(tool_tolerance_m), math.radians(tool_tolerance_deg)
-        self.lower, self.upper = np.asarray(robot.lower, float), np.asarray(robot.upper, float)
-        self.rows: list[tuple[float, int]] = []
+        # The limits the executor's client holds the demands to (the joint table's), within the arm's.
+        table = joint_specs(robot)[:robot.n_joints]
+        self.lower = np.maximum(np.asarray(robot.lower, float), [j.lower for j in table])
+        self.upper = np.minimum(np.asarray(robot.upper, float), [j.upper for j in table])
+        self.rows: list[int] = []
         self.thrust_limited = self.joint_limited = 0
         self.wb: WholeBody | None = None
 
@@ -74,6 +78,7 @@ class ExecutorWholeBody:
                              f"({self.controller.period:g} s): set its rate to {1.0 / self.controller.period:g} Hz")
         w = self.world
         self.wb = WholeBody(self.robot, w.vehicle, self.controller, self.settings, self.pose, q_plan, w.model)
+        self.wb.lower, self.wb.upper = self.lower, self.upper  # its targets within the client's limits
         self._hull = w.model.body(VEHICLE_BODY).id
         position, R = self._truth()[:2]
         self.nav = None if self.navigation is None else NavigationEstimate(self.navigation, position, R)
@@ -102,7 +107,7 @@ class ExecutorWholeBody:
         self.integral = cmd.integral
         self.thrust_limited += bool(cmd.thrust_limited)
         self.joint_limited += bool(cmd.joint_limited)
-        self.rows.append((t, int(k)))
+        self.rows.append(int(k))
         return np.asarray(cmd.target, dtype=float)
 
     def tool_error(self, k: int, q: np.ndarray) -> tuple[float, float]:
@@ -126,13 +131,15 @@ class ExecutorWholeBody:
         """The run ended: the station keeping takes the thrusters back (it holds the docked pose)."""
         self.world.release_thrust()
 
-    def plan_rows(self, times: np.ndarray) -> np.ndarray:
-        """``(k,)`` int: the plan row in force at each of ``times`` [s, physics time] (the last
-        demand's at or before it; row 0 before the first)."""
-        t, rows = np.array([r[0] for r in self.rows]), np.array([r[1] for r in self.rows], dtype=int)
-        if not len(t):
+    def plan_rows(self, tick_times: np.ndarray, times: np.ndarray) -> np.ndarray:
+        """``(k,)`` int: the plan row in force at each of ``times`` [s]: the row of the last
+        demand sent at or before it, the demands sent at ``tick_times`` [s] (the executor's log);
+        row 0 before the first."""
+        n = min(len(tick_times), len(self.rows))
+        if not n:
             return np.zeros(len(times), dtype=int)
-        return rows[np.maximum(np.searchsorted(t, np.asarray(times) + 1e-9, side="right") - 1, 0)]
+        rows = np.asarray(self.rows[:n], dtype=int)
+        return rows[np.maximum(np.searchsorted(np.asarray(tick_times)[:n], np.asarray(times) + 1e-9, side="right") - 1, 0)]
 
 
 # The share of the tool's pose error the arm's demands remove per tick over BPL. The measured

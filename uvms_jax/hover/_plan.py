@@ -372,6 +372,9 @@ def execute_plan_hovering(robot: Robot, plan: Plan, pose, vehicle: VehicleSettin
     world = HoverWorld(trimmed(vehicle, robot, q0), controller, current, xyz=pose[:3], rpy=(0.0, 0.0, pose[3]))
     driver = None
     if control == "whole_body":
+        if not np.isclose(1.0 / config.rate_hz, controller.period, rtol=1e-9, atol=0.0):
+            raise ValueError(f"the executor's tick ({1.0 / config.rate_hz:g} s) must be the whole-body controller's "
+                             f"period ({controller.period:g} s): set its rate to {1.0 / controller.period:g} Hz")
         settings = executor_settings(WholeBodySettings(), sim.servo_gain) if whole_body is None else whole_body
         driver = ExecutorWholeBody(robot, world, controller, settings, pose, navigation,
                                    tool_tolerance_m=tool_tolerance_m, tool_tolerance_deg=tool_tolerance_deg)
@@ -381,7 +384,8 @@ def execute_plan_hovering(robot: Robot, plan: Plan, pose, vehicle: VehicleSettin
     if driver is None:
         tool_target = docked_tool(robot, vehicle, pose, log.q)
     else:
-        tool_target, angle = _planned_tool(driver, log, pose)
+        ticks = run.result.start_s + np.array([row[0] for row in run.log.rows])
+        tool_target, angle = _planned_tool(driver, log, ticks)
     tool_error = np.linalg.norm(log.tool - tool_target, axis=-1)
     # A gate passed at the last tick the executor logged for its waypoint (log times count
     # from the run's start on the simulator's clock).
@@ -402,12 +406,13 @@ def execute_plan_hovering(robot: Robot, plan: Plan, pose, vehicle: VehicleSettin
                     joint_limited_periods=None if driver is None else driver.joint_limited)
 
 
-def _planned_tool(driver: ExecutorWholeBody, log: HoverLog, pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _planned_tool(driver: ExecutorWholeBody, log: HoverLog, ticks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``(tool_target (k, 3) [m, world], angle (k,) [rad])`` at the rows of ``log``: the tool's
-    planned position at the plan row in force, and the angle of the simulated tool (the
-    vehicle–arm chain at the logged pose and joints) from its planned orientation."""
+    planned position at the plan row in force (the executor's ticks at ``ticks`` [s]), and the
+    angle of the simulated tool (the vehicle–arm chain at the logged pose and joints) from its
+    planned orientation."""
     wb = driver.wb
-    planned = wb.T_tool[driver.plan_rows(log.time)]  # (k, 4, 4) in V₀
+    planned = wb.T_tool[driver.plan_rows(ticks, log.time)]  # (k, 4, 4) in V₀
     free = np.concatenate([log.position, log.quat], axis=1)
     zeta = np.array([np.concatenate([vehicle_displacement(wb.T_dock, f), q]) for f, q in zip(free, log.q)])
     T = np.asarray(kin.fk(wb.chain, zeta), dtype=float)

@@ -205,6 +205,11 @@ class HoverWorld:
         self.command(self.data, thrust, demand)
         self._commanded = True
 
+    @property
+    def thrust_commanded(self) -> bool:
+        """A controller sets the thrusts (:meth:`command_thrust`), not the station keeping."""
+        return self._commanded
+
     def release_thrust(self) -> None:
         """Hand the thrusters back to the station keeping on its reference (a controller's run
         ended, or stopped): from the next control period on."""
