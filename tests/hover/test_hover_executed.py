@@ -124,3 +124,23 @@ def test_the_executors_settings_lead_the_simulated_servo():
     assert dataclasses.replace(s, servo_lead_s=0.03, tool_gain=1.0) == WholeBodySettings()
     with pytest.raises(ValueError, match="servo_gain"):
         executor_settings(WholeBodySettings(), 0.0)
+
+
+def test_the_stage_runs_over_bpl_and_writes_its_plot_table_and_results(tmp_path):
+    from uvms_jax.hover import run_hover, write_hover
+
+    stage = run_hover(ARM, _plan(), POSE, VehicleSettings(), current=(0.3, 0.0, 0.0))
+    assert list(stage.runs) == ["still water", "current [0.3, 0.0, 0.0] m/s",
+                                "current [0.3, 0.0, 0.0] m/s, whole-body controller"]
+    assert stage.main == "current [0.3, 0.0, 0.0] m/s, whole-body controller"
+    res, table, notes = write_hover(stage, tmp_path, video=False, docked={"status": "completed", "gates": PLAN_GATES})
+    assert (tmp_path / "hover.png").stat().st_size > 10_000 and not (tmp_path / "hover.mp4").exists()
+    assert res["driver"] == "BPL executor, whole-body controller" and res["status"] == "completed"
+    assert res["gates_tool_within_tolerance"] == res["gates"] == PLAN_GATES
+    assert len(res["gate_tool_error_m"]) == PLAN_GATES and res["joint_limited_periods"] is not None
+    plain = res["runs"]["current [0.3, 0.0, 0.0] m/s"]
+    removes = res["coordination_removes"]["max_gate_tool_error_m"]
+    assert removes == pytest.approx(1.0 - res["max_gate_tool_error_m"] / plain["max_gate_tool_error_m"]) and removes > 0.5
+    assert len(table.splitlines()) == 2 + 4 and "docked (hw stage)" in table and len(notes) == 1
+    still_only = run_hover(ARM, _plan(), POSE, VehicleSettings(), whole_body=None)
+    assert list(still_only.runs) == ["still water"] and "coordination_removes" not in still_only.results()

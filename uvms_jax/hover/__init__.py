@@ -11,7 +11,11 @@ pseudo-inverse of the thrust configuration matrix (:func:`thrust_matrix`,
 :func:`allocate_thrust`); a whole-body controller (:class:`WholeBody`, :class:`WholeBodySettings`)
 that keeps the tool on its planned path with the vehicle's station keeping in its null space.
 :class:`HoverSim` steps it all on the CPU and records a
-:class:`HoverLog`; :func:`write_hover_video` films a run in its planning scene. Settings: :class:`VehicleSettings` (trimmed to neutral and level for an arm
+:class:`HoverLog`; :func:`write_hover_video` films a run in its planning scene. Over BPL,
+:func:`execute_plan_hovering` runs a plan with the hw executor on the simulated arm mounted on
+the vehicle, the whole-body controller between the plan and the arm
+(:class:`ExecutorWholeBody`); :func:`run_hover` and :func:`write_hover` are the hover stage.
+Settings: :class:`VehicleSettings` (trimmed to neutral and level for an arm
 and pose by :func:`trimmed`), :class:`ControllerSettings`, :class:`CurrentSettings`.
 
 The formulas are pure functions of arrays that take ``xp`` (``numpy`` or ``jax.numpy``), so a
@@ -63,6 +67,10 @@ from uvms_jax.hover._plan import run_plan_hovering
 from uvms_jax.hover._plan import vehicle_arm_chain
 from uvms_jax.hover._plan import vehicle_displacement
 from uvms_jax.hover._settings import DEFAULT_THRUSTERS
+from uvms_jax.hover._stage import HoverStage
+from uvms_jax.hover._stage import plot_hover
+from uvms_jax.hover._stage import run_hover
+from uvms_jax.hover._stage import write_hover
 from uvms_jax.hover._settings import GRAVITY
 from uvms_jax.hover._settings import ControllerSettings
 from uvms_jax.hover._settings import CurrentSettings
@@ -86,10 +94,10 @@ __all__ = ["allocate_thrust", "apply_buoyancy", "arm_motion", "batch_candidates"
            "ControllerSettings", "current_at", "currents_grid", "CurrentSettings", "DEFAULT_THRUSTERS",
            "docked_tool", "execute_plan_hovering", "executor_settings", "ExecutorWholeBody", "fluid_bodies", "fluid_xfrc", "follow_tool_path",
            "GRAVITY", "hold_pose", "hover_mjcf", "hover_mjx", "hover_model", "HoverFilm", "hover_frame", "HoverLog", "HoverMJX",
-           "HoverRun", "HoverSim", "HoverState", "HoverWorld", "HULL_GEOM", "level_attitude", "NavigationEstimate",
+           "HoverRun", "HoverSim", "HoverStage", "HoverState", "HoverWorld", "HULL_GEOM", "level_attitude", "NavigationEstimate",
            "NavigationSettings", "PeriodRecord",
-           "plan_targets", "plot_robustness", "run_plan_hovering", "SERVO_KP", "SERVO_KV", "servo_name",
+           "plan_targets", "plot_hover", "plot_robustness", "run_hover", "run_plan_hovering", "SERVO_KP", "SERVO_KV", "servo_name",
            "station_keeping", "thrust_layout", "thrust_matrix", "Thruster", "thruster_name", "trimmed",
            "vehicle_arm_chain", "VEHICLE_BODY", "vehicle_displacement", "VehicleSettings", "WholeBody",
-           "WholeBodyCommand", "WholeBodySettings", "wrap_angle", "write_hover_video",
+           "WholeBodyCommand", "WholeBodySettings", "wrap_angle", "write_hover", "write_hover_video",
            "yaw_of_quat"]
