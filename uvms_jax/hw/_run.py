@@ -278,16 +278,16 @@ def prepare_out(out: Path | str, *, overwrite: bool = False) -> Path:
 
 
 def write_run(run: HwRun, out: Path | str, *, plot: bool = True,
-              plan_path: Path | str | None = None) -> dict[str, Any]:
-    """Write ``run.csv`` (every tick), ``results.json`` (:func:`run_report`) and ``run.png``
-    (if ``plot`` and anything was logged) into ``out`` (created), each atomically (a temporary
-    file renamed over it), then remove the folder's :data:`~uvms_jax.files.RUNNING` marker;
-    returns the report. The plot comes last: a run interrupted again while plotting has its
-    results written already."""
+              plan_path: Path | str | None = None, extra: dict[str, Any] | None = None) -> dict[str, Any]:
+    """Write ``run.csv`` (every tick), ``results.json`` (:func:`run_report`, with ``extra``'s
+    entries added, e.g. a hovering run's ``hover``) and ``run.png`` (if ``plot`` and anything
+    was logged) into ``out`` (created), each atomically (a temporary file renamed over it), then
+    remove the folder's :data:`~uvms_jax.files.RUNNING` marker; returns the report. The plot
+    comes last: a run interrupted again while plotting has its results written already."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     run.log.write_csv(out / "run.csv")
-    report = run_report(run, out, plan_path)
+    report = {**run_report(run, out, plan_path), **(extra or {})}
     write_atomic(out / "results.json", json.dumps(report, indent=2) + "\n")
     clear_running(out)
     if plot and run.log.rows:
