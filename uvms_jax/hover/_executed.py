@@ -3,7 +3,7 @@
 At every tick of :class:`uvms_jax.hw.Executor` it turns the arm's measured joints (BPL position
 feedback) and the vehicle's navigation estimate into the arm's joint demands and the thrusts,
 with :class:`~uvms_jax.hover.WholeBody` (the formulas of :mod:`uvms_jax.hover._wbc`, the same
-as on :class:`~uvms_jax.hover.HoverSim` and in the MJX batch), and it judges the arm's part of
+step as on :class:`~uvms_jax.hover.HoverSim`), and it judges the arm's part of
 each gate by the tool's pose. The arm is the simulated BPL arm; the vehicle is its
 :class:`~uvms_jax.hover.HoverWorld`, whose thrusters the controller drives while the run lasts.
 """
@@ -29,8 +29,8 @@ __all__ = ["EXECUTOR_TOOL_GAIN", "SETTLED_DEG", "SETTLED_M", "ExecutorWholeBody"
 
 # The executor's gate with the controller in the loop: the tool, by the navigation estimate,
 # within this of the gate's planned pose [m, °]: settled (the controller drives the estimate onto
-# the plan; a tick moves it ~0.1 mm at rest). A fifth of the 10 mm and 2° the runs are judged on,
-# so the navigation's own error (5 mm at worst on the CPU simulator) fits beside it.
+# the plan). A fifth of the 10 mm and 2° the runs are judged on, so the navigation's own error
+# (5 mm at worst on the CPU simulator) fits beside it.
 SETTLED_M = 0.002
 SETTLED_DEG = 0.4
 
