@@ -9,7 +9,9 @@ one JSON object.
         > benchmarks/results/hover_controllers_cpu.json
 
 The run folder is a `make demo` run's (its `schedule/plan.json` and `docking/best_pose.json`).
-``--navigation`` gives the whole-body controller the navigation estimate's defaults (30 Hz,
+``--controls whole_body_bpl`` runs the whole-body controller in the BPL executor's loop on the
+simulated arm instead (:func:`uvms_jax.hover.execute_plan_hovering`, gates judged on the tool
+after each move). ``--navigation`` gives the whole-body controller the navigation estimate's defaults (30 Hz,
 50 ms, 5 mm, 0.2°, fused with dead reckoning at ``--fix-gain``); ``--gust`` adds gusts of that
 standard deviation [m/s] every 2 s.
 """
@@ -29,14 +31,21 @@ import numpy as np
 from uvms_jax import hover, planfile
 from uvms_jax.robot import load_arm
 
+BPL = "whole_body_bpl"  # the whole-body controller in the BPL executor's loop (execute_plan_hovering)
+
 
 def _run(arm, plan, pose, current, control: str, navigation) -> dict:
     t0 = time.perf_counter()
-    r = hover.run_plan_hovering(arm, plan, pose, current=current, control=control,
-                                navigation=navigation if control == "whole_body" else None)
+    if control == BPL:  # the BPL executor on the simulated arm, the whole-body controller between
+        r = hover.execute_plan_hovering(arm, plan, pose, current=current, control="whole_body", navigation=navigation)
+    else:
+        r = hover.run_plan_hovering(arm, plan, pose, current=current, control=control,
+                                    navigation=navigation if control == "whole_body" else None)
     s = r.summary()
     return {"control": control, "status": s["status"], "reason": s["reason"], "gates": s["gates"],
             "gates_reached": s["gates_reached"], "max_gate_tool_error_m": s["max_gate_tool_error_m"],
+            "mean_gate_tool_error_m": float(np.mean(r.gate_tool_error)),
+            "gates_tool_within_tolerance": s["gates_tool_within_tolerance"],
             "max_tool_error_m": s["max_tool_error_m"], "p95_tool_error_m": float(np.percentile(r.tool_error, 95)),
             "max_gate_tool_angle_deg": None if r.gate_tool_angle is None
             else float(np.degrees(r.gate_tool_angle.max())),
@@ -50,7 +59,8 @@ def main() -> None:
     ap.add_argument("run", type=Path, help="a make demo run folder")
     ap.add_argument("--speeds", type=float, nargs="+", default=[0.0, 0.3, 0.5], help="[m/s]")
     ap.add_argument("--directions", type=float, nargs="+", default=[0.0, 120.0, 240.0], help="[deg from the world's x]")
-    ap.add_argument("--controls", nargs="+", default=["pid", "whole_body"])
+    ap.add_argument("--controls", nargs="+", default=["pid", "whole_body"],
+                    choices=["pid", "feed_forward", "whole_body", BPL])
     ap.add_argument("--navigation", action="store_true", help="the whole-body controller sees a navigation estimate")
     ap.add_argument("--fix-gain", type=float, default=None, help="the navigation's fix_gain (default: its setting's)")
     ap.add_argument("--gust", type=float, default=0.0, help="gusts' standard deviation [m/s]")

@@ -5,7 +5,7 @@ from __future__ import annotations
 from uvms_jax.text import md_table
 from blocks._format import RESULTS, _load, _rate
 
-__all__ = ["hover_mjx", "hover_robustness", "hover_vehicle", "hover_levelling", "hover_controllers"]
+__all__ = ["hover_mjx", "hover_robustness", "hover_vehicle", "hover_levelling", "hover_controllers", "hover_bpl"]
 
 
 def hover_mjx() -> str:
@@ -153,3 +153,24 @@ def hover_controllers() -> str:
             f"({gust['gust_m_s']:g} m/s, `{gust['command']}`) the worst gate error is {g['pid']['0.3']:.0f} mm (PID) against "
             f"{g['whole_body']['0.3']:.1f} mm (whole-body) at 0.3 m/s; at 0.5 m/s the gusts exceed the thrusters and both "
             f"lose the path ({g['pid']['0.5']:.0f} / {g['whole_body']['0.5']:.0f} mm).\n")
+
+
+def _bpl_cell(d: dict, control: str, speed: float) -> str:
+    r = next(r for r in d["runs"] if r["control"] == control and r["speed_m_s"] == speed)
+    return (f"{1e3 * r['max_gate_tool_error_m']:.1f} / {1e3 * r['mean_gate_tool_error_m']:.1f} mm, "
+            f"{1e3 * r['max_tool_error_m']:.1f} mm; {r['gates_tool_within_tolerance']}/{r['gates']}"
+            + ("" if r["status"] == "completed" else f", {r['status']}"))
+
+
+def hover_bpl() -> str:
+    """The whole-body controller on the CPU simulator against the same controller in the BPL
+    executor's loop on the simulated arm (docs/hover.md, "Over BPL")."""
+    exact, nav = _load("hover_bpl_cpu.json"), _load("hover_bpl_nav_cpu.json")
+    speeds = sorted({r["speed_m_s"] for r in exact["runs"]})
+    columns = [("CPU simulator", exact, "whole_body"), ("over BPL", exact, "whole_body_bpl"),
+               ("CPU simulator, navigation fixes", nav, "whole_body"), ("over BPL, navigation fixes", nav, "whole_body_bpl")]
+    rows = [[f"{s:g} m/s" if s else "still water", *(_bpl_cell(d, c, s) for _, d, c in columns)] for s in speeds]
+    return (f"`{exact['command']}` (and `--navigation`), the demo's plan and docked pose; the tool's error at the "
+            "gates, worst / mean, its worst over the run (over BPL: from its path), and the gates with the tool within "
+            "10 mm (the CPU simulator's gates are the plan's segments; the executor's are its waypoints and gripper "
+            "steps):\n\n" + md_table(["current", *(c for c, _, _ in columns)], rows) + "\n")

@@ -148,3 +148,28 @@ def test_the_frames_show_the_hw_videos_scene_from_its_camera(rendered):
 def test_the_video_has_the_hw_videos_frames_of_the_run(rendered):
     _, info, _ = rendered
     assert info["frames"] == int(np.floor(info["duration_s"] * FPS + 1e-9)) + 1
+
+
+def _distance_to_polyline(p: np.ndarray, line: np.ndarray) -> float:
+    """The distance [m] of point ``p`` from the polyline ``line`` (k, 3), segment by segment."""
+    best = np.inf
+    for a, b in zip(line[:-1], line[1:]):
+        s = np.clip(np.dot(p - a, b - a) / max(np.dot(b - a, b - a), 1e-300), 0.0, 1.0)
+        best = min(best, float(np.linalg.norm(p - a - s * (b - a))))
+    return best
+
+
+def test_a_drawn_path_keeps_its_corners_and_stays_within_its_tolerance():
+    from uvms_jax.hover._video import simplified
+
+    t = np.linspace(0.0, 1.0, 101)[:, None]
+    straight = t * np.array([1.0, 2.0, 0.5])
+    np.testing.assert_array_equal(simplified(straight, 1e-3), [0, 100])
+    corner = np.concatenate([straight[:51], straight[50] + t[1:51] * np.array([0.0, 0.0, 1.0])])
+    np.testing.assert_array_equal(simplified(corner, 1e-3), [0, 50, 100])
+    rng = np.random.default_rng(0)
+    wiggly = np.cumsum(rng.normal(0.0, 0.01, (300, 3)), axis=0)
+    tolerance = 0.005
+    kept = simplified(wiggly, tolerance)
+    assert kept[0] == 0 and kept[-1] == 299 and len(kept) < 300
+    assert max(_distance_to_polyline(p, wiggly[kept]) for p in wiggly) <= tolerance

@@ -134,3 +134,30 @@ def test_speed_scale_reaches_the_executor(tmp_path, capsys):
     p.write_text(json.dumps(obj))
     assert main(["run", str(p), "--sim", "--speed-scale", "0.5", "--no-plot", "--out", str(tmp_path / "o")]) == 0
     assert json.loads(capsys.readouterr().out.strip().splitlines()[-1])["ok"]
+
+
+def test_hovering_run_on_the_simulated_arm(plan_file, tmp_path, capsys):
+    """``--hover``: the whole-body controller between the plan and the simulated arm of a vehicle
+    hovering in a 0.3 m/s current; every gate on the tool within 10 mm, the plan's 4 gates."""
+    out = tmp_path / "out"
+    assert main(["run", str(plan_file), "--hover", "--current", "0.3", "0", "0", "--no-plot", "--out", str(out)]) == 0
+    res = json.loads((out / "results.json").read_text())
+    hover = res["hover"]
+    assert res["ok"] and res["gates"] == 4 and res["sim"]["limit_violations"] == 0
+    assert hover["driver"] == "BPL executor, whole-body controller" and hover["status"] == "completed"
+    assert hover["current_m_s"] == [0.3, 0.0, 0.0] and hover["max_drift_m"] > 0
+    assert len(hover["gate_tool_error_m"]) == 4 and max(hover["gate_tool_error_m"]) <= 0.01
+    assert hover["thrust_limited_periods"] == 0 and hover["joint_limited_periods"] is not None
+
+
+def test_hovering_flags_need_hover_and_the_controllers_rate(plan_file, tmp_path, capsys):
+    assert main(["run", str(plan_file), "--sim", "--current", "0.3", "0", "0", "--out", str(tmp_path / "a")]) == 2
+    assert "--current need --hover" in capsys.readouterr().err
+    assert main(["run", str(plan_file), "--hover", "--rate", "100", "--out", str(tmp_path / "b")]) == 2
+    assert "50 Hz" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as e:  # argparse: one link
+        main(["run", str(plan_file), "--hover", "--udp", "127.0.0.1:9"])
+    assert e.value.code == 2 and "not allowed with argument --hover" in capsys.readouterr().err
+    assert not (tmp_path / "b").exists()
+    text = build_parser()._subparsers._group_actions[0].choices["run"].format_help()
+    assert "--hover" in text and "whole-body controller" in text and "--current VX VY VZ" in text

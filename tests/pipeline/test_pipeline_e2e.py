@@ -121,4 +121,11 @@ def test_pipeline_tiny_end_to_end(tmp_path):
         assert m["driver"] == "BPL executor" and m["status"] == "completed", m["reason"]
         assert m["gates"] == m["gates_reached"] == res["hw"]["gates"]
     assert flowing["max_drift_m"] > still["max_drift_m"] > 0
+    # The whole-body controller between the executor's plan and the arm, over BPL: every gate on
+    # the tool within 10 mm; it is the hover entry's main run.
+    coordinated = runs["current [0.3, 0.0, 0.0] m/s, whole-body controller"]
+    assert coordinated["driver"] == "BPL executor, whole-body controller"
+    assert coordinated["status"] == "completed", coordinated["reason"]
+    assert coordinated["gates"] == coordinated["gates_tool_within_tolerance"] == res["hw"]["gates"]
+    assert max(coordinated["gate_tool_error_m"]) <= 0.01 and res["hover"]["driver"] == coordinated["driver"]
     assert res["hover"]["coordination_removes"]["max_gate_tool_error_m"] > 0.5

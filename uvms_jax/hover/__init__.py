@@ -11,7 +11,11 @@ pseudo-inverse of the thrust configuration matrix (:func:`thrust_matrix`,
 :func:`allocate_thrust`); a whole-body controller (:class:`WholeBody`, :class:`WholeBodySettings`)
 that keeps the tool on its planned path with the vehicle's station keeping in its null space.
 :class:`HoverSim` steps it all on the CPU and records a
-:class:`HoverLog`; :func:`write_hover_video` films a run in its planning scene. Settings: :class:`VehicleSettings` (trimmed to neutral and level for an arm
+:class:`HoverLog`; :func:`write_hover_video` films a run in its planning scene. Over BPL,
+:func:`execute_plan_hovering` runs a plan with the hw executor on the simulated arm mounted on
+the vehicle, the whole-body controller between the plan and the arm
+(:class:`ExecutorWholeBody`); :func:`run_hover` and :func:`write_hover` are the hover stage.
+Settings: :class:`VehicleSettings` (trimmed to neutral and level for an arm
 and pose by :func:`trimmed`), :class:`ControllerSettings`, :class:`CurrentSettings`.
 
 The formulas are pure functions of arrays that take ``xp`` (``numpy`` or ``jax.numpy``), so a
@@ -36,6 +40,8 @@ from uvms_jax.hover._batch_control import CurrentRanking
 from uvms_jax.hover._batch_control import batch_controlled
 from uvms_jax.hover._batch_control import nav_schedule
 from uvms_jax.hover._batch_control import rank_by_current
+from uvms_jax.hover._executed import ExecutorWholeBody
+from uvms_jax.hover._executed import executor_settings
 from uvms_jax.hover._control import allocate_thrust
 from uvms_jax.hover._control import control_steps
 from uvms_jax.hover._control import hold_pose
@@ -68,6 +74,10 @@ from uvms_jax.hover._plan import run_plan_hovering
 from uvms_jax.hover._plan import vehicle_arm_chain
 from uvms_jax.hover._plan import vehicle_displacement
 from uvms_jax.hover._settings import DEFAULT_THRUSTERS
+from uvms_jax.hover._stage import HoverStage
+from uvms_jax.hover._stage import plot_hover
+from uvms_jax.hover._stage import run_hover
+from uvms_jax.hover._stage import write_hover
 from uvms_jax.hover._settings import GRAVITY
 from uvms_jax.hover._settings import ControllerSettings
 from uvms_jax.hover._settings import CurrentSettings
@@ -89,12 +99,12 @@ from uvms_jax.hover._wholebody import WholeBodyCommand
 __all__ = ["allocate_thrust", "apply_buoyancy", "arm_motion", "batch_candidates", "batch_controlled", "batch_plan",
            "batch_scenarios", "BatchResult", "buoyancy_bodies", "buoyancy_xfrc", "control_steps",
            "ControlledResult", "CONTROLS", "ControllerSettings", "CurrentRanking", "current_at", "currents_grid", "CurrentSettings", "DEFAULT_THRUSTERS",
-           "docked_tool", "execute_plan_hovering", "fluid_bodies", "fluid_xfrc", "follow_tool_path",
+           "docked_tool", "execute_plan_hovering", "executor_settings", "ExecutorWholeBody", "fluid_bodies", "fluid_xfrc", "follow_tool_path",
            "GRAVITY", "hold_pose", "hover_mjcf", "hover_mjx", "hover_model", "hover_spec", "HoverFilm", "hover_frame", "HoverLog", "HoverMJX",
-           "HoverRun", "HoverSim", "HoverState", "HoverWorld", "HULL_GEOM", "level_attitude", "nav_schedule", "NavigationEstimate",
+           "HoverRun", "HoverSim", "HoverStage", "HoverState", "HoverWorld", "HULL_GEOM", "level_attitude", "nav_schedule", "NavigationEstimate",
            "NavigationSettings", "PeriodRecord",
-           "plan_targets", "plot_robustness", "rank_by_current", "run_plan_hovering", "SERVO_KP", "SERVO_KV", "servo_name",
+           "plan_targets", "plot_hover", "plot_robustness", "rank_by_current", "run_hover", "run_plan_hovering", "SERVO_KP", "SERVO_KV", "servo_name",
            "station_keeping", "thrust_layout", "thrust_matrix", "Thruster", "thruster_name", "trimmed",
            "vehicle_arm_chain", "VEHICLE_BODY", "vehicle_displacement", "VehicleSettings", "WholeBody",
-           "WholeBodyCommand", "WholeBodySettings", "wrap_angle", "write_hover_video",
+           "WholeBodyCommand", "WholeBodySettings", "wrap_angle", "write_hover", "write_hover_video",
            "yaw_of_quat"]

@@ -28,6 +28,8 @@ from uvms_jax.robot import TOOL_SITE, Robot
 from ._model import VEHICLE_BODY, trimmed
 from ._settings import ControllerSettings, CurrentSettings, NavigationSettings, VehicleSettings, WholeBodySettings
 from ._sim import HoverLog, HoverSim, HoverWorld
+from ._executed import ExecutorWholeBody, executor_settings
+from ._wbc import pose_error
 from ._wholebody import NavigationEstimate, WholeBody
 
 __all__ = ["HoverRun", "docked_tool", "execute_plan_hovering", "follow_tool_path", "plan_targets", "run_plan_hovering", "vehicle_arm_chain",
@@ -95,7 +97,9 @@ class HoverRun:
         position at each gate [m]; gate_joint_error: ``(g,)`` the largest joint error from the
         gate's waypoint [rad].
       tool_error: ``(k,)`` the tool's distance from where the docked arm holds it on the plan
-        (the arm's forward kinematics at the docked base), per logged row [m].
+        (the arm's forward kinematics at the docked base), per logged row [m]; over BPL with the
+        whole-body controller, from the planned path over the :data:`TRAIL_S` up to the row in
+        force (the arm trails its speed-limited profile), the gates still on their poses.
       tool_target: ``(k, 3)`` that docked position, per logged row [m, world].
       drift: ``(k,)`` the vehicle's distance from the docked pose [m].
       tool_tolerance_m, joint_tolerance_rad: a gate is reached within both.
@@ -183,7 +187,9 @@ class HoverRun:
         rpy = self.log.rpy
         gates = len(self.gate_times) if self.executed is None else self.planned_gates
         driver = "whole-body controller" if self.coordinated else "replay"
-        return {"driver": driver if self.executed is None else "BPL executor",
+        if self.executed is not None:
+            driver = "BPL executor, whole-body controller" if self.coordinated else "BPL executor"
+        return {"driver": driver,
                 "current_m_s": self.current.tolist(), "coordinated": self.coordinated, "status": status, "reason": reason,
                 "gates": gates, "gates_reached": self.gates_reached,
                 "gates_tool_within_tolerance": int(np.sum(self.gate_tool_error <= self.tool_tolerance_m)),
@@ -329,43 +335,113 @@ def execute_plan_hovering(robot: Robot, plan: Plan, pose, vehicle: VehicleSettin
                           controller: ControllerSettings = ControllerSettings(),
                           current: CurrentSettings = CurrentSettings(), *,
                           config: ExecutorSettings = ExecutorSettings(), sim: SimSettings = SimSettings(),
-                          tool_tolerance_m: float = 0.01) -> HoverRun:
+                          tool_tolerance_m: float = 0.01, control: str = "pid",
+                          whole_body: WholeBodySettings | None = None, tool_tolerance_deg: float = 2.0,
+                          navigation: NavigationSettings | None = None) -> HoverRun:
     """Execute ``plan`` with the BPL executor on the simulated arm mounted on the vehicle
-    hovering at the docked ``pose`` ``(4,) = [x, y, z, ψ]`` [m, rad]: the executor, its gates and
-    its safety checks are the fixed base's (:func:`uvms_jax.hw.run_plan` over the loopback link),
-    only the arm's base moves (:class:`HoverWorld` around :class:`uvms_jax.hw.SimArm`).
+    hovering at the docked ``pose`` ``(4,) = [x, y, z, ψ]`` [m, rad]: the executor, its safety
+    checks and its link are the fixed base's (:func:`uvms_jax.hw.run_plan` over the loopback
+    link), only the arm's base moves (:class:`HoverWorld` around :class:`uvms_jax.hw.SimArm`).
 
-    The vehicle is ballasted for the arm at the plan's first waypoint (:func:`trimmed`), starts
-    at rest at ``pose`` and holds it by station keeping. The tool error of a row is the tool's
-    distance from where the docked arm holds it at the same measured joint angles: the
-    vehicle's motion, seen at the tool. The executor does not see it (its gates are on the
-    encoders); ``gates_tool_within_tolerance`` of the summary counts the gates where the tool
-    was within ``tool_tolerance_m`` [m] as well. The run's ``world`` draws it
-    (:func:`write_hover_video`).
+    The vehicle is ballasted for the arm at the plan's first waypoint (:func:`trimmed`) and
+    starts at rest at ``pose``. ``control``:
+
+    - ``"pid"``: the executor streams the plan's profiles, the station keeping holds the docked
+      pose, and the gates are on the encoders, which the vehicle's motion does not move. The
+      tool error of a row is the tool's distance from where the docked arm holds it at the same
+      measured joint angles: the vehicle's motion, seen at the tool, which the executor does not
+      see; ``gates_tool_within_tolerance`` counts the gates where the tool was within
+      ``tool_tolerance_m`` [m] as well.
+    - ``"whole_body"``: the whole-body controller sits between the plan and the arm
+      (:class:`~uvms_jax.hover.ExecutorWholeBody`, ``whole_body``; None: the defaults with the
+      simulated arm's servo lead, :func:`executor_settings`): every tick it sends the arm's
+      demands from the measured joints and the vehicle's ``navigation`` estimate (None: exact)
+      and drives the thrusters. The executor's gates wait for the tool to settle on its
+      planned pose by that estimate (:data:`~uvms_jax.hover._executed.SETTLED_M`); the run's
+      tool error is the tool's distance from its planned pose (the docked arm's along the
+      executor's plan rows) from the simulator, ``gates_tool_within_tolerance`` counts the gates
+      within ``tool_tolerance_m`` [m] of it, and ``gate_tool_angle`` holds the angles at the
+      gates (judged against ``tool_tolerance_deg`` [°]).
+
+    The run's ``world`` draws it (:func:`write_hover_video`).
 
     Raises:
       PlanError: the plan was made for another arm, or the dry run refused it.
+      ValueError: an unknown ``control``; for ``"whole_body"``, an executor rate other than
+        the controller's period.
     """
+    if control not in ("pid", "whole_body"):
+        raise ValueError(f"control must be 'pid' or 'whole_body' over BPL, got {control!r}")
     pose = np.asarray(pose, dtype=float)
     q0 = np.asarray(next(seg.q[0] for seg in plan.segments if len(seg.q)), dtype=float)
     world = HoverWorld(trimmed(vehicle, robot, q0), controller, current, xyz=pose[:3], rpy=(0.0, 0.0, pose[3]))
-    run = run_plan(plan, robot, config=config, sim=sim, world=world)
+    driver = None
+    if control == "whole_body":
+        if not np.isclose(1.0 / config.rate_hz, controller.period, rtol=1e-9, atol=0.0):
+            raise ValueError(f"the executor's tick ({1.0 / config.rate_hz:g} s) must be the whole-body controller's "
+                             f"period ({controller.period:g} s): set its rate to {1.0 / controller.period:g} Hz")
+        settings = executor_settings(WholeBodySettings(), sim.servo_gain) if whole_body is None else whole_body
+        driver = ExecutorWholeBody(robot, world, controller, settings, pose, navigation)
+    run = run_plan(plan, robot, config=config, sim=sim, world=world, controller=driver)
     log = world.log()
-    tool_target = docked_tool(robot, vehicle, pose, log.q)
-    tool_error = np.linalg.norm(log.tool - tool_target, axis=-1)
     # A gate passed at the last tick the executor logged for its waypoint (log times count
     # from the run's start on the simulator's clock).
     last_tick = {(row[1], row[2]): row[0] for row in run.log.rows}
     gate_times = np.array([run.result.start_s + last_tick[g.segment, g.waypoint] for g in run.result.gates])
     rows = np.searchsorted(log.time, gate_times - 1e-9).clip(max=len(log.time) - 1)
+    angle = None
+    if driver is None:
+        tool_target = docked_tool(robot, vehicle, pose, log.q)
+        tool_error = point_error = np.linalg.norm(log.tool - tool_target, axis=-1)
+    else:
+        ticks = run.result.start_s + np.array([row[0] for row in run.log.rows])
+        tool_target, angle, tool_error = _planned_tool(driver, log, ticks, rows, gate_times)
+        point_error = np.linalg.norm(log.tool - tool_target, axis=-1)
     planned = sum(len(seg.q) - (i > 0 and len(seg.q) > 0) + (seg.jaws_mm is not None)
                   for i, seg in enumerate(plan.segments))
-    return HoverRun(log=log, gate_times=gate_times, gate_tool_error=tool_error[rows],
+    thrust_limited = _saturated_periods(log, world.limits) if driver is None else driver.thrust_limited
+    return HoverRun(log=log, gate_times=gate_times, gate_tool_error=point_error[rows],
                     gate_joint_error=np.array([g.error_rad for g in run.result.gates]), tool_error=tool_error,
                     drift=np.linalg.norm(log.position - pose[:3], axis=-1), tool_tolerance_m=float(tool_tolerance_m),
                     joint_tolerance_rad=config.gate_threshold_rad, current=world.current_velocity(0.0),
-                    tool_target=tool_target, executed=run, planned_gates=int(planned), world=world,
-                    thrust_limited_periods=_saturated_periods(log, world.limits))
+                    tool_target=tool_target, coordinated=driver is not None, executed=run,
+                    planned_gates=int(planned), world=world,
+                    gate_tool_angle=None if angle is None else angle[rows],
+                    tool_tolerance_rad=float(np.radians(tool_tolerance_deg)), thrust_limited_periods=thrust_limited,
+                    joint_limited_periods=None if driver is None else driver.joint_limited)
+
+
+# How far back along its planned path the tool's error over a run looks [s]: the executor's
+# profiles run a joint at up to its speed limit, where the arm trails its demand by what its
+# position loop needs (0.07 rad, 0.14 s, for the Bravo 7's joint G at 0.5 rad/s), and the
+# controller, with no speed left, cannot take that back until the move slows.
+TRAIL_S = 0.3
+
+
+def _planned_tool(driver: ExecutorWholeBody, log: HoverLog, ticks: np.ndarray, gate_rows: np.ndarray,
+                  gate_times: np.ndarray) -> tuple[np.ndarray, ...]:
+    """``(tool_target (k, 3) [m, world], angle (k,) [rad], path_error (k,) [m])`` at the rows of
+    ``log``: the tool's planned position at the plan row in force (the executor's ticks at
+    ``ticks`` [s]; at the log's ``gate_rows``, the row of the gate at ``gate_times`` [s]: a gate
+    after the log's last row is judged there); the angle of the simulated tool (the vehicle–arm
+    chain at the logged pose and joints) from its planned orientation; and the tool's distance
+    from its planned path over the :data:`TRAIL_S` before that row (the polyline through the
+    rows)."""
+    wb = driver.wb
+    k = driver.plan_rows(ticks, log.time)
+    k[gate_rows] = driver.plan_rows(ticks, gate_times)
+    planned = wb.T_tool[k]  # (k, 4, 4) in V₀
+    free = np.concatenate([log.position, log.quat], axis=1)
+    zeta = np.array([np.concatenate([vehicle_displacement(wb.T_dock, f), q]) for f, q in zip(free, log.q)])
+    T = np.asarray(kin.fk(wb.chain, zeta), dtype=float)
+    angle = np.linalg.norm(pose_error(planned, T)[:, 3:], axis=-1)
+    path = wb.T_tool[:, :3, 3] @ wb.T_dock[:3, :3].T + wb.T_dock[:3, 3]  # (K, 3) every row, world
+    idx = np.clip(k[:, None] + np.arange(-round(TRAIL_S / wb.dt), 1), 0, len(path) - 1)
+    a, b, x = path[idx[:, :-1]], path[idx[:, 1:]], log.tool[:, None, :]
+    ab = b - a
+    s = np.clip(np.sum((x - a) * ab, axis=-1) / np.maximum(np.sum(ab * ab, axis=-1), 1e-300), 0.0, 1.0)
+    path_error = np.linalg.norm(x - a - s[..., None] * ab, axis=-1).min(axis=-1)
+    return path[k], angle, path_error
 
 
 def follow_tool_path(robot: Robot, vehicle: VehicleSettings, q_docked, docked_pose, pose, *, key=None,

@@ -120,6 +120,7 @@ class HoverWorld:
         self.reference = np.array([*self.xyz, self.rpy[2]])
         self.integral = np.zeros(4)
         self.robot: Robot | None = None
+        self._commanded = False  # a controller sets the thrusts (command_thrust), not the station keeping
 
     def current_velocity(self, t: float) -> np.ndarray:
         """(3,) the water's velocity at time ``t`` [m/s]."""
@@ -148,7 +149,7 @@ class HoverWorld:
         """Take ``model`` (compiled from :meth:`spec`, drives added or not) with ``data`` at the
         start: look up its parts, set the lift, record the first row."""
         robot, m = self.robot, model
-        self.model = m
+        self.model, self.data = m, data
         self._steps = control_steps(self.controller.period, m.opt.timestep)
         self._thr = np.array([m.actuator(thruster_name(k)).id for k in range(len(self.vehicle.thrusters))])
         ids, volume, cob = buoyancy_bodies(m, robot, self.vehicle)
@@ -196,6 +197,23 @@ class HoverWorld:
             u = np.zeros(self.limits.size)
         data.ctrl[self._thr] = u
 
+    def command_thrust(self, thrust: np.ndarray, demand: np.ndarray | None = None) -> None:
+        """A controller sets the thrusts [N] from now on (beyond a thruster's limit raises
+        ValueError), held until its next command; the station keeping stands by until
+        :meth:`release_thrust`."""
+        self.command(self.data, thrust, demand)
+        self._commanded = True
+
+    @property
+    def thrust_commanded(self) -> bool:
+        """A controller sets the thrusts (:meth:`command_thrust`), not the station keeping."""
+        return self._commanded
+
+    def release_thrust(self) -> None:
+        """Hand the thrusters back to the station keeping on its reference (a controller's run
+        ended, or stopped): from the next control period on."""
+        self._commanded = False
+
     def physics_step(self, model: mujoco.MjModel, data: mujoco.MjData) -> None:
         """One physics step with the current and the buoyancy of the pose being integrated."""
         if self._current_varies:
@@ -207,11 +225,12 @@ class HoverWorld:
     def step(self, model: mujoco.MjModel, data: mujoco.MjData) -> None:
         """One physics step of a world whose arm another simulator drives: at each control
         period's start the state is recorded (after the first) and the station keeping sets the
-        thrusts."""
+        thrusts (unless a controller commands them, :meth:`command_thrust`)."""
         if self._tick % self._steps == 0:
             if self._tick:
                 self.record(model, data)
-            self.command(data, None)
+            if not self._commanded:
+                self.command(data, None)
         self.physics_step(model, data)
         self._tick += 1
 

@@ -32,8 +32,12 @@ OUTLINE_RGBA = (1.0, 1.0, 1.0, 1.0)  # the docked hull's edges: white
 CURRENT_RGBA = (0.15, 0.45, 1.0, 1.0)  # the current's arrow: blue
 LINE_PX = 3.0  # width of the paths' and the outline's lines [pixels]
 # Points of a drawn path at most: the demo's ~92 s run gets one per ~0.3 s, finer than the
-# tool moves visibly at 480 × 360, and ~600 line geoms in all stay cheap for software rendering.
+# tool moves visibly at 480 × 360. Of those, only the points where the path bends by more than
+# PATH_TOLERANCE_M are drawn (Ramer–Douglas–Peucker): each line geom costs the software
+# renderer about as much per frame as the rest of the scene's detail (300 points a path: 30 %
+# of the video's time), and a chord within 2 mm of the path is under a pixel at these sizes.
 PATH_POINTS = 300
+PATH_TOLERANCE_M = 0.002
 ARROW_S = 2.0  # the arrow is as long as the water flows in this time [s]: 0.3 m/s → 0.6 m
 ARROW_RADIUS_M = 0.015  # the arrow's shaft [m]
 ARROW_ASIDE_M = 0.3  # the arrow's middle: this far out from the docked hull's side nearest the camera [m]
@@ -77,12 +81,39 @@ def _thinned(n: int) -> np.ndarray:
     return np.unique(np.linspace(0, n - 1, min(n, PATH_POINTS)).round().astype(int))
 
 
+def simplified(points: np.ndarray, tolerance: float) -> np.ndarray:
+    """Indices (sorted, first and last included) of the points ``(n, 3)`` [m] that a polyline
+    needs so that every point lies within ``tolerance`` [m] of it (Ramer–Douglas–Peucker: the
+    point farthest from the chord of a stretch is kept while it lies beyond the tolerance)."""
+    n = len(points)
+    keep = np.zeros(n, dtype=bool)
+    keep[[0, n - 1]] = n > 0
+    stack = [(0, n - 1)]
+    while stack:
+        i, j = stack.pop()
+        if j <= i + 1:
+            continue
+        a, inner = points[i], points[i + 1:j]
+        chord = points[j] - a
+        length2 = float(chord @ chord)
+        s = np.clip((inner - a) @ chord / length2, 0.0, 1.0) if length2 > 0 else np.zeros(len(inner))
+        distance = np.linalg.norm(inner - a - s[:, None] * chord, axis=-1)
+        k = int(np.argmax(distance))
+        if distance[k] > tolerance:
+            keep[i + 1 + k] = True
+            stack += [(i, i + 1 + k), (i + 1 + k, j)]
+    return np.flatnonzero(keep)
+
+
+_ZERO, _EYE = np.zeros(3), np.eye(3).ravel()
+
+
 def _add(scn: mujoco.MjvScene, kind: mujoco.mjtGeom, width: float, a, b, rgba) -> None:
     """A connector geom (line, arrow) from ``a`` to ``b`` [m] into ``scn``."""
     if scn.ngeom >= scn.maxgeom:
         raise RuntimeError(f"the scene holds {scn.maxgeom} geoms at most: draw fewer path points (PATH_POINTS)")
     g = scn.geoms[scn.ngeom]
-    mujoco.mjv_initGeom(g, kind, np.zeros(3), np.zeros(3), np.eye(3).ravel(), np.asarray(rgba, dtype=np.float32))
+    mujoco.mjv_initGeom(g, kind, _ZERO, _ZERO, _EYE, np.asarray(rgba, dtype=np.float32))
     mujoco.mjv_connector(g, kind, width, np.asarray(a, dtype=float), np.asarray(b, dtype=float))
     scn.ngeom += 1
 
@@ -115,7 +146,9 @@ class HoverFilm:
         self.qpos = w.replay_qpos(log)  # (k, nq) of the hovering model
         self.opt, self.pert = mujoco.MjvOption(), mujoco.MjvPerturb()
         self.outline = box_edges(w.vehicle.size, frames.pose(frames.rpy_matrix(w.rpy), w.xyz))
-        self.path_rows = _thinned(len(log.time))
+        rows = _thinned(len(log.time))
+        self.target_rows = rows[simplified(run.tool_target[rows], PATH_TOLERANCE_M)]
+        self.path_rows = rows[simplified(log.tool[rows], PATH_TOLERANCE_M)]  # of the tool's whole path
         # The row of each gate, as the run judged its tool there (a gate just after the last
         # control period: the last row).
         self.gate_rows = np.searchsorted(log.time, run.gate_times - 1e-9).clip(max=len(log.time) - 1)
@@ -133,7 +166,7 @@ class HoverFilm:
         mujoco.mjv_addGeoms(self.model, self.data, self.opt, self.pert, mujoco.mjtCatBit.mjCAT_ALL, scn)
         for a, b in self.outline:
             _add(scn, mujoco.mjtGeom.mjGEOM_LINE, LINE_PX, a, b, OUTLINE_RGBA)
-        _polyline(scn, run.tool_target[self.path_rows], TARGET_RGBA)
+        _polyline(scn, run.tool_target[self.target_rows], TARGET_RGBA)
         done = self.path_rows[self.path_rows < row]
         _polyline(scn, log.tool[np.append(done, row)], ACTUAL_RGBA)
         v = log.current[row]

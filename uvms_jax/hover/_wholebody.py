@@ -19,7 +19,7 @@ from scipy.spatial.transform import Rotation
 from uvms_jax import frames, kin
 from uvms_jax.robot import Robot
 
-from ._control import allocate_thrust, level_attitude, station_keeping, thrust_layout, wrap_angle
+from ._control import LIMIT_SLACK, allocate_thrust, level_attitude, station_keeping, thrust_layout, wrap_angle
 from ._hydro import fluid_bodies
 from ._model import VEHICLE_BODY
 from ._settings import ControllerSettings, NavigationSettings, VehicleSettings, WholeBodySettings
@@ -184,8 +184,10 @@ class WholeBody:
         T, J = xp.asarray(kin.fk(self.chain, zeta)), xp.asarray(kin.jacobian(self.chain, zeta))
         v1 = self._at(self.tool_rate, k, xp) + s.tool_gain / dt * pose_error(self._at(self.T_tool, k, xp), T, xp=xp)
         lead = dt + s.servo_lead_s
-        lo = xp.maximum(-self.rate_limit, (self.lower - q_ref) / lead)
-        hi = xp.minimum(self.rate_limit, (self.upper - q_ref) / lead)
+        # Bounds LIMIT_SLACK inside the limits: the target then lies inside them exactly, rounding
+        # included (a demand one ulp past a limit is refused by the arm's client).
+        lo = xp.minimum(0.0, xp.maximum(-self.rate_limit, (self.lower + LIMIT_SLACK - q_ref) / lead))
+        hi = xp.maximum(0.0, xp.minimum(self.rate_limit, (self.upper - LIMIT_SLACK - q_ref) / lead))
         S = xp.asarray([1.0, 1.0, 1.0] + [s.orientation_length] * 3)  # rows in [m/s]: position first
         rates, joint_limited = limited_rates(S[:, None] * J, S * v1, self.J2, -s.station_gain * eta, self.w_inv_sqrt,
                                              s.damping, self.arm, lo, hi, xp=xp)

@@ -68,6 +68,7 @@ from ._settings import SimSettings
 from ._executor import AbortRun
 from ._executor import Executor
 from ._executor import GateRecord
+from ._executor import JointController
 from ._executor import RunInterrupted
 from ._executor import RunResult
 from ._ids import BASE_COMPUTER
@@ -116,6 +117,7 @@ __all__ = [
     "AbortRun",
     "AnswerFormat",
     "Executor",
+    "JointController",
     "GateRecord",
     "ExecutorSettings",
     "HardwareStatus",

@@ -20,6 +20,13 @@ passes the client's send guard. A lost link (no trusted state for ``link_timeout
 hardware status, a measured angle outside the limits, a tracking error above
 ``tracking_error_rad``, a gate not reached within ``gate_timeout_s``, or a refused demand aborts
 the run: zero velocity is sent to every joint (hold) and the result says why (``ok=False``).
+
+A :class:`JointController` may sit between the plan and the arm (e.g. the whole-body controller of
+a hovering vehicle, :mod:`uvms_jax.hover`): at every tick it turns the plan's demand and the
+measured joints into the arm's demands, and it judges the arm's part of each gate. The plan's
+demands it follows are the executor's moves back to back (a gate's wait holds its move's last
+row). Its demands pass the same send guard (never outside the limits: a refused one aborts the
+run), the same tracking check against the demands sent, and the same faults stop the run.
 """
 
 from __future__ import annotations
@@ -28,6 +35,7 @@ import dataclasses
 import math
 import time
 from collections.abc import Callable
+from typing import NamedTuple, Protocol
 
 import numpy as np
 
@@ -42,7 +50,7 @@ from ._joints import LimitError
 from ._runlog import RunLog
 from ._transport import LinkError
 
-__all__ = ["AbortRun", "Executor", "GateRecord", "RunInterrupted", "RunResult"]
+__all__ = ["AbortRun", "Executor", "GateRecord", "JointController", "RunInterrupted", "RunResult"]
 
 INTERRUPTED = "interrupted (SIGINT): the arm was told to hold"  # RunResult.reason of an interrupted run
 
@@ -133,6 +141,41 @@ class RunResult:
         return sum(g.gripped for g in self.gates)
 
 
+class JointController(Protocol):
+    """Sets the arm's joint demands between the plan and the arm, tick by tick.
+
+    The executor calls :meth:`prepare` once at connect, then every tick :meth:`demand` and, once
+    a move's profile has ended, :meth:`gate`; :meth:`stop` when the run ends, however it ends.
+    """
+
+    def prepare(self, q_plan: np.ndarray, period: float) -> None:
+        """``q_plan (K, n)``: the plan's arm demands [rad] at every tick of ``period`` [s], the
+        executor's moves back to back; raise ValueError to refuse the run (nothing moved)."""
+
+    def demand(self, k: int, q: np.ndarray) -> np.ndarray:
+        """``(n,)`` the arm's joint demands [rad] for row ``k`` of ``q_plan``, from the measured
+        angles ``q (n,)`` [rad] (the last trusted state); raise ValueError to stop the run."""
+
+    def gate(self, k: int, q: np.ndarray) -> str | None:
+        """None when the arm's part of the gate at row ``k`` is reached with the arm at ``q``
+        ``(n,)`` [rad], else why not (one line)."""
+
+    def stop(self) -> None:
+        """The run ended (completed, aborted or interrupted): hand back what it drove."""
+
+
+class _Step(NamedTuple):
+    """One move of a run: its goal (every joint), profile, where it is in the plan, and its
+    rows of the controller's plan (``first`` to ``last``, inclusive)."""
+
+    goal: np.ndarray
+    move: Move
+    seg: int
+    wp: int
+    first: int
+    last: int
+
+
 class Executor:
     """Runs plans through a :class:`ReachArm` client, on the client's joint table.
 
@@ -144,6 +187,9 @@ class Executor:
       sleep: how to wait [s] (``time.sleep``, or a virtual clock's ``sleep``).
       log: where commanded/measured states go (a fresh :class:`RunLog` by default).
       progress: optional callback ``(segment index, n_segments, name)`` for progress display.
+      controller: sets the arm's demands from the plan and the measured joints, and judges
+        the arm's part of the gates (:class:`JointController`); None: the plan's profiles are
+        streamed as they are and the gates read the encoders.
     """
 
     def __init__(
@@ -154,8 +200,10 @@ class Executor:
         sleep: Callable[[float], None] = time.sleep,
         log: RunLog | None = None,
         progress: Callable[[int, int, str], None] | None = None,
+        controller: JointController | None = None,
     ) -> None:
         self.client = client
+        self.controller = controller
         self.config = config
         self.clock = client.clock
         self.sleep = sleep
@@ -204,21 +252,11 @@ class Executor:
         gates: list[GateRecord] = []
         self._move_start = t0
         try:
-            self._connect(plan)
+            steps = self._connect(plan)
             for i, seg in enumerate(plan.segments):
                 if self.progress is not None:
                     self.progress(i, len(plan.segments), seg.name)
-                for k in range(len(seg.q)):
-                    if k == 0 and i > 0:
-                        continue  # continuity: the previous gate already holds this point
-                    goal = self._goal.copy()
-                    goal[self._arm] = seg.q[k]
-                    min_dt = seg.t[k] - seg.t[k - 1] if k > 0 else 0.0
-                    gates.append(self._execute(goal, min_dt, i, k))
-                if seg.jaws_mm is not None:
-                    goal = self._goal.copy()
-                    goal[-1] = seg.jaws_mm
-                    gates.append(self._execute(goal, 0.0, i, -1))
+                gates.extend(self._execute(step) for step in steps if step.seg == i)
             ok, reason, after = True, "completed", math.nan
         except (AbortRun, LinkError, LimitError, ValueError) as e:
             self.client.hold()
@@ -234,6 +272,8 @@ class Executor:
         finally:
             if self.config.stream_hz:
                 self.client.stop_stream()
+            if self.controller is not None:
+                self.controller.stop()
         return self._result(ok, reason, gates, t0, after, summary)
 
     def _result(self, ok: bool, reason: str, gates: list[GateRecord], t0: float, after: float,
@@ -243,7 +283,9 @@ class Executor:
                          self._ticks, self._timeouts, after, summary, self._rejected, interrupted, t0)
 
     # -- steps -----------------------------------------------------------------------------
-    def _connect(self, plan: Plan) -> None:
+    def _connect(self, plan: Plan) -> list[_Step]:
+        """Check the arm's start, set position mode; the run's moves (the controller prepared
+        for them)."""
         cfg = self.config
         meas = self._start_state()
         self._check_status(force=True)
@@ -259,9 +301,36 @@ class Executor:
         self._goal = meas.copy()
         self._expected = meas.copy()
         self._cmd = meas.copy()
+        steps = self._steps(plan, meas)
+        if self.controller is not None:
+            dt = 1.0 / cfg.rate_hz
+            rows = [s.move.sample(min(j * dt, s.move.duration))[0][self._arm] for s in steps
+                    for j in range(s.last - s.first + 1)]
+            self.controller.prepare(np.array(rows), dt)
         self.client.set_mode(Mode.POSITION)
         if cfg.stream_hz:
             self.client.start_stream(cfg.stream_hz)
+        return steps
+
+    def _steps(self, plan: Plan, start: np.ndarray) -> list[_Step]:
+        """Every move of ``plan`` from the arm at ``start`` (a waypoint, or a jaws step), with
+        its profile and its rows: one per tick until the tick at or after the profile's end."""
+        steps, goal, row, dt = [], start.copy(), 0, 1.0 / self.config.rate_hz
+        for i, seg in enumerate(plan.segments):
+            moves = [(k, seg.q[k], seg.t[k] - seg.t[k - 1] if k > 0 else 0.0) for k in range(len(seg.q))
+                     if not (k == 0 and i > 0)]  # continuity: the previous gate already holds a segment's start
+            moves += [(-1, seg.jaws_mm, 0.0)] if seg.jaws_mm is not None else []
+            for k, value, min_dt in moves:
+                new = goal.copy()
+                if k >= 0:
+                    new[self._arm] = value
+                else:
+                    new[-1] = value
+                move = synchronised_move(goal, new, self._vmax, self._amax, min_dt)
+                n = math.ceil(move.duration / dt - 1e-9) + 1
+                steps.append(_Step(new, move, i, k, row, row + n - 1))
+                goal, row = new, row + n
+        return steps
 
     def _start_state(self) -> np.ndarray:
         """The arm's positions at connect: two consecutive states that agree, so that a
@@ -281,12 +350,13 @@ class Executor:
         raise AbortRun(f"no two consecutive start states agree within {cfg.connect_retries} reads: "
                        "the link corrupts what it carries")
 
-    def _execute(self, goal: np.ndarray, min_duration: float, seg: int, wp: int) -> GateRecord:
-        """Stream one synchronised move from the current goal to ``goal``, then gate."""
-        cfg = self.config
+    def _execute(self, step: _Step) -> GateRecord:
+        """Stream one synchronised move from the current goal to the step's goal, then gate."""
+        cfg, goal, move, seg, wp = self.config, step.goal, step.move, step.seg, step.wp
         moving = np.flatnonzero(np.abs(goal - self._goal) > 0) if np.all(np.isfinite(self._goal)) \
             else np.arange(len(goal))
-        move: Move = synchronised_move(self._goal, goal, self._vmax, self._amax, min_duration)
+        if self.controller is not None:  # it sets every arm joint every tick
+            moving = np.union1d(self._arm, moving)
         jaws = self.jaws is not None
         closing = jaws and goal[-1] < self._goal[-1]
         expected = np.where(goal != self._goal, goal, self._expected)
@@ -300,6 +370,9 @@ class Executor:
         while True:
             t = self.clock() - start
             q_cmd, _ = move.sample(t)
+            row = step.first + min(round(t / dt), step.last - step.first)
+            if self.controller is not None:
+                q_cmd[self._arm] = self.controller.demand(row, self._trusted[self._arm].copy())
             self._cmd = q_cmd
             if len(moving):
                 self.client.set_positions((self.devices[i], float(q_cmd[i])) for i in moving)
@@ -315,14 +388,15 @@ class Executor:
                                    f"{lag[j]:.3f} rad > {cfg.tracking_error_rad} rad")
                 if t >= move.duration:
                     err = np.abs(meas - expected)
-                    if np.all(err <= self._gate):
+                    arm_off = self._arm_gate(row, meas, err)
+                    if arm_off is None and (not jaws or err[-1] <= self._gate[-1]):
                         self._expected = expected
                         return GateRecord(seg, wp, float(np.max(err[self._arm])),
                                           float(err[-1]) if jaws else math.nan, t - move.duration)
                     if jaws and not abs(meas[-1] - still_at) <= self._gate[-1]:  # jaws moved (or first reading)
                         still_since, still_at = t, meas[-1]
                     gripped = (closing and meas[-1] > goal[-1] and t - still_since >= cfg.grip_settle_s
-                               and np.all(err[self._arm] <= self._gate[self._arm]))
+                               and arm_off is None)
                     if gripped:
                         self._expected = np.append(expected[:-1], meas[-1])
                         return GateRecord(seg, wp, float(np.max(err[self._arm])), float(err[-1]),
@@ -331,10 +405,15 @@ class Executor:
                 detail = ""
                 if meas is not None:
                     ratio = np.abs(meas - expected) / self._gate
+                    if self.controller is not None:
+                        ratio[self._arm] = 0.0  # the controller judges the arm
                     j = int(np.argmax(ratio))
                     unit = self.joints[j].unit
-                    detail = (f"; joint {self.joints[j].name} error {abs(meas[j] - expected[j]):.4f} {unit}"
-                              f" > {self._gate[j]} {unit}")
+                    if self.controller is None or ratio[j] > 1.0:
+                        detail = (f"; joint {self.joints[j].name} error {abs(meas[j] - expected[j]):.4f} {unit}"
+                                  f" > {self._gate[j]} {unit}")
+                    if self.controller is not None and (off := self._arm_gate(row, meas, ratio)) is not None:
+                        detail += f"; {off}"
                 raise AbortRun(f"segment {seg} waypoint {wp}: gate not reached within "
                                f"{cfg.gate_timeout_s} s after the move{detail}")
             k += 1
@@ -343,6 +422,14 @@ class Executor:
                 self.sleep(delay)
             else:
                 k = int((self.clock() - start) / dt)  # behind schedule: do not try to catch up
+
+    def _arm_gate(self, row: int, meas: np.ndarray, err: np.ndarray) -> str | None:
+        """None when the arm's part of the gate is reached: the controller's judgement at plan
+        row ``row``, else every arm encoder within the threshold of its goal (``err``)."""
+        if self.controller is not None:
+            return self.controller.gate(row, meas[self._arm].copy())
+        off = err[self._arm] > self._gate[self._arm]
+        return None if not off.any() else f"{int(off.sum())} arm joint(s) outside the gate threshold"
 
     def _measure(self) -> np.ndarray | None:
         """Measured positions (n,) or None if this tick's state did not arrive or is implausible."""

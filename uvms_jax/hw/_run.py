@@ -21,7 +21,7 @@ from uvms_jax.planfile import Plan
 from ._check import PlanSummary, check_arm, check_plan
 from ._client import ReachArm
 from ._settings import ExecutorSettings, SimSettings
-from ._executor import Executor, RunInterrupted, RunResult
+from ._executor import Executor, JointController, RunInterrupted, RunResult
 from ._joints import joint_specs
 from ._runlog import RunLog
 from ._sim import ArmWorld, SimArm
@@ -106,6 +106,7 @@ def run_plan(
     sim: SimSettings = SimSettings(),
     progress: Callable[[int, int, str], None] | None = None,
     world: ArmWorld | None = None,
+    controller: JointController | None = None,
 ) -> HwRun:
     """Check that ``plan`` was made for ``robot``, dry-run check it, then execute it on ``link``.
 
@@ -124,6 +125,8 @@ def run_plan(
       sim: the simulated arm and its faults (ignored for a client).
       world: where the simulated arm is mounted (:class:`ArmWorld`, e.g. a hovering vehicle,
         :class:`uvms_jax.hover.HoverWorld`); None: a fixed base. Simulated links only.
+      controller: sets the arm's demands between the plan and the arm (:class:`JointController`,
+        e.g. :class:`uvms_jax.hover.ExecutorWholeBody` on ``world``); None: the plan's profiles.
       progress: called ``(segment index, n_segments, segment name)`` as segments start.
 
     Returns:
@@ -156,7 +159,7 @@ def run_plan(
     t0 = time.perf_counter()
     if isinstance(link, ReachArm):
         try:
-            result = Executor(link, config, log=log, progress=progress).run(plan)
+            result = Executor(link, config, log=log, progress=progress, controller=controller).run(plan)
         except RunInterrupted as e:
             e.run = HwRun(e.result, log, _link_name(link), time.perf_counter() - t0)
             raise
@@ -164,7 +167,8 @@ def run_plan(
     interrupted = None
     with _simulated(link, plan, robot, config, sim, world) as (client, sleep, sim_link):
         try:
-            result = Executor(client, config, sleep=sleep, log=log, progress=progress).run(plan)
+            result = Executor(client, config, sleep=sleep, log=log, progress=progress,
+                              controller=controller).run(plan)
         except RunInterrupted as e:  # the simulator stops first (leaving the with), then it is raised
             interrupted, result = e, e.result
     counts = SimCounts(sim_link.arm.limit_violations, sim_link.dropped, sim_link.corrupted,
@@ -274,16 +278,16 @@ def prepare_out(out: Path | str, *, overwrite: bool = False) -> Path:
 
 
 def write_run(run: HwRun, out: Path | str, *, plot: bool = True,
-              plan_path: Path | str | None = None) -> dict[str, Any]:
-    """Write ``run.csv`` (every tick), ``results.json`` (:func:`run_report`) and ``run.png``
-    (if ``plot`` and anything was logged) into ``out`` (created), each atomically (a temporary
-    file renamed over it), then remove the folder's :data:`~uvms_jax.files.RUNNING` marker;
-    returns the report. The plot comes last: a run interrupted again while plotting has its
-    results written already."""
+              plan_path: Path | str | None = None, extra: dict[str, Any] | None = None) -> dict[str, Any]:
+    """Write ``run.csv`` (every tick), ``results.json`` (:func:`run_report`, with ``extra``'s
+    entries added, e.g. a hovering run's ``hover``) and ``run.png`` (if ``plot`` and anything
+    was logged) into ``out`` (created), each atomically (a temporary file renamed over it), then
+    remove the folder's :data:`~uvms_jax.files.RUNNING` marker; returns the report. The plot
+    comes last: a run interrupted again while plotting has its results written already."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     run.log.write_csv(out / "run.csv")
-    report = run_report(run, out, plan_path)
+    report = {**run_report(run, out, plan_path), **(extra or {})}
     write_atomic(out / "results.json", json.dumps(report, indent=2) + "\n")
     clear_running(out)
     if plot and run.log.rows:

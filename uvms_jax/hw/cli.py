@@ -1,6 +1,7 @@
 """``uvms-hw``: run a plan on a Reach arm (real or simulated), or serve the simulated arm.
 
-    uvms-hw run PLAN [--robot ARM] [--sim | --udp HOST:PORT | --serial DEV] [--dry-run]
+    uvms-hw run PLAN [--robot ARM] [--sim | --hover [pid] | --udp HOST:PORT | --serial DEV] [--dry-run]
+                     [--current VX VY VZ] [--pose X Y Z YAW] [--navigation]
                      [--speed-scale S] [--drop P] [--corrupt P] [--latency S] [--stuck-joint X]
                      [--hw-fault X:BITS[@T]] [--base-rpy R P Y] [--stream HZ] [--config hw.yaml]
                      [--out DIR] ...
@@ -22,6 +23,12 @@ SIGTERM. Outputs in ``--out``
 ``--overwrite``): ``run.csv`` (commanded vs measured), ``results.json`` and ``run.png``, each
 written atomically; the folder carries a ``RUNNING`` marker until they are written, so a run
 killed outright (SIGKILL) is recognisable.
+``--hover`` runs the plan on the simulated arm mounted on a hovering vehicle
+(:func:`uvms_jax.hover.execute_plan_hovering`, in this process on a virtual clock): the
+whole-body controller sits between the plan and the arm, sending the arm's demands from its
+measured joints and the vehicle's navigation estimate, and the gates are on the tool's pose;
+``results.json`` then has a ``hover`` entry (each gate's tool error, thrust and joint-limit
+counts). ``--hover pid``: the station keeping alone, the plan streamed as it is.
 Defaults come from :class:`~uvms_jax.hw.ExecutorSettings` / ``SimSettings`` (or ``--config``, a YAML
 file shaped like ``configs/hw/default.yaml``); flags override them. ``run`` is
 :func:`~uvms_jax.hw.run_plan` + :func:`~uvms_jax.hw.write_run`, as in the pipeline.
@@ -142,6 +149,10 @@ def build_parser() -> argparse.ArgumentParser:
     link.add_argument("--sim", action="store_true", help="run against the simulated arm (UDP, 127.0.0.1)")
     link.add_argument("--udp", metavar="HOST:PORT", help="real arm over UDP (factory 192.168.2.3:6789)")
     link.add_argument("--serial", metavar="DEV", help="real arm over serial, 115200 8N1")
+    link.add_argument("--hover", nargs="?", const="whole_body", choices=("whole_body", "pid"), metavar="pid",
+                      help="the simulated arm mounted on a hovering vehicle (docs/hover.md; in this process, on a "
+                           "virtual clock), the whole-body controller between the plan and the arm (gates on the "
+                           "tool's pose, within 10 mm and 2 deg); '--hover pid': the station keeping alone")
     r.add_argument("--dry-run", action="store_true", help="only check the plan; send nothing")
     r.add_argument("--config", type=Path, help="YAML with executor/sim sections (configs/hw/default.yaml)")
     r.add_argument("--out", type=Path, help="output folder (default: outputs/hw/<time>)")
@@ -160,6 +171,15 @@ def build_parser() -> argparse.ArgumentParser:
                    help=f"have the joints stream their state at HZ instead of a request per tick {_hw_default('stream_hz')}")
     r.add_argument("--no-plot", action="store_true", help="skip the PNG")
     _sim_args(r)
+    h = r.add_argument_group("hovering vehicle (--hover)")
+    h.add_argument("--current", type=float, nargs=3, metavar=("VX", "VY", "VZ"),
+                   help="the water's velocity in the world [m/s] (default: still water)")
+    h.add_argument("--pose", type=float, nargs=4, metavar=("X", "Y", "Z", "YAW"),
+                   help="the docked pose the vehicle hovers at [m, rad] (default: 0 0 0 0); the arm hangs at "
+                        "the default vehicle's mount, or is mounted as the plan's base_rpy says")
+    h.add_argument("--navigation", action="store_true",
+                   help="the controller sees the vehicle through navigation fixes (30 Hz, 50 ms late, 5 mm, "
+                        "0.2 deg of noise) instead of exactly")
 
     e = command("export", "write a plan as a trajectory_msgs/JointTrajectory-shaped YAML/JSON file")
     e.add_argument("plan", type=Path, help="plan.json, or a JointTrajectory .yaml/.yml/.json")
@@ -241,16 +261,21 @@ def _run(args: argparse.Namespace) -> int:
           f"{summary.n_gripper_steps} gripper steps, ~{summary.estimated_s:.1f} s of motion", file=sys.stderr)
     if args.dry_run:
         return EXIT_OK
-    if not (args.sim or args.udp or args.serial):
-        print("uvms-hw: choose a link: --sim, --udp HOST:PORT or --serial DEV", file=sys.stderr)
+    if not (args.sim or args.hover or args.udp or args.serial):
+        print("uvms-hw: choose a link: --sim, --hover, --udp HOST:PORT or --serial DEV", file=sys.stderr)
         return EXIT_REFUSED
     sim_flags = (args.drop, args.corrupt, args.latency, args.stuck_joint, args.hw_fault, args.coalesce,
                  args.base_rpy)
-    if not args.sim and any(f is not None for f in sim_flags):
-        print("uvms-hw: fault injection and simulated-arm flags need --sim", file=sys.stderr)
+    if not (args.sim or args.hover) and any(f is not None for f in sim_flags):
+        print("uvms-hw: fault injection and simulated-arm flags need --sim or --hover", file=sys.stderr)
+        return EXIT_REFUSED
+    if (refusal := _hover_refusal(args, hw)) is not None:
+        print(f"uvms-hw: {refusal}", file=sys.stderr)
         return EXIT_REFUSED
     out = args.out or Path("outputs/hw") / time.strftime("%Y-%m-%d_%H-%M-%S")
     client = None
+    if args.hover:
+        return _run_hovering(args, plan, robot, hw, sim_cfg, out)
     if not args.sim:
         if robot.hardware is None:
             print(f"uvms-hw: robot {robot.name!r} has no hardware profile (device ids): use --sim", file=sys.stderr)
@@ -281,6 +306,45 @@ def _run(args: argparse.Namespace) -> int:
         if client is not None:
             client.close()
     report = write_run(run, out, plot=not args.no_plot, plan_path=args.plan)
+    print(json.dumps(report))
+    if not run.ok:
+        print(f"uvms-hw: aborted, arm told to hold: {run.result.reason}", file=sys.stderr)
+    return EXIT_OK if run.ok else EXIT_ABORTED
+
+
+def _hover_refusal(args: argparse.Namespace, hw: ExecutorSettings) -> str | None:
+    """Why the hovering flags cannot run (one line), or None."""
+    if not args.hover:
+        given = [f for f, v in (("--current", args.current), ("--pose", args.pose)) if v is not None]
+        given += ["--navigation"] if args.navigation else []
+        return f"{', '.join(given)} need --hover" if given else None
+    from uvms_jax.hover import ControllerSettings
+
+    period = ControllerSettings().period
+    if abs(1.0 / hw.rate_hz - period) > 1e-9 * period and args.hover == "whole_body":
+        return f"--hover: the executor's rate must be the whole-body controller's, {1.0 / period:g} Hz (--rate)"
+    return None
+
+
+def _run_hovering(args: argparse.Namespace, plan, robot, hw: ExecutorSettings, sim_cfg: SimSettings, out: Path) -> int:
+    """``run --hover``: the plan on the simulated arm of a hovering vehicle; the run's files and
+    its ``hover`` entry in ``results.json``."""
+    from uvms_jax.hover import CurrentSettings, NavigationSettings, VehicleSettings, execute_plan_hovering
+
+    vehicle = VehicleSettings()
+    if plan.base_rpy is not None:  # the arm mounted as the plan was made for
+        vehicle = dataclasses.replace(vehicle, mount_rpy=tuple(plan.base_rpy))
+    try:
+        hovering = execute_plan_hovering(
+            robot, plan, args.pose or (0.0, 0.0, 0.0, 0.0), vehicle,
+            current=CurrentSettings(velocity=tuple(args.current or (0.0, 0.0, 0.0))), config=hw, sim=sim_cfg,
+            control=args.hover, navigation=NavigationSettings() if args.navigation else None)
+    except RunInterrupted as e:
+        return _interrupted(e.run, out, args)
+    except KeyboardInterrupt:
+        return _interrupted(None, out, args)
+    run = hovering.executed
+    report = write_run(run, out, plot=not args.no_plot, plan_path=args.plan, extra={"hover": hovering.summary()})
     print(json.dumps(report))
     if not run.ok:
         print(f"uvms-hw: aborted, arm told to hold: {run.result.reason}", file=sys.stderr)

@@ -35,26 +35,23 @@ class HwStageSettings:
 
 @dataclasses.dataclass(frozen=True)
 class HoverStageSettings:
-    """The hover stage: the scheduled plan executed with the vehicle hovering at the docked pose
-    (:func:`uvms_jax.hover.execute_plan_hovering`: the hw stage's executor and settings), in
-    still water and in ``current``.
+    """The hover stage: the scheduled plan executed over BPL with the vehicle hovering at the
+    docked pose (:func:`uvms_jax.hover.run_hover`: the hw stage's executor and settings on the
+    simulated arm mounted on the vehicle), in still water and in ``current``.
 
     Attributes:
       current: the water's velocity in the world frame [m/s]; (0, 0, 0): still water only.
       vehicle: hull mass, water, thrusters (its hull box and arm mount are the docking scene's).
-      controller: the station keeping on (x, y, z, ψ).
+      controller: the station keeping on (x, y, z, ψ), and the control period (the executor's
+        tick with the whole-body controller).
       tool_tolerance_m: a gate counts as kept by the tool when it is within this of where the
         docked arm holds it [m].
       coordinate: also run the current with the whole-body controller (``whole_body``: the tool
-        on its docked path first, station keeping in that task's null space;
-        :func:`uvms_jax.hover.run_plan_hovering` with ``control="whole_body"``) on the
-        simulator's position servos, since the executor streams the plan unchanged; its gates
-        are judged on the tool's world pose, within ``tool_tolerance_m`` and
-        ``tool_tolerance_deg`` [°].
+        on its docked path first, station keeping in that task's null space) between the
+        executor's plan and the arm; its gates are judged on the tool's pose, within
+        ``tool_tolerance_m`` and ``tool_tolerance_deg`` [°].
       navigation: the whole-body controller sees the vehicle's pose through this navigation
         (rate, latency, noise; :class:`uvms_jax.hover.NavigationSettings`), or exactly (None).
-      dwell_s, gripper_s, joint_tolerance_rad: that run's dwell at each gate and gripper
-        step [s], and a replay's gate on the joints [rad].
       frame_png: also write the video's frame at the gate of the largest tool error here (with
         ``hw.plot``; relative: to the working directory), e.g. ``docs/img/hover_frame.png``.
     """
@@ -62,10 +59,7 @@ class HoverStageSettings:
     current: tuple[float, float, float] = (0.0, 0.0, 0.0)
     vehicle: hover.VehicleSettings = hover.VehicleSettings()
     controller: hover.ControllerSettings = hover.ControllerSettings()
-    dwell_s: float = setting(0.5, ge=0)
-    gripper_s: float = setting(1.0, ge=0)
     tool_tolerance_m: float = setting(0.01, gt=0)
-    joint_tolerance_rad: float = setting(0.01, gt=0)
     coordinate: bool = True
     whole_body: hover.WholeBodySettings = hover.WholeBodySettings()
     navigation: hover.NavigationSettings | None = None
