@@ -12,6 +12,7 @@ import yaml
 from _hw_helpers import short_plan
 from uvms_jax.hw import ExecutorSettings, HwSettings, SimSettings, plan_to_dict
 from uvms_jax.settings import from_mapping
+from uvms_jax.cli import uvms_hw
 from uvms_jax.hw.cli import build_parser, main
 
 ROOT = Path(__file__).parents[2]
@@ -140,7 +141,7 @@ def test_hovering_run_on_the_simulated_arm(plan_file, tmp_path, capsys):
     """``--hover``: the whole-body controller between the plan and the simulated arm of a vehicle
     hovering in a 0.3 m/s current; every gate on the tool within 10 mm, the plan's 4 gates."""
     out = tmp_path / "out"
-    assert main(["run", str(plan_file), "--hover", "--current", "0.3", "0", "0", "--no-plot", "--out", str(out)]) == 0
+    assert uvms_hw(["run", str(plan_file), "--hover", "--current", "0.3", "0", "0", "--no-plot", "--out", str(out)]) == 0
     res = json.loads((out / "results.json").read_text())
     hover = res["hover"]
     assert res["ok"] and res["gates"] == 4 and res["sim"]["limit_violations"] == 0
@@ -153,10 +154,12 @@ def test_hovering_run_on_the_simulated_arm(plan_file, tmp_path, capsys):
 def test_hovering_flags_need_hover_and_the_controllers_rate(plan_file, tmp_path, capsys):
     assert main(["run", str(plan_file), "--sim", "--current", "0.3", "0", "0", "--out", str(tmp_path / "a")]) == 2
     assert "--current need --hover" in capsys.readouterr().err
-    assert main(["run", str(plan_file), "--hover", "--rate", "100", "--out", str(tmp_path / "b")]) == 2
+    assert uvms_hw(["run", str(plan_file), "--hover", "--rate", "100", "--out", str(tmp_path / "b")]) == 2
     assert "50 Hz" in capsys.readouterr().err
+    assert main(["run", str(plan_file), "--hover", "--out", str(tmp_path / "b")]) == 2  # hw.cli alone: no vehicle
+    assert "run it as uvms-hw" in capsys.readouterr().err
     with pytest.raises(SystemExit) as e:  # argparse: one link
-        main(["run", str(plan_file), "--hover", "--udp", "127.0.0.1:9"])
+        uvms_hw(["run", str(plan_file), "--hover", "--udp", "127.0.0.1:9"])
     assert e.value.code == 2 and "not allowed with argument --hover" in capsys.readouterr().err
     assert not (tmp_path / "b").exists()
     text = build_parser()._subparsers._group_actions[0].choices["run"].format_help()

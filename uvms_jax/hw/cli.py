@@ -43,6 +43,7 @@ import sys
 import time
 from collections.abc import Sequence
 from pathlib import Path
+from types import ModuleType
 
 from uvms_jax import __version__, progress
 from uvms_jax.files import EXIT_INTERRUPTED, EXIT_TERMINATED, clear_running, sigterm_as_interrupt, write_atomic
@@ -243,7 +244,7 @@ def _refuse_out(out: Path | None, overwrite: bool) -> str | None:
     return None if out is None or overwrite else refuse_out(out)
 
 
-def _run(args: argparse.Namespace) -> int:
+def _run(args: argparse.Namespace, hovering: ModuleType | None) -> int:
     if not args.dry_run and (refusal := _refuse_out(args.out, args.overwrite)):
         print(f"uvms-hw: {refusal}", file=sys.stderr)  # before anything is loaded or checked
         return EXIT_REFUSED
@@ -269,13 +270,13 @@ def _run(args: argparse.Namespace) -> int:
     if not (args.sim or args.hover) and any(f is not None for f in sim_flags):
         print("uvms-hw: fault injection and simulated-arm flags need --sim or --hover", file=sys.stderr)
         return EXIT_REFUSED
-    if (refusal := _hover_refusal(args, hw)) is not None:
+    if (refusal := _hover_refusal(args, hw, hovering)) is not None:
         print(f"uvms-hw: {refusal}", file=sys.stderr)
         return EXIT_REFUSED
     out = args.out or Path("outputs/hw") / time.strftime("%Y-%m-%d_%H-%M-%S")
     client = None
     if args.hover:
-        return _run_hovering(args, plan, robot, hw, sim_cfg, out)
+        return _run_hovering(args, plan, robot, hw, sim_cfg, out, hovering)
     if not args.sim:
         if robot.hardware is None:
             print(f"uvms-hw: robot {robot.name!r} has no hardware profile (device ids): use --sim", file=sys.stderr)
@@ -312,39 +313,38 @@ def _run(args: argparse.Namespace) -> int:
     return EXIT_OK if run.ok else EXIT_ABORTED
 
 
-def _hover_refusal(args: argparse.Namespace, hw: ExecutorSettings) -> str | None:
+def _hover_refusal(args: argparse.Namespace, hw: ExecutorSettings, hovering: ModuleType | None) -> str | None:
     """Why the hovering flags cannot run (one line), or None."""
     if not args.hover:
         given = [f for f, v in (("--current", args.current), ("--pose", args.pose)) if v is not None]
         given += ["--navigation"] if args.navigation else []
         return f"{', '.join(given)} need --hover" if given else None
-    from uvms_jax.hover import ControllerSettings
-
-    period = ControllerSettings().period
+    if hovering is None:
+        return "--hover needs the hovering vehicle: run it as uvms-hw (uvms_jax.cli), not uvms_jax.hw.cli"
+    period = hovering.ControllerSettings().period
     if abs(1.0 / hw.rate_hz - period) > 1e-9 * period and args.hover == "whole_body":
         return f"--hover: the executor's rate must be the whole-body controller's, {1.0 / period:g} Hz (--rate)"
     return None
 
 
-def _run_hovering(args: argparse.Namespace, plan, robot, hw: ExecutorSettings, sim_cfg: SimSettings, out: Path) -> int:
-    """``run --hover``: the plan on the simulated arm of a hovering vehicle; the run's files and
-    its ``hover`` entry in ``results.json``."""
-    from uvms_jax.hover import CurrentSettings, NavigationSettings, VehicleSettings, execute_plan_hovering
-
-    vehicle = VehicleSettings()
+def _run_hovering(args: argparse.Namespace, plan, robot, hw: ExecutorSettings, sim_cfg: SimSettings, out: Path,
+                  hovering: ModuleType) -> int:
+    """``run --hover``: the plan on the simulated arm of a hovering vehicle (``hovering``: the
+    :mod:`uvms_jax.hover` package); the run's files and its ``hover`` entry in ``results.json``."""
+    vehicle = hovering.VehicleSettings()
     if plan.base_rpy is not None:  # the arm mounted as the plan was made for
         vehicle = dataclasses.replace(vehicle, mount_rpy=tuple(plan.base_rpy))
     try:
-        hovering = execute_plan_hovering(
+        hovered = hovering.execute_plan_hovering(
             robot, plan, args.pose or (0.0, 0.0, 0.0, 0.0), vehicle,
-            current=CurrentSettings(velocity=tuple(args.current or (0.0, 0.0, 0.0))), config=hw, sim=sim_cfg,
-            control=args.hover, navigation=NavigationSettings() if args.navigation else None)
+            current=hovering.CurrentSettings(velocity=tuple(args.current or (0.0, 0.0, 0.0))), config=hw,
+            sim=sim_cfg, control=args.hover, navigation=hovering.NavigationSettings() if args.navigation else None)
     except RunInterrupted as e:
         return _interrupted(e.run, out, args)
     except KeyboardInterrupt:
         return _interrupted(None, out, args)
-    run = hovering.executed
-    report = write_run(run, out, plot=not args.no_plot, plan_path=args.plan, extra={"hover": hovering.summary()})
+    run = hovered.executed
+    report = write_run(run, out, plot=not args.no_plot, plan_path=args.plan, extra={"hover": hovered.summary()})
     print(json.dumps(report))
     if not run.ok:
         print(f"uvms-hw: aborted, arm told to hold: {run.result.reason}", file=sys.stderr)
@@ -391,19 +391,23 @@ def _serve(args: argparse.Namespace) -> int:
     return EXIT_ABORTED
 
 
-def main(argv: Sequence[str] | None = None) -> int:
+def main(argv: Sequence[str] | None = None, hovering: ModuleType | None = None) -> int:
     """Console entry point; returns the exit status (see module docstring). SIGTERM stops a run
-    as Ctrl-C does (:func:`uvms_jax.files.sigterm_as_interrupt`), with status 143."""
+    as Ctrl-C does (:func:`uvms_jax.files.sigterm_as_interrupt`), with status 143.
+
+    ``hovering``: the :mod:`uvms_jax.hover` package, which ``run --hover`` drives (given by
+    :func:`uvms_jax.cli.uvms_hw`, the ``uvms-hw`` command: hw sits below hover and never
+    imports it)."""
     args = build_parser().parse_args(argv)
     with sigterm_as_interrupt() as terminated:
-        status = _command(args)
+        status = _command(args, hovering)
     return EXIT_TERMINATED if status == EXIT_INTERRUPTED and terminated() else status
 
 
-def _command(args: argparse.Namespace) -> int:
+def _command(args: argparse.Namespace, hovering: ModuleType | None) -> int:
     try:
         if args.command == "run":
-            return _run(args)
+            return _run(args, hovering)
         if args.command == "export":
             return _export(args)
         return _serve(args)
