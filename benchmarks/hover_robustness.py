@@ -75,7 +75,11 @@ def _per_speed(res, mask_variant, speeds, s) -> list[dict]:
     for speed in speeds:
         m = mask_variant & np.isclose(s, speed)
         gate = res.worst_gate_tool_error[0, m]
-        out.append({"speed_m_s": float(speed), "scenarios": int(m.sum()),
+        reasons = res.reasons[0, m]
+        held = reasons != ""
+        out.append({"speed_m_s": float(speed), "scenarios": int(m.sum()), "held": int(held.sum()),
+                    "held_thrust_limited": int((held & (res.thrust_limited_periods[0, m] > 0)).sum()),
+                    "worst_reason": str(reasons[np.argmax(gate)]),
                     "worst_gate_tool_error_m": float(gate.max()), "p95_gate_tool_error_m": float(np.percentile(gate, 95)),
                     "worst_gate_tool_angle_deg": float(np.degrees(res.gate_tool_angle[0, m].max())),
                     "worst_tool_error_m": float(res.max_tool_error[0, m].max()),

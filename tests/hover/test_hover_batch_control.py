@@ -79,6 +79,8 @@ def test_limits_hold_in_a_current_beyond_the_thrusters(batch):
     assert np.all(res.peak_thrust[0, strong] <= 40.0 + 1e-9)
     assert np.all(res.thrust_violations[0] == 0) and np.all(res.joint_violations[0] == 0)
     assert np.all(res.worst_gate_tool_error[0, strong] > 0.01)  # the tool does lose its path there
+    assert all("thrusters were at their limit" in r for r in res.reasons[0, strong])  # held, with the reason
+    assert all(r == "" for r in res.reasons[0][res.gate_reached[0].all(axis=-1)])
 
 
 def test_fixes_arrive_late_by_hand():

@@ -24,7 +24,7 @@ from uvms_jax.hover import VehicleSettings, hover_model, trimmed
 from uvms_jax.hover._hydro import buoyancy_xfrc
 from uvms_jax.hover._model import VEHICLE_BODY, buoyancy_bodies
 from uvms_jax.hover._settings import ControllerSettings, CurrentSettings, NavigationSettings, WholeBodySettings
-from uvms_jax.hover._wbc import limited_rates, pose_error, task_priority
+from uvms_jax.hover._wbc import SECOND_TASK_DAMPING, limited_rates, pose_error, spd_solve, task_priority, weighted_pinv
 from uvms_jax.hover._wholebody import NavigationEstimate, WholeBody
 from uvms_jax.robot import load_arm
 
@@ -34,6 +34,8 @@ WRENCH_ATOL = 1e-6  # [N, N·m] the feed-forward against MuJoCo's inverse dynami
 NULL_ATOL = 1e-9  # [m/s, rad/s] the tool twist of the second task's rates (float64 rounding)
 STEP = 1e-6  # [s] a step along the second task's rates: the tool moves O(STEP²) for FK
 POSE = np.array([0.1, -0.2, 1.2, 0.4])
+PINV_ATOL = 1e-12  # the Cholesky solves against NumPy's SVD pseudo-inverse, undamped (float64 rounding)
+SECOND_TASK_RTOL = 1e-4  # the second task's damping: a relative μ²/σ_min² = 1e-6/0.1 at most on these tasks
 
 
 def _plan(K: int = 7, dt: float = 0.02) -> np.ndarray:
@@ -105,6 +107,29 @@ def test_the_second_task_does_not_move_the_first():
     # Without a second task the first task's rates are the same.
     alone, _, _ = task_priority(J, v1, J2, J2 @ (rates - second), w, 1e-3)
     np.testing.assert_allclose(J @ alone, J @ rates, atol=NULL_ATOL)
+
+
+def test_the_solves_are_the_pseudo_inverses():
+    """Oracle: NumPy's SVD pseudo-inverse. The weighted pseudo-inverse and the null-space
+    projector are exact; the second task's damped solve is the pseudo-inverse to μ²/σ_min²."""
+    rng = np.random.default_rng(3)
+    M = rng.normal(size=(6, 6))
+    rhs = rng.normal(size=(6, 4))
+    np.testing.assert_allclose(spd_solve(M @ M.T + np.eye(6), rhs), np.linalg.solve(M @ M.T + np.eye(6), rhs),
+                               atol=PINV_ATOL)
+    for seed in range(5):
+        _, _, J, v1, J2, v2, w = _task(seed)
+        w[8] = 0.0  # a joint held: its column out of the first task
+        np.testing.assert_allclose(weighted_pinv(J, w), w[:, None] * np.linalg.pinv(J * w), atol=PINV_ATOL)
+        rates, second, N1 = task_priority(J, v1, J2, v2, w, 1e-3)
+        np.testing.assert_allclose(N1, np.eye(12) - w[:, None] * np.linalg.pinv(J * w) @ J, atol=PINV_ATOL)
+        A = J * w
+        first = w * (A.T @ np.linalg.solve(A @ A.T + 1e-6 * np.eye(6), v1))
+        C = J2 @ N1
+        assert np.linalg.svd(C, compute_uv=False)[-1] ** 2 > SECOND_TASK_DAMPING ** 2 / SECOND_TASK_RTOL
+        want = N1 @ np.linalg.pinv(C) @ (v2 - J2 @ first)
+        np.testing.assert_allclose(second, want, atol=SECOND_TASK_RTOL * np.abs(want).max())
+        np.testing.assert_allclose(rates - second, first, atol=PINV_ATOL)
 
 
 def test_rate_bounds_are_never_exceeded():

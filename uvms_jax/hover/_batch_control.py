@@ -346,6 +346,23 @@ class ControlledResult:
         return (self.gate_tool_error <= self.tool_tolerance_m) & (self.gate_tool_angle <= self.tool_tolerance_rad)
 
     @property
+    def reasons(self) -> np.ndarray:
+        """``(K, N)`` str: why each run would be held (its first gate missed, as
+        :class:`~uvms_jax.hover.HoverRun` words it, with the periods the thrusters were at their
+        limit: a current beyond what they hold), or ``""`` for a run that reached every gate."""
+        out = np.full(self.gate_tool_error.shape[:2], "", dtype=object)
+        for k, n in zip(*np.nonzero(~self.gate_reached.all(axis=-1))):
+            i = int(np.argmin(self.gate_reached[k, n]))
+            e, a = self.gate_tool_error[k, n, i], self.gate_tool_angle[k, n, i]
+            miss = (f"the tool is {1e3 * e:.1f} mm from its planned pose (tolerance {1e3 * self.tool_tolerance_m:.0f} mm)"
+                    if e > self.tool_tolerance_m else f"the tool is turned {np.degrees(a):.2f}° from its planned pose "
+                    f"(tolerance {np.degrees(self.tool_tolerance_rad):.2f}°)")
+            limited = self.thrust_limited_periods[k, n]
+            out[k, n] = f"gate {i + 1} of {self.gate_times.size}: {miss}" + (
+                f"; the thrusters were at their limit in {limited} control periods" if limited else "")
+        return out
+
+    @property
     def worst_gate_tool_error(self) -> np.ndarray:
         """``(K, N)`` the largest gate tool error [m] (0 without gates)."""
         return self.gate_tool_error.max(axis=-1, initial=0.0)

@@ -244,7 +244,11 @@ class NavigationSettings:
       position_noise_m: standard deviation of a fix's position on each axis [m].
       angle_noise_deg: standard deviation of a fix's orientation about each axis [°].
       fix_gain: the share of a fix's innovation the estimate takes, in (0, 1]
-        (:class:`~uvms_jax.hover.NavigationEstimate`; 1: the newest fix carried forward).
+        (:class:`~uvms_jax.hover.NavigationEstimate`; 1: the newest fix carried forward). It sets
+        the filter's time constant, ``1 / (rate_hz · fix_gain)`` (1.7 s by default), and is the
+        steady-state Kalman gain ``g²/(1 − g) = σ_w²/σ_fix²`` for dead reckoning that wanders by
+        ``σ_w`` between fixes: the default 0.02 stands for 0.1 mm per fix (0.55 mm/√s), a DVL
+        and gyro at hovering speeds (docs/hover.md, "Navigation").
       seed: the noise's random seed.
     """
 
@@ -252,7 +256,7 @@ class NavigationSettings:
     latency_s: float = setting(0.05, ge=0)
     position_noise_m: float = setting(0.005, ge=0)
     angle_noise_deg: float = setting(0.2, ge=0)
-    fix_gain: float = setting(0.1, gt=0, le=1)
+    fix_gain: float = setting(0.02, gt=0, le=1)
     seed: int = 0
 
     def __post_init__(self) -> None:

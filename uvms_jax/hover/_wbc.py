@@ -32,8 +32,14 @@ import numpy as np
 
 from ._hydro import fluid_xfrc
 
+# μ of the second task's solve (task_priority; J₂ N₁ is dimensionless here): the station keeping's
+# rates move by a relative μ²/σ_min(J₂ N₁)² ≤ 2.3e-5 on the demo's plan (σ_min ≥ 0.21 along it),
+# and μ² = 1e-6, eight float32 ulps of C Cᵀ's unit-sized diagonal, keeps the Cholesky factor real
+# in float32 where the arm is singular and C loses rank.
+SECOND_TASK_DAMPING = 1e-3
+
 __all__ = ["ArmParts", "arm_momentum_rate", "drag_wrench", "hydrostatic_wrench", "limited_rates", "link_motion",
-           "pose_error", "task_priority", "weighted_pinv"]
+           "pose_error", "spd_solve", "task_priority", "weighted_pinv"]
 
 
 class ArmParts(NamedTuple):
@@ -71,12 +77,40 @@ def pose_error(T_desired, T, xp=np):
 def weighted_pinv(J, w_inv_sqrt, xp=np):
     """``(m, k)`` the weighted pseudo-inverse ``J⁺_W = W^{-1/2} (J W^{-1/2})⁺`` of ``J (k, m)``,
     ``w_inv_sqrt (m,)`` the square roots of ``W⁻¹``'s diagonal (0: a coordinate that must not
-    move). ``J J⁺_W J = J`` exactly (a Moore–Penrose identity), whatever the weights."""
-    return w_inv_sqrt[:, None] * xp.linalg.pinv(J * w_inv_sqrt[None, :])
+    move), for ``J W^{-1/2}`` of full row rank (the vehicle's columns give the tool's task that
+    rank whatever the arm): ``W^{-1/2} Aᵀ (A Aᵀ)⁻¹``, ``A = J W^{-1/2}``, by Cholesky
+    (:func:`spd_solve`). ``J J⁺_W J = J`` to rounding, whatever the weights."""
+    A = J * w_inv_sqrt[None, :]
+    return w_inv_sqrt[:, None] * spd_solve(A @ A.T, A, xp=xp).T
+
+
+def spd_solve(M, rhs, xp=np):
+    """``M⁻¹ rhs`` for a symmetric positive-definite ``M (k, k)`` and ``rhs (k, …)``, by its
+    Cholesky factor, unrolled (``k`` is static): elementwise operations only, so that under
+    ``vmap`` a batch of small systems costs a few fused loops rather than a library call each."""
+    k = M.shape[0]
+    L = [[None] * k for _ in range(k)]
+    for j in range(k):
+        L[j][j] = xp.sqrt(M[j, j] - sum(L[j][p] ** 2 for p in range(j)))
+        for i in range(j + 1, k):
+            L[i][j] = (M[i, j] - sum(L[i][p] * L[j][p] for p in range(j))) / L[j][j]
+    y = []
+    for i in range(k):  # L y = rhs
+        y.append((rhs[i] - sum(L[i][p] * y[p] for p in range(i))) / L[i][i])
+    x = [None] * k
+    for i in reversed(range(k)):  # Lᵀ x = y
+        x[i] = (y[i] - sum(L[p][i] * x[p] for p in range(i + 1, k))) / L[i][i]
+    return xp.stack(x)
 
 
 def task_priority(J1, v1, J2, v2, w_inv_sqrt, damping, xp=np):
     """Two tasks by priority: ``ζ̇ = ζ̇₁ + N₁ (J₂ N₁)⁺ (v₂ − J₂ ζ̇₁)``.
+
+    The pseudo-inverses are Cholesky solves of the tasks' small Gram matrices
+    (:func:`spd_solve`), not SVDs: ``J₁⁺_W`` is :func:`weighted_pinv`, and ``(J₂ N₁)⁺ r`` is
+    ``Cᵀ (C Cᵀ + μ² I)⁻¹ r``, ``C = J₂ N₁``, ``μ`` = :data:`SECOND_TASK_DAMPING`: the exact
+    pseudo-inverse to a relative ``μ²/σ_min(C)²`` where ``C`` has full row rank (for the
+    vehicle's rows it has the arm Jacobian's rank), and bounded where it has not.
 
     Args:
       J1: ``(6, m)`` the first task's Jacobian; v1: ``(6,)`` its velocity.
@@ -87,12 +121,16 @@ def task_priority(J1, v1, J2, v2, w_inv_sqrt, damping, xp=np):
 
     Returns:
       ``(ζ̇ (m,), ζ̇₂ (m,), N₁ (m, m))``: the rates, the second task's part of them (``J₁ ζ̇₂ = 0``
-      to rounding: ``N₁ = I − J₁⁺_W J₁`` is built from the exact pseudo-inverse), and ``N₁``.
+      to rounding: ``N₁ = I − J₁⁺_W J₁`` is built from the undamped pseudo-inverse), and ``N₁``.
     """
     A = J1 * w_inv_sqrt[None, :]
-    dot1 = w_inv_sqrt * (A.T @ xp.linalg.solve(A @ A.T + damping ** 2 * xp.eye(A.shape[0], dtype=A.dtype), v1))
-    N1 = xp.eye(J1.shape[1], dtype=J1.dtype) - weighted_pinv(J1, w_inv_sqrt, xp=xp) @ J1
-    dot2 = N1 @ (xp.linalg.pinv(J2 @ N1) @ (v2 - J2 @ dot1))
+    gram = A @ A.T
+    eye = xp.eye(A.shape[0], dtype=A.dtype)
+    dot1 = w_inv_sqrt * (A.T @ spd_solve(gram + damping ** 2 * eye, v1, xp=xp))
+    N1 = xp.eye(J1.shape[1], dtype=J1.dtype) - w_inv_sqrt[:, None] * (A.T @ spd_solve(gram, J1, xp=xp))
+    C = J2 @ N1
+    eye2 = xp.eye(C.shape[0], dtype=C.dtype)
+    dot2 = N1 @ (C.T @ spd_solve(C @ C.T + SECOND_TASK_DAMPING ** 2 * eye2, v2 - J2 @ dot1, xp=xp))
     return dot1 + dot2, dot2, N1
 
 
