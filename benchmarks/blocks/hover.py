@@ -64,7 +64,7 @@ def hover_robustness() -> str:
             f"{thrust_bad} periods with a thrust past its limit; {joints}.\n\n"
             + md_table(["current [m/s]"] + [v["name"] for v in variants], rows) + "\n")
     for name, where in (("hover_robustness_whole_body_cpu.json", "2-core CPU"),
-                        ("hover_robustness_whole_body_h200.json", None)):
+                        ("hover_robustness_whole_body_h200.json", None), ("hover_robustness_h200.json", None)):
         if (RESULTS / name).exists():
             text += _whole_plan(_load(name), where)
     if (RESULTS / "hover_robustness_throughput_h200.json").exists():
@@ -77,17 +77,22 @@ def hover_robustness() -> str:
 
 def _whole_plan(w: dict, where: str | None) -> str:
     """One sentence: the whole plan's worst-direction gate tool error per speed, exact / noisy
-    navigation, with the gates reached and the thrust-limited periods of the worst speed."""
+    navigation, with the gates reached, the runs held (the current beyond the thrusters) and the
+    limit violations."""
     exact = next(x for x in w["variants"] if not x["navigation_noise"])["per_speed"]
     noisy = next(x for x in w["variants"] if x["navigation_noise"])["per_speed"]
     cells = "; ".join(f"{a['speed_m_s']:g} m/s: {_mm(a['worst_gate_tool_error_m'])} / {_mm(b['worst_gate_tool_error_m'])}"
-                      f" (gates reached in the worst direction {a['gates_reached_worst']:.2f} / {b['gates_reached_worst']:.2f})"
+                      f" (gates reached in the worst direction {a['gates_reached_worst']:.2f} / "
+                      f"{b['gates_reached_worst']:.2f}; held {a.get('held', 0)} / {b.get('held', 0)} of {a['scenarios']})"
                       for a, b in zip(exact, noisy))
-    bad = sum(r["thrust_violations"] + r["joint_violations"] for r in exact + noisy)
+    thrust = sum(r["thrust_violations"] for r in exact + noisy)
+    joints = sum(r["joint_violations"] for r in exact + noisy)
+    size = (f"{w['scenarios']} scenarios ({w['repetitions']} draws of navigation noise per direction) in one call at "
+            f"{_rate(w['env_steps_per_s'])} env-steps/s, " if w.get("repetitions", 1) > 1 else "")
     return (f"\nThe whole plan ({w['gates']} gates, {w['simulated_s']:.0f} s), whole-body controller, "
-            f"{w['directions']} directions, on the {where or w['device']} (`{w['command']}`, jax {w['jax']}): "
-            f"worst-direction gate tool error, exact / noisy navigation [mm]: {cells}; {bad} thrust or joint-limit "
-            "violations.\n")
+            f"{w['directions']} directions, {size}on the {where or w['device']} (`{w['command']}`, jax {w['jax']}): "
+            f"worst-direction gate tool error, exact / noisy navigation [mm]: {cells}; {thrust} thrust and {joints} "
+            "joint-limit violations (held: the thrusters saturated, the reason in the run).\n")
 
 
 def hover_vehicle() -> str:
