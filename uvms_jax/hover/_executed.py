@@ -13,6 +13,7 @@ from __future__ import annotations
 import dataclasses
 import math
 
+import jax
 import numpy as np
 
 from uvms_jax import kin
@@ -24,6 +25,8 @@ from ._settings import ControllerSettings, NavigationSettings, WholeBodySettings
 from ._sim import HoverWorld
 from ._wbc import pose_error
 from ._wholebody import NavigationEstimate, WholeBody
+
+_fk = jax.jit(kin.fk_of)  # the tool's pose every tick, without kin.fk's input checks (ζ built here)
 
 __all__ = ["EXECUTOR_TOOL_GAIN", "SETTLED_DEG", "SETTLED_M", "ExecutorWholeBody", "executor_settings"]
 
@@ -123,7 +126,7 @@ class ExecutorWholeBody:
         """``(distance [m], angle [rad])`` of the tool from its planned pose at row ``k``, by the
         last navigation estimate and the joint angles ``q (n,)``."""
         eta = self.wb.displacement(*self.estimate)
-        T = np.asarray(kin.fk(self.wb.chain, np.concatenate([eta, np.asarray(q, dtype=float)])), dtype=float)
+        T = np.asarray(_fk(self.wb.chain, np.concatenate([eta, np.asarray(q, dtype=float)])), dtype=float)
         e = pose_error(self.wb.T_tool[min(k, len(self.wb.T_tool) - 1)], T)
         return float(np.linalg.norm(e[:3])), float(np.linalg.norm(e[3:]))
 

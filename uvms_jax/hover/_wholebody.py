@@ -12,6 +12,7 @@ from __future__ import annotations
 import functools
 from typing import NamedTuple
 
+import jax
 import mujoco
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -24,6 +25,10 @@ from ._hydro import fluid_bodies
 from ._model import VEHICLE_BODY
 from ._settings import ControllerSettings, NavigationSettings, VehicleSettings, WholeBodySettings
 from ._wbc import (ArmParts, arm_momentum_rate, drag_wrench, hydrostatic_wrench, limited_rates, pose_error)
+
+# The tool's pose and Jacobian in one compiled pass, without kin.fk's input checks: the
+# controller builds ζ itself, every period (one dispatch instead of two checked ones).
+_pose_and_jacobian = jax.jit(kin.pose_and_jacobian_of)
 
 __all__ = ["NavigationEstimate", "WholeBody", "WholeBodyCommand", "arm_parts", "euler_xyz"]
 
@@ -181,7 +186,7 @@ class WholeBody:
         # vehicle stays within a few degrees of level and of the docked heading).
         eta_dot = xp.concatenate([R_dock.T @ velocity, R_dock.T @ (R @ angular_velocity)])
         zeta = xp.concatenate([eta + s.prediction_s * eta_dot, q_ref])
-        T, J = xp.asarray(kin.fk(self.chain, zeta)), xp.asarray(kin.jacobian(self.chain, zeta))
+        T, J = (xp.asarray(a) for a in _pose_and_jacobian(self.chain, zeta))
         v1 = self._at(self.tool_rate, k, xp) + s.tool_gain / dt * pose_error(self._at(self.T_tool, k, xp), T, xp=xp)
         lead = dt + s.servo_lead_s
         # Bounds LIMIT_SLACK inside the limits: the target then lies inside them exactly, rounding

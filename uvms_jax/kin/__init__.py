@@ -34,6 +34,7 @@ from uvms_jax.kin._export import to_urdf
 from uvms_jax.kin._fk import Kinematics
 from uvms_jax.kin._fk import fk
 from uvms_jax.kin._fk import fk_of
+from uvms_jax.kin._fk import pose_and_jacobian_of
 from uvms_jax.kin._fk import jacobian
 from uvms_jax.kin._fk import jacobian_rows
 from uvms_jax.kin._fk import kinematics
