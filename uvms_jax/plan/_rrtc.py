@@ -20,6 +20,7 @@ import time
 import numba
 import numpy as np
 
+from uvms_jax.plan import _kernel_cache  # noqa: F401  # the kernels below are cached by content
 from uvms_jax.plan._vector_kernels import make_scratch, motion_free
 
 TRAPPED, ADVANCED, REACHED = 0, 1, 2
