@@ -360,7 +360,7 @@ class VectorChecker:
         self.lower, self.upper = robot.lower, robot.upper
         self._scratch = make_scratch(self.model)
         q = np.zeros((1, robot.n_joints))
-        self.states_free(q), self.motion_free(q[0], q[0], 1.0), load(self.model, robot.n_joints)  # see load
+        self.states_free(q), self.motion_free(q[0], q[0], 1.0), load(self.model, self.lower, self.upper)  # see load
 
     def _rows(self, Q) -> np.ndarray:
         Q = np.ascontiguousarray(np.atleast_2d(Q), dtype=np.float64)
