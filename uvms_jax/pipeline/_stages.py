@@ -494,10 +494,11 @@ def _fixed_mount_M_a(problem: evo.ArmDockingProblem, T_world_base: np.ndarray) -
     if not np.allclose(T[2, :3], (0, 0, 1), atol=1e-6):
         return None
     pose = np.array([*T[:3, 3], np.arctan2(T[1, 0], T[0, 0])])
-    dtype = problem.T_vehicle_box.dtype
-    no_hull = problem.replace(T_vehicle_box=jnp.zeros((0, 4, 4), dtype), vehicle_half=jnp.zeros((0, 3), dtype),
-                              world=problem.world.without_vehicle())
-    return float(evo.evaluate_arm(no_hull, pose).M_a)
+    # M_a depends on the hull only through the arm's collisions with it (the world's mask); the
+    # hull's own clearance enters the fitness alone. Same shapes as the docking stage's
+    # problem: its compiled report serves here.
+    no_hull = problem.replace(world=problem.world.without_vehicle())
+    return float(evo.arm_report(no_hull, pose[None]).terms.M_a[0])
 
 
 BASELINE_TITLE = "Baseline: the thesis's fixed mount against the docked arm"
