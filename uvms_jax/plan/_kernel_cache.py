@@ -48,13 +48,18 @@ def kernels_digest() -> str:
 _UserProvided = getattr(caching, "UserProvidedCacheLocator", None) or caching._UserProvidedCacheLocator
 
 
+def cache_folder() -> str:
+    """The folder of this source's compiled kernels (whether or not it exists yet)."""
+    return os.path.join(config.CACHE_DIR, f"uvms_jax_plan_{kernels_digest()[:32]}")
+
+
 class ContentLocator(_UserProvided):
     """Numba cache locator of the kernel modules: a folder and a stamp by their content."""
 
     def __init__(self, py_func, py_file):
         self._py_file = py_file
         self._lineno = py_func.__code__.co_firstlineno
-        self._cache_path = os.path.join(config.CACHE_DIR, f"uvms_jax_plan_{kernels_digest()[:32]}")
+        self._cache_path = cache_folder()
 
     def get_source_stamp(self) -> str:
         return kernels_digest()
