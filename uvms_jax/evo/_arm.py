@@ -169,8 +169,9 @@ def make_arm_docking_problem(
 
 def _on_device(x, dtype) -> Array:
     """``x`` cast to ``dtype`` on the host (NumPy rounds as XLA does), then put on the device: a
-    cast on the device compiles a program per shape, some 25 while a problem is built."""
-    return jnp.asarray(np.asarray(x).astype(jnp.dtype(dtype)))
+    cast on the device, like ``jnp.asarray`` of a NumPy array, compiles a program per shape,
+    some 25 while a problem is built; ``jax.device_put`` compiles none."""
+    return jax.device_put(np.asarray(x).astype(jnp.dtype(dtype)))
 
 
 def _checked_targets(T_world_tool, group) -> tuple[np.ndarray, np.ndarray]:
