@@ -119,7 +119,8 @@ def test_host_loop_gives_identical_runs(setup, sphere):
     looped = evo.run_ga_batch(keys, sphere, codec, dataclasses.replace(ga, eval_chunk=7), params)
     host = evo.run_ga_batch(keys, sphere, codec, dataclasses.replace(ga, eval_chunk=7, host_loop=True), params)
     for field in ("history", "best_x", "best_fitness", "generations", "evaluations"):
-        np.testing.assert_array_equal(np.asarray(getattr(host, field)), np.asarray(getattr(looped, field)), err_msg=field)
+        np.testing.assert_array_equal(np.asarray(getattr(host, field)), np.asarray(getattr(looped, field)),
+                                      err_msg=field)
     with pytest.raises(ValueError, match="host_loop needs an eval_chunk"):
         dataclasses.replace(ga, host_loop=True)
 

@@ -158,7 +158,8 @@ def make_arm_docking_problem(
     lo, up = np.asarray(chain.lower, dtype=np.float64), np.asarray(chain.upper, dtype=np.float64)
     u = np.asarray(jax.random.uniform(jax.random.key(seed), (n_seeds, chain.n_joints), dtype=jnp.float32))
     return ArmDockingProblem(
-        chain=jax.tree_util.tree_map(lambda x: _on_device(x, dtype), chain), T_vehicle_base=arr(mount), T_world_tool=arr(T_tool),
+        chain=jax.tree_util.tree_map(lambda x: _on_device(x, dtype), chain), T_vehicle_base=arr(mount),
+        T_world_tool=arr(T_tool),
         group=jnp.asarray(group, dtype=jnp.int32), seeds=arr(lo + u * (up - lo)), pose_low=arr(low),
         pose_high=arr(high), p_dock=arr(p_dock), p_i=arr(p_i),
         objective=make_objective(paper_weights(a, b, terms), dtype), world=world,

@@ -34,7 +34,8 @@ as the thesis's test cage (thesis ch. 4–5).
   ``uvms_jax.sched.normalise_metrics``), :func:`plan_from_edges` (:func:`gripper_steps`: how an arm
   without a gripper takes its gripper steps);
 * query path: :func:`plan_query` → :class:`QueryResult` (a robot in a :class:`World`, compiled
-  :class:`VectorChecker` with MuJoCo's :class:`ExactChecker`, its kernels compiled ahead by :func:`warm_kernels`; MoveIt scenes and requests:
+  :class:`VectorChecker` with MuJoCo's :class:`ExactChecker`, its kernels compiled ahead by
+  :func:`warm_kernels`; MoveIt scenes and requests:
   :func:`load_moveit_scene`, :func:`load_moveit_request`, an SRDF's disabled pairs :func:`load_srdf`); a scene in a context as a world:
   :func:`scene_world`, :func:`held_shapes`, :func:`scene_checker`, an edge on it:
   :func:`plan_scene_query` (``PlanSettings.checker = "query"``); many problems in one jitted
