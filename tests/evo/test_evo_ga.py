@@ -112,6 +112,19 @@ def test_fitness_cache_gives_identical_runs(setup, batch, sphere, chunk):
     assert np.all(np.asarray(cached.evaluations) < full)  # elites alone are never re-evaluated
 
 
+def test_host_loop_gives_identical_runs(setup, sphere):
+    """Generations driven from Python with the shared compiled fitness: the same runs as the
+    jitted loop with the same fitness cache (the sphere's fitness rounds alike in both)."""
+    codec, ga, params, keys = setup
+    looped = evo.run_ga_batch(keys, sphere, codec, dataclasses.replace(ga, eval_chunk=7), params)
+    host = evo.run_ga_batch(keys, sphere, codec, dataclasses.replace(ga, eval_chunk=7, host_loop=True), params)
+    for field in ("history", "best_x", "best_fitness", "generations", "evaluations"):
+        np.testing.assert_array_equal(np.asarray(getattr(host, field)), np.asarray(getattr(looped, field)),
+                                      err_msg=field)
+    with pytest.raises(ValueError, match="host_loop needs an eval_chunk"):
+        dataclasses.replace(ga, host_loop=True)
+
+
 def test_elitism_and_rate_decay(setup, sphere):
     codec, ga, params, _ = setup
     ask, tell = jax.jit(ga.ask), jax.jit(ga.tell)

@@ -3,6 +3,7 @@ and the vehicle's hull sit where the pose and the scene file's mount put them.""
 
 from __future__ import annotations
 
+import jax.numpy as jnp
 import mujoco
 import numpy as np
 import pytest
@@ -68,3 +69,18 @@ def test_open_water_scene_keeps_the_tables_and_drops_the_cage(demo):
     names = {model.geom(i).name for i in range(model.ngeom)}
     assert {"start_left", "dest_inclined", "n1:cube1", "n5:base_cube1"} <= names
     assert not any(n.startswith("cage:") for n in names) and "ceiling" not in names
+
+
+def test_fixed_mount_M_a_leaves_out_the_hull(demo):
+    """The baseline's M_a at a fixed mount: the docking problem's with the vehicle's hull gone.
+    Oracle: the problem without any hull box (its arrays emptied) and without the hull in the
+    arm's collision world, scored by evaluate_arm."""
+    _, problem = demo
+    pose = (0.01, 0.41, 1.2, -1.62)  # the tiny experiment's box: reaches every target
+    _, T_world_base, _ = docked_scene(demo[0], problem, pose)
+    dtype = problem.T_vehicle_box.dtype
+    empty = problem.replace(T_vehicle_box=jnp.zeros((0, 4, 4), dtype), vehicle_half=jnp.zeros((0, 3), dtype),
+                            world=problem.world.without_vehicle())
+    expected = float(evo.evaluate_arm(empty, np.asarray(pose)).M_a)
+    assert expected > 0
+    np.testing.assert_allclose(evo.fixed_base_M_a(problem, T_world_base), expected, rtol=1e-9)

@@ -138,7 +138,7 @@ def make_arm_docking_problem(
         world whose rows are not the targets or an unknown fitness term.
     """
     dtype = dtype or jnp.zeros(()).dtype
-    arr = lambda x: jnp.asarray(np.asarray(x, dtype=np.float64), dtype=dtype)
+    arr = lambda x: _on_device(np.asarray(x, dtype=np.float64), dtype)
     T_tool, group = _checked_targets(T_world_tool, group)
     mount = np.asarray(T_vehicle_base, dtype=np.float64)
     if mount.shape != (4, 4):
@@ -158,13 +158,21 @@ def make_arm_docking_problem(
     lo, up = np.asarray(chain.lower, dtype=np.float64), np.asarray(chain.upper, dtype=np.float64)
     u = np.asarray(jax.random.uniform(jax.random.key(seed), (n_seeds, chain.n_joints), dtype=jnp.float32))
     return ArmDockingProblem(
-        chain=kin.with_dtype(chain, dtype), T_vehicle_base=arr(mount), T_world_tool=arr(T_tool),
+        chain=jax.tree_util.tree_map(lambda x: _on_device(x, dtype), chain), T_vehicle_base=arr(mount),
+        T_world_tool=arr(T_tool),
         group=jnp.asarray(group, dtype=jnp.int32), seeds=arr(lo + u * (up - lo)), pose_low=arr(low),
         pose_high=arr(high), p_dock=arr(p_dock), p_i=arr(p_i),
         objective=make_objective(paper_weights(a, b, terms), dtype), world=world,
         T_vehicle_box=boxes[0][0], vehicle_half=boxes[0][1], T_world_box=boxes[1][0], scene_half=boxes[1][1],
         damping=arr(damping), n_groups=n_groups, iterations=int(iterations),
     )
+
+
+def _on_device(x, dtype) -> Array:
+    """``x`` cast to ``dtype`` on the host (NumPy rounds as XLA does), then put on the device: a
+    cast on the device, like ``jnp.asarray`` of a NumPy array, compiles a program per shape,
+    some 25 while a problem is built; ``jax.device_put`` compiles none."""
+    return jax.device_put(np.asarray(x).astype(jnp.dtype(dtype)))
 
 
 def _checked_targets(T_world_tool, group) -> tuple[np.ndarray, np.ndarray]:
@@ -199,7 +207,7 @@ def _checked_world(world: SphereWorld, chain: Chain, n_groups: int, dtype) -> Sp
     if world.rows.radius.shape[0] != n_groups or int(jnp.max(world.rows.body, initial=0)) > chain.n_joints:
         raise ValueError(f"world has {world.rows.radius.shape[0]} rows for {n_groups} targets, or bodies beyond the "
                          f"arm's {chain.n_joints}")
-    return jax.tree_util.tree_map(lambda x: x.astype(dtype) if jnp.issubdtype(x.dtype, jnp.floating) else x, world)
+    return jax.tree_util.tree_map(lambda x: _on_device(x, dtype) if jnp.issubdtype(x.dtype, jnp.floating) else x, world)
 
 
 # A vehicle frame is level when its z axis is within this of the world's (a rotation's rounding
@@ -308,10 +316,11 @@ def fixed_base_M_a(problem: ArmDockingProblem, T_world_base) -> float | None:
     if not np.allclose(T[2, :3], (0, 0, 1), atol=LEVEL_ATOL):
         return None
     pose = np.array([*T[:3, 3], np.arctan2(T[1, 0], T[0, 0])])
-    dtype = problem.T_vehicle_box.dtype
-    no_hull = problem.replace(T_vehicle_box=jnp.zeros((0, 4, 4), dtype), vehicle_half=jnp.zeros((0, 3), dtype),
-                              world=problem.world.without_vehicle())
-    return float(evaluate_arm(no_hull, pose).M_a)
+    # M_a depends on the hull only through the arm's collisions with it (the world's mask); the
+    # hull's own clearance enters the fitness alone. Same shapes as the docking stage's problem:
+    # its compiled report serves here.
+    no_hull = problem.replace(world=problem.world.without_vehicle())
+    return float(arm_report(no_hull, pose[None]).terms.M_a[0])
 
 
 class ArmReport(NamedTuple):

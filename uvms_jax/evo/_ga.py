@@ -121,6 +121,12 @@ class BinaryGA:
         (elites, unchanged copies, repeated crossovers) take that fitness, and the new ones of
         all runs are pooled and evaluated c at a time, in as many calls as needed. Results
         are identical; on a CPU a converging run then costs ~40 % fewer evaluations.
+      host_loop: False: a whole optimisation is one jitted ``while_loop`` with the fitness
+        inside it. True (needs ``eval_chunk``): generations are driven from Python and the
+        fitness is the compiled evaluation that :func:`~uvms_jax.evo.grid_search` and
+        :func:`~uvms_jax.evo.zoom_from` call with ``chunk_size = eval_chunk``
+        (:mod:`uvms_jax.evo._ga_host`): one compilation of a costly fitness serves the GA and
+        the searches, for a few host round trips per generation.
     """
 
     population_size: int
@@ -129,6 +135,7 @@ class BinaryGA:
     n_elites: int = 2
     tournament_size: int = 2
     eval_chunk: int | None = None
+    host_loop: bool = False
 
     def __post_init__(self):
         if self.population_size < 2 or not 0 <= self.n_elites < self.population_size:
@@ -138,6 +145,8 @@ class BinaryGA:
             )
         if self.eval_chunk is not None and self.eval_chunk < 1:
             raise ValueError(f"eval_chunk must be None or >= 1, got {self.eval_chunk}")
+        if self.host_loop and self.eval_chunk is None:
+            raise ValueError("host_loop needs an eval_chunk (the chunk of the shared compiled fitness), got None")
         if self.n_bits < 2 or self.max_generations < 1 or self.tournament_size < 1:
             raise ValueError(
                 f"need n_bits >= 2, max_generations >= 1, tournament_size >= 1, got "
@@ -240,6 +249,25 @@ class GAResult(NamedTuple):
     state: GAState
 
 
+def _pool(population: Bits, state: GAState, skip: Array, chunk: int):
+    """The fitness cache of :func:`_pooled_fitness`: ``(fitness (R·P,)`` known fitness, −inf for
+    the new individuals; ``order (n_slots,)`` flat indices of the new individuals first, then
+    ``R·P`` (padding, past the end); ``n_new ()``; ``evaluated (R,))``."""
+    R, P, L = population.shape
+    same = jnp.all(population[:, :, None, :] == state.population[:, None, :, :], axis=-1)  # (R, P, P)
+    same = same & jnp.isfinite(state.fitness)[:, None, :]  # nothing is known before generation 1
+    known = jnp.any(same, axis=-1) | skip[:, None]
+    prev = jnp.take_along_axis(state.fitness, jnp.argmax(same, axis=-1), axis=-1)
+    fitness = jnp.where(known, prev, -jnp.inf).reshape(R * P)
+    n_new = R * P - jnp.sum(known)
+    n_slots = -(-(R * P) // chunk) * chunk
+    # Pool indices of the new individuals first; padding slots point past the end (dropped).
+    order = jnp.argsort(known.reshape(R * P), stable=True)
+    order = jnp.concatenate([order, jnp.full((n_slots - R * P,), R * P, order.dtype)])
+    order = jnp.where(jnp.arange(n_slots) < n_new, order, R * P)
+    return fitness, order, n_new, (P - jnp.sum(known, axis=-1)).astype(jnp.int32)
+
+
 def _pooled_fitness(problem: Any, codec: BinaryCodec, population: Bits, state: GAState, skip: Array, chunk):
     """Fitness of the populations ``(R, P, n_bits)`` of R runs.
 
@@ -255,18 +283,8 @@ def _pooled_fitness(problem: Any, codec: BinaryCodec, population: Bits, state: G
     if chunk is None:
         fitness = problem.fitness(codec.decode(population.reshape(R * P, L))).reshape(R, P)
         return fitness, jnp.where(skip, 0, P).astype(jnp.int32)
-    same = jnp.all(population[:, :, None, :] == state.population[:, None, :, :], axis=-1)  # (R, P, P)
-    same = same & jnp.isfinite(state.fitness)[:, None, :]  # nothing is known before generation 1
-    known = jnp.any(same, axis=-1) | skip[:, None]
-    prev = jnp.take_along_axis(state.fitness, jnp.argmax(same, axis=-1), axis=-1)
-    fitness = jnp.where(known, prev, -jnp.inf).reshape(R * P)
+    fitness, order, n_new, evaluated = _pool(population, state, skip, chunk)
     flat = population.reshape(R * P, L)
-    n_new = R * P - jnp.sum(known)
-    n_slots = -(-(R * P) // chunk) * chunk
-    # Pool indices of the new individuals first; padding slots point past the end (dropped).
-    order = jnp.argsort(known.reshape(R * P), stable=True)
-    order = jnp.concatenate([order, jnp.full((n_slots - R * P,), R * P, order.dtype)])
-    order = jnp.where(jnp.arange(n_slots) < n_new, order, R * P)
 
     def body(carry):
         i, fitness = carry
@@ -275,7 +293,7 @@ def _pooled_fitness(problem: Any, codec: BinaryCodec, population: Bits, state: G
         return i + 1, fitness.at[idx].set(f.astype(fitness.dtype), mode="drop")
 
     _, fitness = jax.lax.while_loop(lambda c: c[0] * chunk < n_new, body, (jnp.asarray(0, n_new.dtype), fitness))
-    return fitness.reshape(R, P), (P - jnp.sum(known, axis=-1)).astype(jnp.int32)
+    return fitness.reshape(R, P), evaluated
 
 
 def _run_pooled(keys: Array, problem: Any, codec: BinaryCodec, ga: BinaryGA, params: GAParams) -> GAResult:
@@ -296,6 +314,10 @@ def _run_pooled(keys: Array, problem: Any, codec: BinaryCodec, ga: BinaryGA, par
 
     n0 = jnp.zeros(keys.shape[:1], dtype=jnp.int32)
     _, state, n_evals = jax.lax.while_loop(lambda c: ~jnp.all(c[1].done), body, (k_loop, state, n0))
+    return _result(codec, state, n_evals)
+
+
+def _result(codec: BinaryCodec, state: GAState, n_evals: Array) -> GAResult:
     return GAResult(
         best_x=codec.decode(state.best_bits),
         best_fitness=state.best_fitness,
@@ -304,6 +326,9 @@ def _run_pooled(keys: Array, problem: Any, codec: BinaryCodec, ga: BinaryGA, par
         history=state.history,
         state=state,
     )
+
+
+_result_jit = jax.jit(_result)
 
 
 def _check(codec: BinaryCodec, ga: BinaryGA) -> None:
@@ -342,7 +367,12 @@ def run_ga_batch(
     :func:`run_ga` with the same key.
     """
     _check(codec, ga)
-    return _run_batch_jit(keys, problem, codec, ga, params if params is not None else ga.default_params)
+    params = params if params is not None else ga.default_params
+    if ga.host_loop:
+        from uvms_jax.evo._ga_host import run_host_loop  # it uses this module's fitness cache
+
+        return _result_jit(codec, *run_host_loop(keys, problem, codec, ga, params))
+    return _run_batch_jit(keys, problem, codec, ga, params)
 
 
 def ga_batch_compiled(
@@ -350,8 +380,15 @@ def ga_batch_compiled(
 ) -> Callable[[Array, Any, BinaryCodec, GAParams], GAResult]:
     """:func:`run_ga_batch` compiled ahead of time for these arguments' shapes, without running
     it: call the result as ``fn(keys, problem, codec, params)`` (params required). Separates the
-    compilation time from the run time without running a costly fitness twice."""
+    compilation time from the run time without running a costly fitness twice. With
+    ``ga.host_loop`` the steps are compiled here and the fitness at its first call, unless a
+    search with ``chunk_size = ga.eval_chunk`` has compiled it already."""
     _check(codec, ga)
     params = params if params is not None else ga.default_params
+    if ga.host_loop:
+        from uvms_jax.evo._ga_host import compile_steps
+
+        compile_steps(keys, codec, ga, params)
+        return lambda k, p, c, prm: run_ga_batch(k, p, c, ga, prm)
     compiled = _run_batch_jit.lower(keys, problem, codec, ga, params).compile()
     return lambda k, p, c, prm: compiled(k, p, c, prm)

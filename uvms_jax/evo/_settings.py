@@ -176,6 +176,8 @@ class GASettings:
       stall_generations: stop after this many generations (≥ 1) without improvement;
         improvement_tol: smaller relative improvements (≥ 0) don't count.
       eval_chunk: chromosomes per evaluation call, ≥ 1 (None: all in one call).
+      host_loop: generations driven from Python, the fitness compiled once for the GA and the
+        grid search of ``chunk_size = eval_chunk`` (:class:`BinaryGA`); needs ``eval_chunk``.
     """
 
     population_size: int = setting(60, ge=1)
@@ -194,6 +196,7 @@ class GASettings:
     stall_generations: int = setting(50, ge=1)
     improvement_tol: float = setting(1.0e-3, ge=0)
     eval_chunk: int | None = setting(40, ge=1)
+    host_loop: bool = False
 
 
 @dataclasses.dataclass(frozen=True)

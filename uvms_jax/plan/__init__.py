@@ -36,7 +36,7 @@ as the thesis's test cage (thesis ch. 4–5).
   without a gripper takes its gripper steps);
 * query path: :func:`plan_query` → :class:`QueryResult` (a robot in a :class:`World`, compiled
   :class:`VectorChecker` with MuJoCo's :class:`ExactChecker` and its pair tables'
-  :data:`TABLE_BOUND`; MoveIt scenes and requests:
+  :data:`TABLE_BOUND`, its kernels compiled ahead by :func:`warm_kernels`; MoveIt scenes and requests:
   :func:`load_moveit_scene`, :func:`load_moveit_request`, an SRDF's disabled pairs :func:`load_srdf`); a scene in a context as a world:
   :func:`scene_world`, :func:`held_shapes`, :func:`scene_checker`, an edge on it:
   :func:`plan_scene_query` (``PlanSettings.checker = "query"``); many problems in one jitted
@@ -122,6 +122,7 @@ from uvms_jax.plan._vector import LIMIT_TOL
 from uvms_jax.plan._vector import VectorChecker
 from uvms_jax.plan._worlds import World
 from uvms_jax.plan._vector import check_in_limits
+from uvms_jax.plan._vector import warm_kernels
 from uvms_jax.plan._vector_jax import SphereArm
 from uvms_jax.plan._vector_jax import SphereWorlds
 from uvms_jax.plan._vector_jax import sphere_arm

@@ -20,6 +20,7 @@ import time
 import numba
 import numpy as np
 
+from uvms_jax.plan import _kernel_cache  # noqa: F401  # the kernels below are cached by content
 from uvms_jax.plan._vector_kernels import make_scratch, motion_free
 
 TRAPPED, ADVANCED, REACHED = 0, 1, 2
@@ -204,9 +205,11 @@ def shortcut(path, resolution, deadline, tries, seed, model):
     return path
 
 
-def load(model, n: int) -> None:
-    """Load (or compile) the planner's kernels for ``model``'s types now, with ``n`` joints: a
-    first call in a process costs ~0.1 s from Numba's cache, which no query's budget should pay."""
-    q = np.zeros(n)
-    rrt_connect(q, q, q - 1.0, q + 1.0, 1.0, 1.0, 2, 0.0, 0, model)
+def load(model, lower, upper) -> None:
+    """Load (or compile) the planner's kernels for ``model``'s types now, with the joint limits
+    ``lower``, ``upper`` (``(n,)`` [rad]) the queries pass (Numba compiles a read-only array
+    apart): a first call in a process costs ~0.1 s from Numba's cache, which no query's budget
+    should pay."""
+    q = np.clip(np.zeros(len(lower)), lower, upper)
+    rrt_connect(q, q, lower, upper, 1.0, 1.0, 2, 0.0, 0, model)
     shortcut(np.stack([q, q]), 1.0, 0.0, 0, 0, model)

@@ -12,6 +12,8 @@ import numba
 import numpy as np
 from scipy.spatial import ConvexHull
 
+from uvms_jax.plan import _kernel_cache  # noqa: F401  # the kernels below are cached by content
+
 _FACE_ATOL = 1e-9  # coplanar triangles of a hull give one face equation up to round-off
 
 

@@ -31,11 +31,13 @@ from uvms_jax.plan._rrtc import load
 from uvms_jax.plan._pair_tables import pair_tables
 from uvms_jax.plan._vector_kernels import (make_scratch, motion_free, pairs_touching, settle, state_free,
                                            states_status, without_exact, without_tables)
+from uvms_jax.plan._spec import Obstacle
 from uvms_jax.plan._worlds import World, add_obstacles, obstacle_rows
 from uvms_jax.robot import (BASE, Robot, RobotSpheres, Shape, base_body, card_jaws, collision_spheres, inscribed_spheres,
                             robot_spec)
 
-__all__ = ["LIMIT_TOL", "ExactChecker", "RobotSpheresModel", "VectorChecker", "check_in_limits", "robot_spheres_model"]
+__all__ = ["LIMIT_TOL", "ExactChecker", "RobotSpheresModel", "VectorChecker", "check_in_limits", "robot_spheres_model",
+           "warm_kernels"]
 
 #: A joint value this close outside a limit counts as at the limit [rad or m]: the chain keeps
 #: limits in float32, which rounds a limit such as 2.8973 rad by up to 2.4e-7.
@@ -339,6 +341,14 @@ class ExactChecker:
         return out
 
 
+def _limits(a) -> np.ndarray:
+    """Joint limits as the kernels take them: float64, read-only whatever the robot holds, so
+    that one compiled variant serves every robot (Numba compiles a read-only array apart)."""
+    out = np.array(a, dtype=np.float64)
+    out.setflags(write=False)
+    return out
+
+
 class VectorChecker:
     """The compiled sphere checker of a robot in a world (see the module docstring).
 
@@ -362,10 +372,10 @@ class VectorChecker:
         self.side = robot_spheres_model(robot, opening, spheres, tuple(attached))
         self.exact = ExactChecker(self.side, world)
         self.model = self.side.model(world, margin, self.exact)
-        self.lower, self.upper = robot.lower, robot.upper
+        self.lower, self.upper = _limits(robot.lower), _limits(robot.upper)
         self._scratch = make_scratch(self.model)
         q = np.zeros((1, robot.n_joints))
-        self.states_free(q), self.motion_free(q[0], q[0], 1.0), load(self.model, robot.n_joints)  # see load
+        self.states_free(q), self.motion_free(q[0], q[0], 1.0), load(self.model, self.lower, self.upper)  # see load
 
     def _rows(self, Q) -> np.ndarray:
         Q = np.ascontiguousarray(np.atleast_2d(Q), dtype=np.float64)
@@ -395,3 +405,14 @@ class VectorChecker:
         apart on every joint (``q0`` itself not checked)."""
         return bool(motion_free(np.asarray(q0, dtype=np.float64), np.asarray(q1, dtype=np.float64), float(resolution),
                                 self.model, self._scratch))
+
+
+def warm_kernels(robot: Robot) -> None:
+    """Compile (or load from Numba's cache) every kernel a :class:`VectorChecker` of ``robot``
+    calls, on a world with one box: the kernels' types do not depend on the world's sizes, so a
+    later checker of any world of this robot compiles nothing. Meant for a background thread
+    while other work runs (:func:`uvms_jax.pipeline.run_pipeline` starts one before the stages
+    that plan): on a machine's first run it takes the compilation (about 25 s on 2 CPU cores) out
+    of the planning stage's path."""
+    box = Obstacle(name="warm", shape="box", pos=(2.0, 2.0, 2.0), dims=(0.05, 0.05, 0.05))
+    VectorChecker(robot, World((box,)), margin=0.005)

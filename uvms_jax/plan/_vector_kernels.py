@@ -46,6 +46,8 @@ import mujoco
 import numba
 import numpy as np
 
+from uvms_jax.plan import _kernel_cache  # noqa: F401  # the kernels below are cached by content
+
 BOX, SPHERE, CAPSULE, CYLINDER, POLYTOPE = 0, 1, 2, 3, 4
 FREE, HIT, MAYBE = 0, 1, 2  # outcomes of state_status
 _TABLE_CAP = 0.1  # [m] a table's distances are measured up to this (farther: stored as it)

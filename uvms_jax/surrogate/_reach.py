@@ -367,11 +367,12 @@ def _map_w(learned: SurrogateDockingProblem, pose: Array) -> Array:
 
 
 def _refine(problem: evo.ArmDockingProblem, reach: ReachMap, x: np.ndarray, report: evo.ArmReport,
-            s: ReachMapSettings) -> tuple[np.ndarray, evo.ArmReport, np.ndarray, int]:
+            s: ReachMapSettings, chunk: int) -> tuple[np.ndarray, evo.ArmReport, np.ndarray, int]:
     """Trust-region refinement from pose ``x (4,)`` with its analytic ``report`` (fields of shape
     ``(1, ...)``): correct the map to the analytic w at ``x``, zoom on the corrected map inside
-    the trust region, score its best analytically; keep it if better, else halve the region.
-    Returns the best pose, its report, the analytic best per step and the analytic evaluations."""
+    the trust region (``chunk`` poses per evaluation), score its best analytically; keep it if
+    better, else halve the region. Returns the best pose, its report, the analytic best per step
+    and the analytic evaluations."""
     width = np.asarray(problem.pose_high - problem.pose_low) * s.refine_width
     periodic = evo.grid_periodicity(problem)
     learned = SurrogateDockingProblem(problem, reach, jnp.zeros_like(problem.group, dtype=problem.pose_low.dtype))
@@ -381,7 +382,7 @@ def _refine(problem: evo.ArmDockingProblem, reach: ReachMap, x: np.ndarray, repo
         # The corrected map equals the analytic fitness at x: its search moves only to a pose it predicts better.
         zoom = evo.zoom_from(corrected, x[None], report.terms.fitness, problem.pose_low, problem.pose_high,
                              REFINE_COUNTS, s.refine_stages, 0.5, periodic, width=width,
-                             chunk_size=int(np.prod(REFINE_COUNTS)))
+                             chunk_size=chunk)
         if np.array_equal(zoom.x[0], x):
             width = width / 2
         else:
@@ -425,7 +426,9 @@ def dock_with_map(problem: evo.ArmDockingProblem, run: ReachMapRun, ga: evo.GASe
     scored = evo.arm_report(problem, candidates)
     best = int(np.argmax(scored.terms.fitness))
     start = jax.tree_util.tree_map(lambda a: a[best:best + 1], scored)
-    pose, report, history, n_refine = _refine(problem, run.reach, candidates[best], start, s)
+    # The zoom in chunks of the GA's evaluation: with ga.host_loop one compiled map fitness serves both.
+    chunk = ga.eval_chunk if ga.host_loop else int(np.prod(REFINE_COUNTS))
+    pose, report, history, n_refine = _refine(problem, run.reach, candidates[best], start, s, chunk)
     seconds = time.perf_counter() - t0
     sample = jax.random.uniform(jax.random.key(seed + 1), (timing_batch, 4), problem.pose_low.dtype,
                                 problem.pose_low, problem.pose_high)
