@@ -257,7 +257,9 @@ def cold_demo() -> str:
 
 def _fresh_demo() -> str:
     f = _load("fresh_demo_cpu.json")
+    kernels = ("the planner's Numba kernels compiled too, from an empty Numba cache: a machine's first run"
+               if not f.get("numba_kernels_cached_before") else
+               "the planner's Numba kernels loaded from this machine's cache of the same source")
     return (f"\n`make demo` from a fresh clone (`{f['command']}`: clone, virtual environment and install from pip's cache, "
-            f"then the demo with empty caches): {f['total_s']:.1f} s, of which {f['setup_s']:.1f} s setup and "
-            f"{f['pipeline_s']:.1f} s pipeline (its planning stage also compiles the Numba kernels, whose cache is per "
-            f"checkout: plan {f['stage_seconds']['plan']:.0f} s).\n")
+            f"then the demo with an empty compilation cache): {f['total_s']:.1f} s, of which {f['setup_s']:.1f} s setup and "
+            f"{f['pipeline_s']:.1f} s pipeline ({kernels}; plan stage {f['stage_seconds']['plan']:.0f} s).\n")
