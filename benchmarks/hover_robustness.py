@@ -7,8 +7,8 @@ percentile over the directions of each scenario's largest gate tool error, and t
 at which the worst direction loses 10 mm. Writes the result file and, with ``--plot``, the plot.
 
     python benchmarks/hover_robustness.py RUN --device cpu --directions 8 --segments 9 \\
-        --plot docs/img/hover_robustness.png                      # benchmarks/results/hover_robustness_cpu.json
-    python benchmarks/hover_robustness.py RUN --device gpu --scenarios 65536   # ..._h100.json on an H100
+        --plot docs/img/hover_robustness.png       # a reduced CPU run (the file says how it was reduced)
+    python benchmarks/hover_robustness.py RUN --device gpu --out benchmarks/results/hover_robustness_curve_h200.json
 
 RUN is a ``make demo`` run folder (its ``schedule/plan.json`` and ``docking/best_pose.json``).
 The full size is 48 directions and the whole plan; ``--scenarios S`` repeats the grid with fresh

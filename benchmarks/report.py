@@ -29,7 +29,7 @@ from blocks import docking, hover, kin, planning, runs, surrogate  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 DOCUMENTS = (ROOT / "README.md", ROOT / "BENCHMARKS.md", *sorted((ROOT / "docs" / "benchmarks").glob("*.md")),
-             ROOT / "docs" / "theory.md", ROOT / "docs" / "docking.md", ROOT / "docs" / "hover.md",
+             ROOT / "docs" / "theory.md", ROOT / "docs" / "docking.md", ROOT / "docs" / "hover.md", ROOT / "docs" / "hover_batch.md",
              ROOT / "docs" / "planning.md")
 BLOCK = re.compile(r"(<!-- report:(?P<name>[a-z0-9_]+) -->\n)(?P<body>.*?)(<!-- /report:(?P=name) -->)", re.S)
 #: block name → its renderer (``() -> str``), from every topic module's ``__all__``.

@@ -37,8 +37,9 @@ def _mm(v: float) -> str:
 
 def hover_robustness() -> str:
     """Gate tool error against current speed per controller (docs/hover.md), from
-    ``benchmarks/hover_robustness.py``'s CPU run, and its GPU run where there is one."""
-    d = _load("hover_robustness_cpu.json")
+    ``benchmarks/hover_robustness.py``'s full-size GPU run, and its whole-plan and throughput
+    runs."""
+    d = _load("hover_robustness_curve_h200.json")
     variants = d["variants"]
     rows = [[f"{r['speed_m_s']:.1f}"] + [f"{_mm(v['per_speed'][i]['worst_gate_tool_error_m'])} / "
                                          f"{_mm(v['per_speed'][i]['p95_gate_tool_error_m'])}" for v in variants]
@@ -54,8 +55,9 @@ def hover_robustness() -> str:
               f"{max(r['max_joint_excess_rad'] for r in past):.3f} rad (the MJX model has no joint stops; the "
               "controller's targets stay within the limits)")
     n = d["navigation"]
-    text = (f"`{d['command']}` (the demo's plan at its docked pose; 2-core CPU, jax {d['jax']}, {d['dtype']}): "
-            f"{d['reduction']}. {d['scenarios']} scenarios (3 controllers × exact or noisy navigation × "
+    size = d["reduction"] or "the full size: 48 directions, the whole plan, the three controllers"
+    text = (f"`{d['command']}` (the demo's plan at its docked pose; {d['device']}, jax {d['jax']}, {d['dtype']}): "
+            f"{size}. {d['scenarios']} scenarios (3 controllers × exact or noisy navigation × "
             f"{len(d['speeds_m_s'])} speeds × {d['directions']} directions), {d['simulated_s']:.0f} s and {d['gates']} "
             f"gates each, in one MJX call ({d['compile_s']:.0f} s compile, {d['run_s']:.0f} s run, "
             f"{_rate(d['env_steps_per_s'])} env-steps/s). Navigation noise: fixes at {n['rate_hz']:g} Hz, "
@@ -63,8 +65,7 @@ def hover_robustness() -> str:
             f"Each cell: the largest gate tool error of a scenario, worst / 95th percentile over the directions [mm]; "
             f"{thrust_bad} periods with a thrust past its limit; {joints}.\n\n"
             + md_table(["current [m/s]"] + [v["name"] for v in variants], rows) + "\n")
-    for name, where in (("hover_robustness_whole_body_cpu.json", "2-core CPU"),
-                        ("hover_robustness_whole_body_h200.json", None), ("hover_robustness_h200.json", None)):
+    for name, where in (("hover_robustness_whole_body_h200.json", None), ("hover_robustness_h200.json", None)):
         if (RESULTS / name).exists():
             text += _whole_plan(_load(name), where)
     if (RESULTS / "hover_robustness_throughput_h200.json").exists():
