@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import importlib.metadata
 import json
+import os
 import re
 import shlex
 import subprocess
@@ -62,14 +63,20 @@ def plan_gates(plan: dict) -> int:
                for i, s in enumerate(plan["segments"]))
 
 
-def run_pipeline(cmd: list[str], run, card: dict, tmp_path) -> dict:
+def run_pipeline(cmd: list[str], run, card: dict, tmp_path, optimised: bool = False) -> dict:
     """``cmd`` (words of a pipeline command whose card path is ``my_arm.yaml``) with ``card``
-    written there, the tiny preset and ``run`` as the run folder; results.json's dict."""
+    written there, the tiny preset and ``run`` as the run folder; results.json's dict.
+
+    ``optimised``: XLA's own optimisation instead of the tests' quick compiles (tests/conftest.py),
+    for a run that spends its time running programs, not compiling them: the Panda's docking stage
+    (its collision meshes) took 87 s with the tests' flags and 47 s without, on 2 cores; the Z1's
+    (its own meshes) took as long either way."""
     path = tmp_path / "my_arm.yaml"
     path.write_text(yaml.safe_dump(card))
     cmd = [sys.executable if w == "python" else w.replace("=my_arm.yaml", f"={path}") for w in cmd]
+    env = dict(os.environ, XLA_FLAGS=os.environ["XLA_FLAGS_OUTSIDE_TESTS"]) if optimised else None
     done = subprocess.run([*cmd, "experiment=tiny", f"hydra.run.dir={run}"], cwd=ROOT, capture_output=True,
-                          text=True, timeout=1500)
+                          text=True, timeout=1500, env=env)
     assert done.returncode == 0, done.stderr[-3000:]
     assert not (run / "RUNNING").exists()
     return json.loads((run / "results.json").read_text())

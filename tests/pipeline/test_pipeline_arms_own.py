@@ -30,4 +30,4 @@ def test_pipeline_with_another_arm(tmp_path, arm):
 def test_pipeline_with_the_panda(tmp_path):
     """The Franka Panda's own description (its collision meshes), default stages."""
     run = tmp_path / "run"
-    check_run(run_pipeline(doc_command(), run, own_card("panda"), tmp_path), run, 7, gripper=True)
+    check_run(run_pipeline(doc_command(), run, own_card("panda"), tmp_path, optimised=True), run, 7, gripper=True)
