@@ -51,10 +51,12 @@ def test_tiny_run_writes_every_file(tmp_path):
 def test_multistart_search_and_the_runs_best_pose():
     """A shifted lattice polished from 3 distinct starts: never below its lattice, and the run's
     best pose is the better of the GA runs' and the search's, scored again by the problem."""
+    # Chunks of 81 points: the lattice's 128 and each zoom stage's 81 per start are evaluated
+    # by one compiled fitness (a chunk shape of their own each otherwise).
     s = from_mapping(evo.DockingSettings, _composed(
         "docking/preset=fast", "n_runs=2", "grid.counts=[4,4,2,4]", "grid.shift=true", "grid.refine_starts=3",
-        "grid.refine_stages=2", "grid.refine_counts=[3,3,3,3]", "wmax.n_per_side=3", "ga.population_size=8",
-        "ga.max_generations=3", "cmaes.enabled=false", "time_single_runs=false"))
+        "grid.refine_stages=2", "grid.refine_counts=[3,3,3,3]", "grid.chunk_size=81", "wmax.n_per_side=3",
+        "ga.population_size=8", "ga.max_generations=3", "cmaes.enabled=false", "time_single_runs=false"))
     run = evo.run_docking(s)
     assert run.refined_grid.fitness >= run.grid.fitness
     assert run.refined_grid.candidates in (2 * 81, 2 * 2 * 81, 2 * 3 * 81)  # stages × starts found × 3^4

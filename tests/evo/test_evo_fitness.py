@@ -76,7 +76,10 @@ def height():
     evo.FITNESS_TERMS.pop("height")
 
 
-def _tiny_ga(scene):
+def _tiny_ga(height_weight: float):
+    """A small GA on the paper's scene with the ``height`` term weighed ``height_weight``. The
+    weights are the objective's data, not its program: every weight runs one compiled GA."""
+    scene = from_mapping(evo.SceneSettings, {"terms": [{"name": "height", "weight": height_weight}]})
     problem = evo.docking_problem(scene, "float64")
     ga_settings = from_mapping(evo.GASettings, {"population_size": 16, "max_generations": 25, "eval_chunk": None,
                                                 "bits": {"x": 6, "y": 6, "z": 4, "psi": 4}})
@@ -84,16 +87,16 @@ def _tiny_ga(scene):
     return problem, evo.run_ga(jax.random.key(0), problem, codec, ga, params)
 
 
-def test_a_term_registered_outside_the_package_changes_the_docking_result(paper_scene, height):
-    base_problem, base = _tiny_ga(paper_scene)
-    scene = from_mapping(evo.SceneSettings, {"terms": [{"name": "height", "weight": HEIGHT_WEIGHT}]})
-    problem, tall = _tiny_ga(scene)
+def test_a_term_registered_outside_the_package_changes_the_docking_result(paper_problem, height):
+    # Weighed 0 the term adds exactly 0 to every fitness (f + 0·z = f): the GA of eq. 15 alone.
+    _, base = _tiny_ga(0.0)
+    problem, tall = _tiny_ga(HEIGHT_WEIGHT)
     assert problem.objective.names == ("manipulability", "distance", "height")
     top = float(problem.pose_high[2])
     assert float(tall.best_x[2]) == pytest.approx(top)  # the term's weight outweighs eq. 15
     assert float(base.best_x[2]) < top
     # The new fitness is eq. 15 plus the weighed term, and it is what the GA maximised.
-    terms = evo.evaluate(base_problem, tall.best_x[None])
+    terms = evo.evaluate(paper_problem, tall.best_x[None])
     want = float(terms.fitness[0]) + HEIGHT_WEIGHT * float(tall.best_x[2])
     assert float(tall.best_fitness) == pytest.approx(want, rel=1e-12)
 
