@@ -65,8 +65,9 @@ def main() -> int:
         t_make = time.perf_counter() - t1
         runs = [json.loads(f.read_text()) for f in clone.rglob("results.json") if ".venv" not in f.parts]
         outcome = next((r for r in runs if "total_seconds" in r), {})
+    flag = f" --numba-cache {args.numba_cache}" if args.numba_cache != "user" else ""
     result = {
-        "benchmark": "fresh_demo", "command": "python benchmarks/fresh_demo.py", "exit_status": code,
+        "benchmark": "fresh_demo", "command": f"python benchmarks/fresh_demo.py{flag}", "exit_status": code,
         "cpus": os.cpu_count(), "machine": platform.machine(), "python": platform.python_version(),
         "clone_s": t_clone, "setup_s": first_line, "make_demo_s": t_make, "total_s": t_clone + t_make,
         "pipeline_s": outcome.get("total_seconds"), "stage_seconds": outcome.get("stage_seconds"),
