@@ -17,7 +17,8 @@ MEMORY_LIMIT_B = 1 << 30  # 1 GiB peak resident memory of the child (a JAX proce
 
 # The child: loads `experiments/<script>` once (its imports), then runs it once per case as its
 # own __main__ (runpy), each with its stdout and stderr captured, and reports exit status,
-# output, time, and finally its peak RSS.
+# output, time, and finally its peak RSS: VmHWM of its own address space where Linux says it
+# (getrusage's ru_maxrss also keeps the peak of the pytest worker that spawned it, across exec).
 _DRIVER = r"""
 import contextlib, io, json, resource, runpy, sys, time
 script, cases = sys.argv[1], json.loads(sys.argv[2])
@@ -35,7 +36,10 @@ for args in cases:
     except SystemExit as e:
         code = e.code if isinstance(e.code, int) else 1
     out.append({"code": code, "output": buf.getvalue(), "seconds": time.perf_counter() - t})
-print(json.dumps({"cases": out, "max_rss_b": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024}))
+status = __import__("pathlib").Path("/proc/self/status")
+hwm = [line.split()[1] for line in status.read_text().splitlines() if line.startswith("VmHWM:")] if status.exists() else []
+peak = int(hwm[0]) * 1024 if hwm else resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+print(json.dumps({"cases": out, "max_rss_b": peak}))
 """
 
 
