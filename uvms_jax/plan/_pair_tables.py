@@ -35,6 +35,7 @@ __all__ = ["TABLE_BOUND", "pair_tables"]
 TABLE_BOUND = 0.003
 _TOLERANCE = 1e-5  # [m] MuJoCo's convex distance tolerance and float32 storage, added to the bound
 _VERSION = 1  # part of the cache key: changes when the tables do
+_LOADED: dict = {}  # the tables read or built in this process, by cache path (read-only)
 
 
 def _outer_reach(side, g: int) -> float:
@@ -82,14 +83,20 @@ def _table(exact, side, g1: int, g2: int) -> tuple[np.ndarray, np.ndarray] | Non
     grid = [ja, jb, float(lower[ja]), float(lower[jb]), spacing, na, nb]
     meta = np.array([ja, jb, lower[ja], lower[jb], spacing, TABLE_BOUND + _TOLERANCE, na, nb], dtype=np.float64)
     path = spheres_cache_dir() / f"table-{_geometry_digest(exact, side, g1, g2, grid)}.npy"
+    if path in _LOADED:  # a checker per world reuses the robot's tables: read from disk once
+        return meta, _LOADED[path]
     if path.is_file():
-        return meta, np.load(path)
+        _LOADED[path] = np.load(path)
+        _LOADED[path].setflags(write=False)
+        return meta, _LOADED[path]
     values = distance_table(exact.arrays(np.zeros(0, bool)), g1, g2, ja, jb, float(lower[ja]), float(lower[jb]),
                             spacing, na, nb, robot.n_joints)
     buffer = io.BytesIO()
     np.save(buffer, values)
     path.parent.mkdir(parents=True, exist_ok=True)
     write_atomic(path, buffer.getvalue())
+    values.setflags(write=False)
+    _LOADED[path] = values
     return meta, values
 
 
