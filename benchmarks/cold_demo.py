@@ -33,6 +33,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from uvms_jax.files import json_text, write_json
+
 ROOT = Path(__file__).resolve().parents[1]
 PIPELINE = ROOT / "experiments" / "pipeline.py"
 RESULTS = ROOT / "benchmarks" / "results"
@@ -182,8 +184,8 @@ def main() -> None:
                "load_average_at_end": list(os.getloadavg()), **report(rec, wall), "outcome": _outcome(run_dir)}
     out = a.out or RESULTS / f"cold_demo_{jax.default_backend()}.json"
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps(res, indent=1) + "\n")
-    print(json.dumps({k: res[k] for k in ("process_wall_s", "whole_run")}, indent=1))
+    write_json(out, res)
+    print(json_text({k: res[k] for k in ("process_wall_s", "whole_run")}))
     print(f"wrote {out}")
     sys.exit(proc.returncode)
 

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import json
 import os
 import platform
 import statistics
@@ -31,6 +30,7 @@ from hydra import compose, initialize_config_dir
 from omegaconf import OmegaConf
 
 from uvms_jax import evo
+from uvms_jax.files import json_text
 from uvms_jax.settings import from_mapping
 
 
@@ -172,7 +172,7 @@ def main() -> None:
     if "ga" in report and "cmaes" in report:
         report["ga_over_cmaes_evaluations_per_s"] = report["ga"]["evaluations_per_s"] / report["cmaes"]["evaluations_per_s"]
     report["load_average_end"] = os.getloadavg()
-    print(json.dumps(report))
+    print(json_text(report))
 
 if __name__ == "__main__":
     main()

@@ -33,7 +33,6 @@ import argparse
 import contextlib
 import importlib.metadata
 import io
-import json
 import os
 import platform
 import sys
@@ -54,6 +53,7 @@ from uvms_jax.evo._collide import capsules_hit_boxes, link_points
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "experiments"))
 from pipeline import settings_of  # noqa: E402  (the pipeline's own reading of its config)
+from uvms_jax.files import json_text  # noqa: E402
 from uvms_jax.plan import docked_scene  # noqa: E402
 
 # Vehicle poses [x, y, z, ψ] of the agreement: the demo's docked pose and one over the other tables
@@ -238,7 +238,7 @@ def main() -> None:
         _, _, spec = docked_scene(settings.scenario, problem, np.asarray(poses[0]))
         out["mjx"] = mjx_time(planning.build_scene(robot, spec).model, np.asarray(q[0].reshape(-1, n)), args.repeat)
         out["mjx"]["spheres_same_count_s"] = sph_s * out["mjx"]["configurations"] / B
-    print(json.dumps(out, indent=1))
+    print(json_text(out))
 
 
 if __name__ == "__main__":

@@ -21,7 +21,6 @@ the time goes.
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import platform
 import shlex
@@ -33,6 +32,7 @@ import jax.numpy as jnp
 
 from uvms_jax import indices, kin
 from uvms_jax.evo import _arm, _world, _world_gpu
+from uvms_jax.files import json_text
 from uvms_jax.kin import _ik, _ik_gpu
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -154,12 +154,12 @@ def main() -> None:
                       for m in (measure(problem, n, args.repeat) for n in args.batches)]
     _ik.spd_solve, _ik_gpu.applies, _world_gpu.applies = library
     stages = {"batch": args.batches[-1], "seconds": stage_seconds(problem, args.batches[-1], args.repeat)}
-    print(json.dumps({
+    print(json_text({
         "command": shlex.join(["python", "benchmarks/docking_fitness.py", *sys.argv[1:]]),
         "device": jax.devices()[0].device_kind, "platform": jax.devices()[0].platform, "jax": jax.__version__,
         "machine": platform.machine(), "cpus": os.cpu_count(), "fitness": "demo (16 tool poses, 8 seeds x 25 DLS iterations)",
         "collision_flops_per_pose": collision_flops(problem),
-        "variants": rows, "stages": stages}, indent=1))
+        "variants": rows, "stages": stages}))
 
 
 if __name__ == "__main__":

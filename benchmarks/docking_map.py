@@ -31,6 +31,8 @@ import sys
 import time
 from pathlib import Path
 
+from uvms_jax.files import json_text, write_json
+
 ROOT = Path(__file__).resolve().parents[1]
 REFERENCE = ROOT / "benchmarks" / "results" / "docking_reference_demo_h100.json"
 
@@ -93,8 +95,8 @@ def main() -> None:
                              "met": int(sum(lo <= 0.02 and ra >= 50 for lo, ra in zip(loss, ratio)))}
         print(json.dumps(runs[-1]), file=sys.stderr)
         if args.out:
-            args.out.write_text(json.dumps(record, indent=1) + "\n")
-    print(json.dumps(record, indent=1))
+            write_json(args.out, record)
+    print(json_text(record))
 
 
 if __name__ == "__main__":

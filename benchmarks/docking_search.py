@@ -31,6 +31,7 @@ from omegaconf import OmegaConf
 
 from uvms_jax import evo
 from uvms_jax import plan as planning
+from uvms_jax.files import json_text
 from uvms_jax.settings import from_mapping
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -123,7 +124,7 @@ def main() -> None:
         ref = json.loads(args.reference_file.read_text())["reference"]["fitness"] if args.reference_file else None
         out["reference_fitness"] = ref
         out["search"] = seeds(lambda seed: demo_settings([*args.overrides, f"seed={seed}"]), *args.seeds, ref)
-    print(json.dumps(out, indent=1))
+    print(json_text(out))
 
 
 if __name__ == "__main__":

@@ -25,6 +25,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from uvms_jax.files import json_text, write_json
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -75,8 +77,8 @@ def main() -> int:
         "numba_kernels_cached_before": kernels_cached, "tail": tail if code else [],
     }
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(result, indent=1) + "\n")
-    print(json.dumps(result, indent=1))
+    write_json(args.out, result)
+    print(json_text(result))
     return code
 
 

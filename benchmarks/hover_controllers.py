@@ -29,6 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from uvms_jax import hover, planfile
+from uvms_jax.files import json_text
 from uvms_jax.robot import load_arm
 
 BPL = "whole_body_bpl"  # the whole-body controller in the BPL executor's loop (execute_plan_hovering)
@@ -89,11 +90,11 @@ def main() -> None:
                  for s in args.speeds} for c in args.controls}
     worst_gate = {c: {str(s): max(r["max_gate_tool_error_m"] for r in rows if r["control"] == c and r["speed_m_s"] == s)
                       for s in args.speeds} for c in args.controls}
-    print(json.dumps({"command": " ".join(["python benchmarks/hover_controllers.py", *sys.argv[1:]]),
+    print(json_text({"command": " ".join(["python benchmarks/hover_controllers.py", *sys.argv[1:]]),
                       "machine": platform.processor() or platform.machine(), "pose": pose, "simulated_s": duration,
                       "navigation": None if navigation is None else dataclasses.asdict(navigation),
                       "gust_m_s": args.gust, "worst_tool_error_m": worst, "worst_gate_tool_error_m": worst_gate,
-                      "runs": rows}, indent=1))
+                      "runs": rows}))
 
 
 if __name__ == "__main__":

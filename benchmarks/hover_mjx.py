@@ -22,7 +22,6 @@ XLA's CPU backend; on a GPU it changes nothing. ``XLA_FLAGS`` is reported.
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import platform
 import sys
@@ -40,6 +39,7 @@ import jax.numpy as jnp  # noqa: E402
 import mujoco  # noqa: E402
 import numpy as np  # noqa: E402
 
+from uvms_jax.files import json_text  # noqa: E402
 from uvms_jax.hover import (ControllerSettings, CurrentSettings, HoverSim, VehicleSettings,  # noqa: E402
                             arm_motion, trimmed)
 from uvms_jax.hover import hover_mjx  # noqa: E402
@@ -131,7 +131,7 @@ def main() -> None:
         r["speedup_vs_cpu_one_thread"] = r["env_steps_per_s"] / cpu_steps_per_s
 
     device = jax.devices()[0]
-    print(json.dumps({
+    print(json_text({
         "benchmark": "hover_mjx",
         "command": " ".join(["python benchmarks/hover_mjx.py", *sys.argv[1:]]),
         "device": {"platform": device.platform, "device_kind": device.device_kind, "count": jax.device_count()},
@@ -147,7 +147,7 @@ def main() -> None:
         "cpu_mujoco_hoversim": {"threads": 1, "simulated_s": cpu_seconds, "wall_s": cpu_s, "runs_s": cpu_runs,
                                 "steps_per_s": cpu_steps_per_s},
         "cpu_mujoco_mj_step_only": {"threads": 1, "steps": n_raw, "steps_per_s": raw_steps_per_s},
-    }, indent=1))
+    }))
 
 
 if __name__ == "__main__":

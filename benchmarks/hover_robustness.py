@@ -50,6 +50,7 @@ import jax  # noqa: E402
 import numpy as np  # noqa: E402
 
 from uvms_jax import hover, planfile  # noqa: E402
+from uvms_jax.files import write_json  # noqa: E402
 from uvms_jax.planfile import Plan  # noqa: E402
 from uvms_jax.robot import load_arm  # noqa: E402
 
@@ -178,7 +179,7 @@ def main() -> None:
     model = re.search(r"[a-z]\d{2,4}", device.device_kind.lower())  # "NVIDIA H100 80GB HBM3" → h100
     tag = "cpu" if device.platform == "cpu" else model.group(0) if model else "gpu"
     out = args.out or ROOT / "benchmarks" / "results" / f"hover_robustness_{tag}.json"
-    out.write_text(json.dumps(result, indent=1) + "\n")
+    write_json(out, result)
     if args.plot:
         plot(result, args.plot)
     print(json.dumps({k: result[k] for k in ("scenarios", "compile_s", "run_s", "env_steps_per_s")}))

@@ -25,6 +25,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from uvms_jax import hover, planfile  # noqa: E402
+from uvms_jax.files import write_json  # noqa: E402
 from uvms_jax.robot import load_arm  # noqa: E402
 
 
@@ -75,7 +76,7 @@ def main() -> None:
               "thrust_limits_N": limits.tolist(), "per_direction": per_direction,
               "directions_beyond_thrusters_deg": [p["direction_deg"] for p in per_direction
                                                   if p["best_share_at_that_period"] > 1.0]}
-    args.out.write_text(json.dumps(result, indent=1) + "\n")
+    write_json(args.out, result)
     print(json.dumps({k: result[k] for k in ("speed_m_s", "directions_beyond_thrusters_deg")}))
 
 

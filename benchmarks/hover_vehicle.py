@@ -20,7 +20,6 @@ Usage: python benchmarks/hover_vehicle.py [--arm bravo7]
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import sys
 
@@ -28,6 +27,7 @@ import mujoco
 import numpy as np
 from scipy.optimize import linprog
 
+from uvms_jax.files import json_text
 from uvms_jax.hover import ControllerSettings, VehicleSettings, fluid_bodies, hover_model, thrust_layout
 from uvms_jax.robot import load_arm
 
@@ -83,7 +83,7 @@ def main() -> None:
     for name, inertia, i in (("translation", mass, 0), ("yaw", yaw_inertia, 3)):
         roots = np.roots([inertia, controller.kd[i], controller.kp[i], controller.ki[i]])
         poles[name] = [[float(r.real), float(r.imag)] for r in sorted(roots, key=lambda r: (r.real, r.imag))]
-    print(json.dumps({
+    print(json_text({
         "benchmark": "hover_vehicle", "command": " ".join(["python benchmarks/hover_vehicle.py", *sys.argv[1:]]),
         "arm": args.arm, "arm_joints_rad": q_arm.tolist(), "thrusters": len(limits), "thrust_limit_n": limits.tolist(),
         "thrust_matrix_rank": int(np.linalg.matrix_rank(B)),
@@ -91,7 +91,7 @@ def main() -> None:
         "restoring_moment_nm_per_rad": vehicle.water_density * vehicle.gravity * vehicle.volume * vehicle.cob[2],
         "mass_kg": mass, "yaw_inertia_kg_m2": yaw_inertia,
         "gains": {"kp": controller.kp, "kd": controller.kd, "ki": controller.ki}, "poles_rad_s": poles,
-    }, indent=1))
+    }))
 
 
 if __name__ == "__main__":

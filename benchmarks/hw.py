@@ -17,7 +17,6 @@ Run: ``.venv/bin/python benchmarks/hw.py [--n 2000]``.
 from __future__ import annotations
 
 import argparse
-import json
 import platform
 import socket
 import statistics
@@ -29,6 +28,7 @@ import time
 from cobs import cobs
 from crc import Calculator
 
+from uvms_jax.files import json_text
 from uvms_jax.hw import (CRC8_CONFIG, PacketID, PacketReader, ReachArm, SimArm, SimSettings, SimServer, UdpTransport,
                          encode_floats, encode_packet, joint_specs)
 from uvms_jax.robot import load_arm
@@ -191,7 +191,7 @@ def main() -> None:
         "round_trip": round_trip(a.n),
         "stream": stream(),
     }
-    print(json.dumps(res))
+    print(json_text(res))
 
 
 if __name__ == "__main__":

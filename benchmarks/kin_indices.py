@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import argparse
 import functools
-import json
 import platform
 import time
 
@@ -33,6 +32,7 @@ import pytorch_kinematics as pk
 import torch
 
 from uvms_jax import indices, kin, robot
+from uvms_jax.files import json_text
 from uvms_jax.indices import _gpu
 from uvms_jax.indices._indices import _kci_of, _manipulability_of, _safe_inverse, _safe_sqrt, _vectors
 
@@ -235,7 +235,7 @@ def main() -> None:
         rows.append(row)
 
     print(
-        json.dumps(
+        json_text(
             {
                 "benchmark": "kin_indices",
                 "chain": chain.name,
@@ -250,7 +250,6 @@ def main() -> None:
                 "accuracy": acc,
                 "results": rows,
             },
-            indent=1,
         )
     )
 

@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import argparse
 import collections
-import json
 import sys
 
 import jax
@@ -23,6 +22,7 @@ import jax.numpy as jnp
 from jax.extend import core as jcore
 
 from uvms_jax import indices, kin
+from uvms_jax.files import json_text
 
 #: Primitives that are arithmetic on a scalar (the rest move or select data).
 ARITHMETIC = ("mul", "add", "sub", "neg", "div", "sqrt", "rsqrt", "sin", "cos", "abs", "max", "min", "exp", "log")
@@ -56,7 +56,7 @@ def main() -> None:
         counts = primitive_counts(lambda q: fn(chain, q), q)
         record["indices"][name] = {"arithmetic": {k: counts[k] for k in ARITHMETIC if counts[k]},
                                    "other": {k: v for k, v in sorted(counts.items()) if k not in ARITHMETIC}}
-    print(json.dumps(record, indent=1))
+    print(json_text(record))
 
 
 if __name__ == "__main__":

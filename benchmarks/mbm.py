@@ -30,7 +30,6 @@ from __future__ import annotations
 
 import argparse
 import importlib.metadata
-import json
 import platform
 import time
 from pathlib import Path
@@ -40,6 +39,7 @@ import numpy as np
 from uvms_jax import frames
 from uvms_jax import plan as P
 from uvms_jax import robot as R
+from uvms_jax.files import json_text, write_json
 from uvms_jax.plan._collision import densify
 
 FAMILIES = ("table_pick", "table_under_pick", "box", "bookshelf_small", "bookshelf_tall", "bookshelf_thin", "cage")
@@ -300,8 +300,8 @@ def main() -> None:
         times, solved, ok = rows["vamp"]
         result["vamp_total"] = _summary(times, solved, len(mine), ok) | _vamp_family(mine, args.budget)
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(result, indent=1) + "\n")
-    print(json.dumps({k: v for k, v in result.items() if k != "records"}, indent=1))
+    write_json(args.out, result)
+    print(json_text({k: v for k, v in result.items() if k != "records"}))
 
 
 if __name__ == "__main__":

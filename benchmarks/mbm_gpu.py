@@ -22,13 +22,14 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import importlib.metadata
-import json
 import os
 import platform
 import re
 import sys
 import time
 from pathlib import Path
+
+from uvms_jax.files import json_text, write_json
 
 ROOT = Path(__file__).resolve().parent.parent
 RESULTS = ROOT / "benchmarks" / "results"
@@ -180,8 +181,8 @@ def main(argv=None) -> dict:
 
     out = args.out or RESULTS / f"mbm_gpu_{device_label(jax.devices()[0])}.json"
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps(record, indent=1) + "\n")
-    print(json.dumps(record, indent=1))
+    write_json(out, record)
+    print(json_text(record))
     return record
 
 

@@ -8,13 +8,14 @@ prints one JSON object: the command, the lines the example printed and its wall 
 
 from __future__ import annotations
 
-import json
 import os
 import platform
 import subprocess
 import sys
 import time
 from pathlib import Path
+
+from uvms_jax.files import json_text
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLE = "examples/own_arm.py"
@@ -24,8 +25,8 @@ def main() -> None:
     start = time.perf_counter()
     out = subprocess.run([sys.executable, EXAMPLE], cwd=ROOT, check=True, capture_output=True, text=True).stdout
     wall = time.perf_counter() - start
-    print(json.dumps({"command": f"python {EXAMPLE}", "cpu_count": os.cpu_count(), "machine": platform.machine(),
-                      "wall_s": wall, "printed": out.splitlines()}, indent=1, ensure_ascii=False))
+    print(json_text({"command": f"python {EXAMPLE}", "cpu_count": os.cpu_count(), "machine": platform.machine(),
+                      "wall_s": wall, "printed": out.splitlines()}, ensure_ascii=False))
 
 
 if __name__ == "__main__":

@@ -23,6 +23,8 @@ from pathlib import Path
 
 import yaml
 
+from uvms_jax.files import json_text
+
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLE_ARMS = yaml.safe_load((ROOT / "examples" / "arms.yaml").read_text())
 STAGES = "[docking,plan,schedule,hw]"
@@ -73,11 +75,11 @@ def main() -> None:
     args = p.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         runs = [run_arm(arm, args.tiny, args.capsules, Path(tmp)) for arm in args.arms]
-    print(json.dumps({"benchmark": "pipeline_arms", "command": " ".join(["python benchmarks/pipeline_arms.py", *sys.argv[1:]]),
+    print(json_text({"benchmark": "pipeline_arms", "command": " ".join(["python benchmarks/pipeline_arms.py", *sys.argv[1:]]),
                       "preset": "tiny" if args.tiny else "demo", "stages": STAGES,
                       "collision": "capsules" if args.capsules else "description",
                       "machine": {"cpus": os.cpu_count(), "processor": platform.processor() or platform.machine()},
-                      "runs": runs}, indent=1))
+                      "runs": runs}))
 
 
 if __name__ == "__main__":

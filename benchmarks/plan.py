@@ -37,6 +37,7 @@ import numpy as np
 import yaml
 
 from uvms_jax import plan as P
+from uvms_jax.files import json_text, write_json
 from uvms_jax.plan import _collision, _spheres, _tasks
 
 # The steps of plan_edge, as (namespace, attribute, label); the planners' time (plan_motion or
@@ -163,7 +164,7 @@ def main() -> None:
             per_checker[name]["motions"] = fast.n_motions - n0[0]
             per_checker[name]["samples_checked"] = fast.n_states - n0[1]
             per_checker[name]["rejections_confirmed_by_mujoco"] = fast.n_confirmed - n0[2]
-    text = json.dumps({
+    record = {
         "command": " ".join(["python benchmarks/plan.py", *sys.argv[1:]]),
         "device": f"{platform.machine()} CPU, Python {platform.python_version()}",
         "planner_params": settings.planner_params,
@@ -175,9 +176,9 @@ def main() -> None:
         "warmup_s": round(warmup_s, 2),
         "validity_checks": {k: round(v, 3) if isinstance(v, float) else v for k, v in checks.items()},
         "checkers": per_checker,
-    }, indent=1)
-    args.out.write_text(text + "\n")
-    print(text)
+    }
+    write_json(args.out, record)
+    print(json_text(record))
 
 
 if __name__ == "__main__":

@@ -24,7 +24,6 @@ Run: ``.venv/bin/python benchmarks/sched.py [--repeats 50]``.
 from __future__ import annotations
 
 import argparse
-import json
 import platform
 import statistics
 import sys
@@ -34,6 +33,7 @@ import jax
 import numpy as np
 
 from uvms_jax import sched
+from uvms_jax.files import json_text
 
 SCALE = 1_000_000  # OR-Tools arc costs are integers
 THESIS_MS = {"greedy": sched.THESIS_SOLVER_MS["greedy"], "grasp_1000": sched.THESIS_SOLVER_MS["grasp"],
@@ -241,8 +241,7 @@ def main() -> None:
             "scoring_vs_numpy": sc["schedules_per_s"] / sc["peer_numpy_schedules_per_s"],
         },
     }
-    json.dump(out, sys.stdout, indent=1)
-    print()
+    print(json_text(out))
 
 
 if __name__ == "__main__":

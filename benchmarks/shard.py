@@ -10,7 +10,6 @@ Usage: python benchmarks/shard.py [--counts 64,64,16,64] [--chunk 1048576]
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import sys
 import time
@@ -21,6 +20,7 @@ import numpy as np
 import yaml
 
 from uvms_jax import evo
+from uvms_jax.files import json_text
 
 SCENE = Path(__file__).resolve().parents[1] / "configs" / "docking" / "scene" / "paper.yaml"
 
@@ -46,7 +46,7 @@ def main() -> None:
     sharded_problem = evo.shard_over_devices(problem)
     sharded, t_sharded = timed(lambda: search(sharded_problem))
     n = single.n_candidates
-    print(json.dumps({
+    print(json_text({
         "benchmark": "shard_grid",
         "command": " ".join([*(["XLA_FLAGS=" + os.environ["XLA_FLAGS"]] if "XLA_FLAGS" in os.environ else []),
                              "python benchmarks/shard.py", *sys.argv[1:]]),
@@ -58,7 +58,7 @@ def main() -> None:
         "speedup": t_single / t_sharded,
         "same_optimum": bool(np.array_equal(np.asarray(single.x), np.asarray(sharded.x))),
         "fitness": float(single.fitness),
-    }, indent=1))
+    }))
 
 
 if __name__ == "__main__":

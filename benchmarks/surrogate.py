@@ -28,11 +28,12 @@ Usage: python benchmarks/surrogate.py [--device cpu|gpu] [--batches 1e3,1e4,1e5,
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import platform
 import sys
 from pathlib import Path
+
+from uvms_jax.files import json_text
 
 
 def main() -> None:
@@ -100,7 +101,7 @@ def main() -> None:
     grid = (None if args.grid is None
             else _time_grid(int(args.grid), base, fns["analytic_w"], nets["ffbn_w"], args.repeats))
     sizes = {name: (net.hidden if name.startswith("ffbn") else net.n_centres) for name, net in nets.items()}
-    print(json.dumps({
+    print(json_text({
         "benchmark": "surrogate", "command": " ".join(["python benchmarks/surrogate.py", *sys.argv[1:]]),
         "device": jax.devices()[0].device_kind, "platform": jax.devices()[0].platform,
         "python": platform.python_version(), "jax": jax.__version__, "dtype": "float32", "networks": source,

@@ -38,6 +38,8 @@ import sys
 import time
 from pathlib import Path
 
+from uvms_jax.files import json_text, write_json
+
 FUNCTIONS = ("analytic_w", "analytic_kci", "ffbn_w", "ffbn_kci", "rbfn_w", "rbfn_kci")
 PAPER_UNITS = {"ffbn_w": 8, "ffbn_kci": 25, "rbfn_w": 149, "rbfn_kci": 142}
 #: XLA flags of the one-thread child process (the CPU client's intra-op pool and Eigen's).
@@ -84,10 +86,9 @@ def main() -> None:
         "results": results, "single_thread": {"xla_flags": SINGLE_THREAD_FLAGS, "results": None if child is None else json.loads(child.stdout)},
         "seconds": time.perf_counter() - t0,
     }
-    text = json.dumps(record, indent=1)
-    print(text)
+    print(json_text(record))
     if args.out is not None:
-        args.out.write_text(text + "\n", encoding="utf-8")
+        write_json(args.out, record)
 
 
 def _functions(names: list[str]) -> dict:

@@ -30,6 +30,8 @@ import sys
 import time
 from pathlib import Path
 
+from uvms_jax.files import json_text, write_json
+
 NETWORK = "ffbn_kci"
 
 
@@ -126,7 +128,7 @@ def main() -> None:
             # An FFBN has no spread (NaN, which JSON does not hold).
             record["steps"].append({k: v for k, v in step._asdict().items() if k != "spread"} | {"loop": loop})
         if args.out is not None:
-            args.out.write_text(json.dumps(_summary(record), indent=1) + "\n")
+            write_json(args.out, _summary(record))
 
     design = surrogate.design_ffbn(
         k_loop, train, test, error_goal=f.error_goal, max_hidden=f.max_hidden.kci, hidden_start=start, hidden_step=step,
@@ -144,7 +146,7 @@ def main() -> None:
     record["finished"] = True
     record["design_seconds"] = design.seconds + ((earlier or {}).get("design_seconds") or 0.0)
     save()
-    print(json.dumps(_summary(record), indent=1))
+    print(json_text(_summary(record)))
 
 
 def _summary(record: dict) -> dict:

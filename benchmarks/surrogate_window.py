@@ -32,13 +32,14 @@ Usage: python benchmarks/surrogate_window.py [--device cpu|gpu] [--out FILE] [--
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import os
 import platform
 import sys
 import time
 from pathlib import Path
+
+from uvms_jax.files import json_text, write_json
 
 #: The settings swept, most telling first: (name, overrides of SurrogateSettings).
 SETTINGS = (
@@ -120,11 +121,11 @@ def main() -> None:
         record["seconds"] = time.perf_counter() - t0
         record["summary"] = _summary(record)
         if args.out is not None:
-            args.out.write_text(json.dumps(record, indent=1) + "\n")
+            write_json(args.out, record)
     record["summary"] = _summary(record)
     if args.out is not None:
-        args.out.write_text(json.dumps(record, indent=1) + "\n")
-    print(json.dumps(record, indent=1))
+        write_json(args.out, record)
+    print(json_text(record))
 
 
 def _settings(overrides: dict, tiny: bool):

@@ -16,7 +16,6 @@ Usage: python benchmarks/test_suite.py [--keep DIR]   # DIR: clone there and kee
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import re
 import shutil
@@ -25,6 +24,8 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+
+from uvms_jax.files import json_text
 
 ROOT = Path(__file__).resolve().parents[1]
 #: The make targets of .ci/run, in its order.
@@ -73,7 +74,7 @@ def main() -> None:
     record["load_average_end"] = os.getloadavg()
     if args.keep is None:
         shutil.rmtree(where.parent)
-    print(json.dumps(record, indent=1))
+    print(json_text(record))
 
 
 if __name__ == "__main__":

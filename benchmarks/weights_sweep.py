@@ -10,7 +10,6 @@ temporary sweep folder and prints one JSON object: the commands, the gathered ta
 
 from __future__ import annotations
 
-import json
 import os
 import platform
 import shlex
@@ -19,6 +18,8 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+
+from uvms_jax.files import json_text
 
 ROOT = Path(__file__).resolve().parent.parent
 SWEEP = ["experiments/schedule.py", "--multirun", "sched/source=synthetic",
@@ -37,10 +38,10 @@ def main() -> None:
         wall = time.perf_counter() - start
         table = (sweep_dir / "gathered.md").read_text()
     # The commands as a user types them (shell-quoted): README.md shows these.
-    print(json.dumps({"commands": [shlex.join([".venv/bin/python", *SWEEP, "hydra.sweep.dir=multirun/weights"]),
+    print(json_text({"commands": [shlex.join([".venv/bin/python", *SWEEP, "hydra.sweep.dir=multirun/weights"]),
                                    shlex.join([".venv/bin/python", GATHER[0], "multirun/weights", *GATHER[1:]])],
                       "cpu_count": os.cpu_count(), "machine": platform.machine(), "wall_s": wall,
-                      "gathered_md": table}, indent=1))
+                      "gathered_md": table}))
 
 
 if __name__ == "__main__":

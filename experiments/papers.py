@@ -47,7 +47,7 @@ from pathlib import Path
 
 import jax
 
-from uvms_jax.files import write_atomic
+from uvms_jax.files import write_atomic, write_json
 from uvms_jax.papers import PRESETS
 
 log = logging.getLogger("papers")
@@ -216,7 +216,7 @@ def main(argv=None) -> int:
         log.info("%s section in %.0f s", name, time.perf_counter() - t)
     total = time.perf_counter() - t0
     record = {"sections": {n: sections[n] for n in SECTIONS}}
-    write_atomic(args.out / "reproduction.json", json.dumps(record, indent=1, ensure_ascii=False) + "\n")
+    write_json(args.out / "reproduction.json", record, ensure_ascii=False)
     for path, text in documents(record).items():
         (args.out / path).parent.mkdir(parents=True, exist_ok=True)
         write_atomic(args.out / path, text)

@@ -16,7 +16,6 @@ curves, rendered frames where offscreen rendering works).
 from __future__ import annotations
 
 import dataclasses
-import json
 import logging
 import os
 from pathlib import Path
@@ -31,7 +30,7 @@ os.environ.setdefault("MUJOCO_GL", "egl")  # headless offscreen rendering where 
 
 from uvms_jax import hw  # noqa: E402
 from uvms_jax import plan as P  # noqa: E402
-from uvms_jax.files import write_atomic  # noqa: E402
+from uvms_jax.files import write_json  # noqa: E402
 from uvms_jax.settings import from_mapping  # noqa: E402
 
 log = logging.getLogger(__name__)
@@ -57,7 +56,7 @@ def main(cfg: DictConfig) -> dict:
         check = hw.check_plan(plan, robot)  # the hardware's dry run: limits, continuity, timing
         summary["plan_json"] = {"segments": check.n_segments, "estimated_s": check.estimated_s}
     summary["frames"] = P.render_frames(scene, task_plan.targets, out) if settings.render else 0
-    write_atomic(out / "results.json", json.dumps(summary, indent=1))
+    write_json(out / "results.json", summary)
     log.info("outputs in %s", out)
     return summary
 

@@ -4,6 +4,9 @@
   folder, flushed to disk, then renamed over the target (``os.replace``, atomic on POSIX and
   Windows): a reader sees the old file or the new one, never a part; a run killed while writing
   leaves at most a ``.*.tmp`` file beside it, never a truncated result.
+* :func:`json_text` / :func:`write_json`: the one layout of every JSON result file (benchmark
+  records, run results, plans): indented, but with lists of numbers and small records kept on
+  one line, so a file of long series stays short and diffs line by line.
 * :data:`RUNNING`: the marker a run folder carries while a run writes into it
   (:func:`mark_running`, :func:`clear_running`). A folder that still has it after its process
   is gone holds a run that was killed (SIGKILL, power loss): its results, if any, are partial.
@@ -28,15 +31,21 @@ import tempfile
 import time
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
+from typing import Any
 
 __all__ = ["EXIT_INTERRUPTED", "EXIT_TERMINATED", "RUNNING", "UsedFolderError", "atomic_path", "clear_running",
-           "mark_running", "marker_summary", "refuse_used_folder", "sigterm_as_interrupt", "used_run_folder",
-           "write_atomic", "write_csv"]
+           "json_text", "mark_running", "marker_summary", "refuse_used_folder", "sigterm_as_interrupt", "used_run_folder",
+           "write_atomic", "write_csv", "write_json"]
 
 RUNNING = "RUNNING"  # the marker file's name in a run folder
 # Exit statuses of a run stopped by a signal: 128 + the signal's number, as shells report them.
 EXIT_INTERRUPTED = 128 + signal.SIGINT  # 130: Ctrl-C
 EXIT_TERMINATED = 128 + signal.SIGTERM  # 143: a batch scheduler's (or `kill`'s) SIGTERM
+# json_text's layout: a list or object whose one-line form, with its indentation and key, takes at
+# most SHORT_LINE characters stays on one line; a list of one-line items (numbers, records) takes
+# lines of at most LONG_LINE characters (a record longer than that has a line of its own).
+SHORT_LINE = 100
+LONG_LINE = 1000
 
 
 class UsedFolderError(FileExistsError):
@@ -80,6 +89,62 @@ def write_atomic(path: Path | str, data: str | bytes) -> Path:
     return path
 
 
+def json_text(obj: Any, *, indent: int = 1, default: Callable[[Any], Any] | None = None,
+              ensure_ascii: bool = True) -> str:
+    """``obj`` as JSON text (no final newline), as ``json.dumps(obj, indent=indent, ...)`` would
+    write it but for what stays on one line: a record (an object of scalars), a list or object
+    whose one-line form fits :data:`SHORT_LINE`, and a list of one-line items (numbers, strings,
+    records) that fits :data:`LONG_LINE`; a longer such list fills lines of up to
+    :data:`LONG_LINE` characters. A list of lists (a matrix, a path of waypoints) keeps a row a
+    line. ``json.loads`` of the text gives what ``json.dumps`` of ``obj`` would."""
+    def one_line(o: Any) -> str:
+        return json.dumps(o, default=default, ensure_ascii=ensure_ascii)
+
+    def scalar(o: Any) -> bool:
+        return not isinstance(o, (dict, list, tuple))
+
+    def block(opening: str, lines: list[str], closing: str, depth: int) -> str:
+        inner = " " * (indent * (depth + 1))
+        return opening + "\n" + ",\n".join(inner + line for line in lines) + "\n" + " " * (indent * depth) + closing
+
+    def render(o: Any, depth: int, lead: int) -> tuple[str, bool]:
+        """(text, whether it is one line) of ``o`` at ``depth``, after ``lead`` characters of key."""
+        text = one_line(o)
+        if scalar(o) or not o or (isinstance(o, dict) and all(map(scalar, o.values()))) \
+                or len(text) <= SHORT_LINE - indent * depth - lead:
+            return text, True
+        if isinstance(o, dict):
+            keys = [one_line({k: None})[1:-len(": null}")] + ": " for k in o]  # JSON's own text of each key
+            return block("{", [k + render(v, depth + 1, len(k))[0] for k, v in zip(keys, o.values())], "}", depth), False
+        items = [render(x, depth + 1, 0) for x in o]
+        rows = [t for t, _ in items]
+        if not all(flat for _, flat in items) or any(isinstance(x, (list, tuple)) for x in o):
+            return block("[", rows, "]", depth), False
+        if len(text) <= LONG_LINE - indent * depth - lead:
+            return text, True
+        return block("[", _fill(rows, LONG_LINE - indent * (depth + 1)), "]", depth), False
+
+    return render(obj, 0, 0)[0]
+
+
+def _fill(items: list[str], width: int) -> list[str]:
+    """``items`` joined by ``", "`` into lines of at most ``width`` characters (an item longer
+    than that on a line of its own)."""
+    lines = [items[0]]
+    for item in items[1:]:
+        if len(lines[-1]) + 2 + len(item) > width:
+            lines.append(item)
+        else:
+            lines[-1] += ", " + item
+    return lines
+
+
+def write_json(path: Path | str, obj: Any, **layout) -> Path:
+    """Write ``obj`` to ``path`` atomically (:func:`write_atomic`) as :func:`json_text` (with its
+    keyword arguments ``layout``) and a final newline."""
+    return write_atomic(path, json_text(obj, **layout) + "\n")
+
+
 def write_csv(path: Path | str, rows: Iterable[Sequence] | Sequence[Mapping], header: Sequence[str] | None = None) -> Path:
     """Write a CSV table to ``path`` atomically (:func:`atomic_path`): ``header`` then ``rows``
     (sequences), or, without ``header``, ``rows`` as mappings under the first one's keys.
@@ -106,7 +171,7 @@ def mark_running(folder: Path | str, **info) -> Path:
     start time and the command line, plus ``info``. Returns the marker's path."""
     folder = Path(folder)
     body = {"pid": os.getpid(), "started": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "argv": sys.argv, **info}
-    return write_atomic(folder / RUNNING, json.dumps(body, indent=1, default=str) + "\n")
+    return write_json(folder / RUNNING, body, default=str)
 
 
 def clear_running(folder: Path | str) -> None:

@@ -93,7 +93,7 @@ from typing import Any
 
 import yaml
 
-from uvms_jax.files import write_atomic
+from uvms_jax.files import json_text, write_atomic
 from uvms_jax.settings import load_yaml
 
 __all__ = [
@@ -360,8 +360,8 @@ def save_plan(plan: Plan, path: str | Path, *, joint_trajectory: bool = False,
               jaws_start_mm: float | None = None, gripper: Any = None) -> None:
     """Write ``plan`` to ``path`` as ``plan.json``'s object or, with ``joint_trajectory``, as a
     JointTrajectory object (:func:`to_joint_trajectory`, with ``jaws_start_mm`` and
-    ``gripper``); YAML for ``.yaml``/``.yml``, JSON otherwise; atomically
-    (:func:`uvms_jax.files.write_atomic`).
+    ``gripper``); YAML for ``.yaml``/``.yml``, JSON otherwise (laid out by
+    :func:`uvms_jax.files.json_text`); atomically (:func:`uvms_jax.files.write_atomic`).
 
     Raises:
       PlanError: the plan cannot be written as a JointTrajectory (see :func:`to_joint_trajectory`).
@@ -369,7 +369,7 @@ def save_plan(plan: Plan, path: str | Path, *, joint_trajectory: bool = False,
     path = Path(path)
     obj = to_joint_trajectory(plan, jaws_start_mm, gripper) if joint_trajectory else plan_to_dict(plan)
     text = yaml.safe_dump(obj, sort_keys=False, default_flow_style=None) if path.suffix.lower() in _YAML_SUFFIXES \
-        else json.dumps(obj, indent=1)
+        else json_text(obj) + "\n"
     write_atomic(path, text)
 
 

@@ -2,12 +2,11 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
 
-from uvms_jax.files import write_atomic, write_csv
+from uvms_jax.files import write_csv, write_json
 from uvms_jax.evo._docking import DockingRun, GridOptimum
 from uvms_jax.evo._plots import plot_convergence, plot_docked_top_view, plot_wmax
 from uvms_jax.evo._settings import FIELDS
@@ -76,11 +75,11 @@ def _write_wmax(run: DockingRun, out: Path) -> None:
     for name, m in maps.items():
         label = ", ".join(f"{float(v):.3f}" for v in m.pose)
         plot_wmax(m.map, f"{name.replace('_', '-')} pose [{label}]", out / f"wmax_{name}.png", vmax)
-    write_atomic(out / "wmax.json", json.dumps({
+    write_json(out / "wmax.json", {
         name: {"pose": _pose(m.pose), "zero_w_fraction": m.map.zero_fraction, "Ma": m.M_a,
                "w_max_mean": float(m.map.w_max.mean()), "n_per_side": run.settings.wmax.n_per_side}
         for name, m in maps.items()
-    }, indent=2))
+    })
 
 
 def _write_arm_pose(run: DockingRun, out: Path) -> None:
@@ -88,12 +87,12 @@ def _write_arm_pose(run: DockingRun, out: Path) -> None:
     target, and a top view."""
     best = run.best
     pose, ik = best.pose, best.ik
-    write_atomic(out / "best_pose.json", json.dumps({
+    write_json(out / "best_pose.json", {
         "pose": _pose(pose), "source": best.source, "fitness": best.fitness, "Ma": float(ik.terms.M_a),
         "candidates": [{"pose": _pose(x), "fitness": float(f)} for x, f in zip(run.candidates, run.candidate_fitness)],
         "targets": [{"reached": bool(o), "w": float(wi), "q": None if not o else qi.round(5).tolist()}
                     for qi, o, wi in zip(ik.q, ik.valid, ik.w)],
-    }, indent=2))
+    })
     plot_docked_top_view(run.problem, pose, ik.q, ik.valid, ik.w, out / "docked_top_view.png")
 
 
@@ -114,17 +113,17 @@ def write_docking(run: DockingRun, out: Path) -> dict:
             "seconds": run.grid.seconds,
             "refined": {**_optimum(run.refined_grid), "candidates": run.refined_grid.candidates,
                         "seconds": run.refined_grid.seconds, "stages": list(run.refine_stage_fitness)}}
-    write_atomic(out / "grid_optimum.json", json.dumps(grid, indent=2))
+    write_json(out / "grid_optimum.json", grid)
 
     if run.cmaes is not None:
         c = run.cmaes
-        write_atomic(out / "cmaes.json", json.dumps({
+        write_json(out / "cmaes.json", {
             "runs": [{**dict(zip(FIELDS, np.asarray(x).tolist())), "fitness": float(f)} for x, f in zip(c.poses, c.fitness)],
             "seconds": c.seconds,
             "evaluations_per_run": c.evaluations_per_run,
             "ratio_to_grid": (c.fitness / run.grid.fitness).tolist(),
             "ratio_to_refined_grid": (c.fitness / run.refined_grid.fitness).tolist(),
-        }, indent=2))
+        })
 
     write_csv(out / "runs.csv", [[*run.poses[r].round(6).tolist(), round(float(run.fitness[r]), 6),
                                   round(float(run.M_a[r]), 6), int(run.generations[r]), round(run.run_seconds[r], 4)]
@@ -139,5 +138,5 @@ def write_docking(run: DockingRun, out: Path) -> dict:
                      {"grid optimum": run.grid.fitness, "refined grid": run.refined_grid.fitness},
                      out / "convergence.png")
     summary = docking_summary(run)
-    write_atomic(out / "results.json", json.dumps(summary, indent=2))
+    write_json(out / "results.json", summary)
     return summary

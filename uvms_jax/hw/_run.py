@@ -8,14 +8,13 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
-import json
 import math
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
-from uvms_jax.files import RUNNING, clear_running, mark_running, refuse_used_folder, used_run_folder, write_atomic
+from uvms_jax.files import RUNNING, clear_running, mark_running, refuse_used_folder, used_run_folder, write_json
 from uvms_jax.planfile import Plan
 
 from ._check import PlanSummary, check_arm, check_plan
@@ -288,7 +287,7 @@ def write_run(run: HwRun, out: Path | str, *, plot: bool = True,
     out.mkdir(parents=True, exist_ok=True)
     run.log.write_csv(out / "run.csv")
     report = {**run_report(run, out, plan_path), **(extra or {})}
-    write_atomic(out / "results.json", json.dumps(report, indent=2) + "\n")
+    write_json(out / "results.json", report)
     clear_running(out)
     if plot and run.log.rows:
         run.log.plot(out / "run.png")

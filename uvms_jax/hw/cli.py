@@ -46,7 +46,7 @@ from pathlib import Path
 from types import ModuleType
 
 from uvms_jax import __version__, progress
-from uvms_jax.files import EXIT_INTERRUPTED, EXIT_TERMINATED, clear_running, sigterm_as_interrupt, write_atomic
+from uvms_jax.files import EXIT_INTERRUPTED, EXIT_TERMINATED, clear_running, sigterm_as_interrupt, write_json
 from uvms_jax.planfile import PlanError, load_plan, save_plan
 from uvms_jax.settings import SettingsError, from_mapping, read_yaml
 
@@ -357,9 +357,9 @@ def _interrupted(run: HwRun | None, out: Path, args: argparse.Namespace) -> int:
         report = write_run(run, out, plot=False, plan_path=args.plan)
         print(json.dumps(report))
     else:
-        write_atomic(out / "results.json", json.dumps(
-            {"ok": False, "status": "interrupted", "reason": "interrupted (SIGINT) before the run started: "
-             "nothing was sent", "plan": str(args.plan), "out": str(out)}, indent=2) + "\n")
+        write_json(out / "results.json", {"ok": False, "status": "interrupted",
+                                          "reason": "interrupted (SIGINT) before the run started: nothing was sent",
+                                          "plan": str(args.plan), "out": str(out)})
         clear_running(out)
     print(f"uvms-hw: interrupted, arm told to hold; partial results in {out}", file=sys.stderr)
     return EXIT_INTERRUPTED

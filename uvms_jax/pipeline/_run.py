@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import logging
 import threading
 import time
@@ -12,7 +11,7 @@ import jax
 
 from uvms_jax import plan as planning_kernels
 from uvms_jax import progress
-from uvms_jax.files import RUNNING, clear_running, mark_running, refuse_used_folder, write_atomic
+from uvms_jax.files import RUNNING, clear_running, mark_running, refuse_used_folder, write_json
 from uvms_jax.pipeline._precheck import Checked, check_stages
 from uvms_jax.pipeline._report import write_summary
 from uvms_jax.pipeline._settings import STAGES, PipelineSettings
@@ -127,7 +126,7 @@ def _run_stages(settings: PipelineSettings, out: Path, config_text: str, done: d
     results = {"total_seconds": total, "stage_seconds": {r.name: r.seconds for r in reports},
                "stage_cpu_seconds": {r.name: r.cpu_seconds for r in reports},
                "arm": checked.arm_record(), **{r.name: r.results for r in reports}}
-    write_atomic(out / "results.json", json.dumps(results, indent=1, default=str))
+    write_json(out / "results.json", results, default=str)
     summary = write_summary(out, reports, total, config_text, chain(flow, out))
     log.info("pipeline done in %.1f s; summary: %s", total, summary)
     return results

@@ -10,13 +10,12 @@ edge are empty except its planning time). ``metrics_<planner>.json``: metric →
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
 
 from uvms_jax import planfile, sched
-from uvms_jax.files import atomic_path, write_atomic, write_csv
+from uvms_jax.files import atomic_path, write_csv, write_json
 from uvms_jax.plan._plots import plot_ee_paths, plot_plan_joints
 from uvms_jax.plan._taskgraph import TaskGraphPlan
 from uvms_jax.plan._tasks import EdgeResult
@@ -39,18 +38,18 @@ def write_task_graph(task_plan: TaskGraphPlan, out: Path) -> None:
     ``cost_<planner>.csv`` and ``ee_paths_<planner>.png`` into the folder ``out``."""
     out = Path(out)
     scene = task_plan.scene
-    write_atomic(out / "targets.json", json.dumps({
+    write_json(out / "targets.json", {
         str(n): {"q_pre": t.q_pre.tolist(), "q_at": t.q_at.tolist(), "yaw": t.yaw,
                  "manipulability": t.manipulability, "candidates": t.n_candidates}
-        for n, t in task_plan.targets.items()} | {"start": scene.start_q.tolist()}, indent=1))
+        for n, t in task_plan.targets.items()} | {"start": scene.start_q.tolist()})
     # The self-collision pairs the checker skips, as computed for this arm (docs/robots.md).
-    write_atomic(out / "self_collision.json", json.dumps(scene.self_collision, indent=1))
+    write_json(out / "self_collision.json", scene.self_collision)
     rows = []
     for planner, results in task_plan.by_planner.items():
         rows += [_edge_row(r) for r in results]
         mats = task_plan.metrics[planner]
-        write_atomic(out / f"metrics_{planner}.json", json.dumps(
-            {k: np.where(np.isnan(v), None, v).tolist() for k, v in zip(_FILE_METRICS, mats)}))
+        write_json(out / f"metrics_{planner}.json",
+                   {k: np.where(np.isnan(v), None, v).tolist() for k, v in zip(_FILE_METRICS, mats)})
         with atomic_path(out / f"cost_{planner}.csv") as tmp:
             np.savetxt(tmp, task_plan.costs[planner], delimiter=",", fmt="%.6g")
         plot_ee_paths(scene, results, out / f"ee_paths_{planner}.png")

@@ -4,13 +4,12 @@ results.json, and the figures grasp_iterations.png and route.png."""
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
 from pathlib import Path
 
 import jax
 
-from uvms_jax.files import write_atomic, write_csv
+from uvms_jax.files import write_atomic, write_csv, write_json
 from uvms_jax.sched._costs import METRICS
 from uvms_jax.sched._edges import schedule_edges
 from uvms_jax.sched._plots import plot_route, plot_sweep
@@ -44,9 +43,9 @@ def write_schedule(run: ScheduleRun, out: Path, plots: bool = True) -> dict:
     if sweep:
         write_csv(out / "grasp_sweep.csv", sweep)
     edges = [e._asdict() for e in schedule_edges(run.problem, run.best.path)]
-    write_atomic(out / "schedule_edges.json", json.dumps(edges, indent=1))
+    write_json(out / "schedule_edges.json", edges)
     results = schedule_results(run)
-    write_atomic(out / "results.json", json.dumps(results, indent=1))
+    write_json(out / "results.json", results)
     if plots:
         if run.sweep:
             plot_sweep(out, run.sweep, run.solved)

@@ -50,7 +50,7 @@ from flax import struct
 from jax import Array
 
 from uvms_jax import kin
-from uvms_jax.files import atomic_path, write_atomic
+from uvms_jax.files import atomic_path, write_json
 from uvms_jax.surrogate._form import IndexForm, index_fn, index_of
 
 INDEX_NAMES = ("w", "kci")
@@ -278,7 +278,7 @@ def save_dataset(path, ds: Dataset, **meta) -> tuple[Path, Path]:
         np.savez(f, q=np.asarray(ds.q), x=np.asarray(ds.x), y=np.asarray(ds.y))
     config = {"index": ds.index, "inputs": list(ds.inputs), "n": len(ds), "dtype": str(ds.y.dtype),
               "sampling": ds.sampling.to_dict(), "form": ds.form.to_dict(), **meta}
-    write_atomic(js, json.dumps(config, indent=2))
+    write_json(js, config)
     return npz, js
 
 

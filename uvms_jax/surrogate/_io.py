@@ -12,7 +12,7 @@ import jax.numpy as jnp
 import numpy as np
 from flax import traverse_util
 
-from uvms_jax.files import atomic_path, write_atomic
+from uvms_jax.files import atomic_path, write_json
 from uvms_jax.surrogate._ffbn import FFBN
 from uvms_jax.surrogate._rbfn import RBFN
 from uvms_jax.surrogate._scaler import Scaler
@@ -47,7 +47,7 @@ def save_network(path, net: FFBN | RBFN, **meta) -> tuple[Path, Path]:
         np.savez(f, **arrays)
     info = {"format_version": FORMAT_VERSION, "kind": kind, "index": net.index, "inputs": list(net.inputs),
             "n_joints": net.n_joints, "operation_count": net.operation_count, **size, **meta}
-    write_atomic(path.with_suffix(".json"), json.dumps(info, indent=2))
+    write_json(path.with_suffix(".json"), info)
     return path.with_suffix(".npz"), path.with_suffix(".json")
 
 

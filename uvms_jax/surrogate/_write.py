@@ -2,10 +2,9 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
-from uvms_jax.files import write_atomic
+from uvms_jax.files import write_json
 from uvms_jax.surrogate._dataset import save_dataset
 from uvms_jax.surrogate._io import save_network
 from uvms_jax.surrogate._plots import plot_ffbn_design, plot_rbfn_design, plot_training
@@ -39,4 +38,4 @@ def write_surrogates(run: SurrogateRun, out: Path) -> Path:
         plot(name, d, goal, out / f"{name}_design.png")
     plot_training(run.designs, out / "training.png")
     path = out / "results.json"
-    return write_atomic(path, json.dumps(run.report, indent=2))
+    return write_json(path, run.report)

@@ -3,11 +3,10 @@
 from __future__ import annotations
 
 import dataclasses
-import json
 from pathlib import Path
 
 from uvms_jax import surrogate
-from uvms_jax.files import write_atomic
+from uvms_jax.files import write_json
 from uvms_jax.pipeline._report import StageReport
 from uvms_jax.pipeline._settings import PipelineSettings
 from uvms_jax.pipeline.stages._flow import Flow, docking_problem
@@ -29,7 +28,7 @@ def run(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
     res = {"n_train_samples": reach.n_train, "n_test_samples": reach.n_test,
            "analytic_seconds": reach.analytic_seconds, "train_seconds": reach.train_seconds,
            "vehicle_pose_equivalents": n / k, **t}
-    write_atomic(out / "reach_map.json", json.dumps({**res, "settings": dataclasses.asdict(r)}, indent=1))
+    write_json(out / "reach_map.json", {**res, "settings": dataclasses.asdict(r)})
     table = md_table(["tool poses (train / test)", "reached", "analytic scoring [s]", "FFBN units", "training [s]",
                       "test RMSE of w", "max error of w", "largest w"],
                      [[f"{reach.n_train} / {reach.n_test}", f"{100 * t['reached_fraction']:.0f} %",
