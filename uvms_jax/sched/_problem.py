@@ -167,24 +167,11 @@ class PickPlaceProblem:
         padded[:n, :n] = cost
         padded[goal, n] = padded[n, n] = 0.0
         move_cost = np.where(rule & np.isfinite(padded), padded, np.inf)
-        next_ok = next_table(move_cost, kind)
-        for a in (cost, move_cost, rule, next_ok, kind):
+        tables = dict(cost=cost, move_cost=move_cost, rule=rule, next_ok=next_table(move_cost, kind), kind=kind,
+                      object_nodes=np.array(objects, dtype=np.int32), base_nodes=np.array(bases, dtype=np.int32))
+        for a in tables.values():  # a problem's tables never change (cached views rely on it)
             a.setflags(write=False)
-        object_nodes = np.array(objects, dtype=np.int32)
-        base_nodes = np.array(bases, dtype=np.int32)
-        for a in (object_nodes, base_nodes):
-            a.setflags(write=False)
-        problem = cls(
-            cost=cost,
-            move_cost=move_cost,
-            rule=rule,
-            next_ok=next_ok,
-            kind=kind,
-            object_nodes=object_nodes,
-            base_nodes=base_nodes,
-            start=start,
-            goal=goal,
-        )
+        problem = cls(**tables, start=start, goal=goal)
         _check_feasible(problem)
         return problem
 
