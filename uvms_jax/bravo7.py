@@ -19,7 +19,9 @@ Units: metres and radians; the jaws A move in metres here (the wire speaks milli
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+
+from uvms_jax.urdf import PRISMATIC, UrdfJoint
 
 __all__ = [
     "ARM_JOINTS",
@@ -44,36 +46,14 @@ NAME = "bravo7"
 # The URDF writes π to five decimals; the project keeps its numbers as published.
 URDF_PI = 3.14159
 
-REVOLUTE = "revolute"
-PRISMATIC = "prismatic"
-
 
 @dataclass(frozen=True)
-class Joint:
-    """One joint as the URDF writes it, plus its BPL device id.
+class Joint(UrdfJoint):
+    """One joint as the URDF writes it (:class:`uvms_jax.urdf.UrdfJoint`: name "A" (jaws) … "G"
+    (base rotate), limits in rad, or m for the jaws), plus its BPL device id ``device_id``
+    (one byte on the wire)."""
 
-    Attributes:
-      name: Bravo 7 letter, "A" (jaws) … "G" (base rotate).
-      device_id: BPL device id (one byte on the wire).
-      xyz: joint origin in the parent link frame [m].
-      rpy: joint origin orientation, URDF roll-pitch-yaw [rad].
-      axis: joint axis in the joint frame (unit vector).
-      lower, upper: position limits [rad, or m for the jaws].
-      velocity: URDF speed limit [rad/s, or m/s for the jaws].
-      effort: URDF effort limit [N·m, or N for the jaws].
-      kind: "revolute" or "prismatic".
-    """
-
-    name: str
-    device_id: int
-    xyz: tuple[float, float, float]
-    rpy: tuple[float, float, float]
-    axis: tuple[float, float, float]
-    lower: float
-    upper: float
-    velocity: float
-    effort: float
-    kind: str = REVOLUTE
+    device_id: int = field(kw_only=True)
 
 
 # URDF velocity and effort limits of the revolute joints (docs/theory.md §1.3).
@@ -82,12 +62,12 @@ _EFFORT = 9.0
 
 # The six revolute joints in chain order G, F, E, D, C, B (device ids 0x07 … 0x02).
 ARM_JOINTS: tuple[Joint, ...] = (
-    Joint("G", 0x07, (0.0665, 0.0, 0.078), (0.0, 0.0, 0.0), (0.0, 0.0, -1.0), 0.0, 6.3, _V, _EFFORT),
-    Joint("F", 0x06, (-0.046, 0.0, 0.0674), (0.0, 0.0, 0.0), (0.0, 1.0, 0.0), 0.0, 3.5, _V, _EFFORT),
-    Joint("E", 0x05, (-0.0052, 0.0, -0.29055), (0.0, 0.0, 0.0), (0.0, 1.0, 0.0), 0.0, 3.5, _V, _EFFORT),
-    Joint("D", 0x04, (0.0408, 0.0, 0.09695), (0.0, 0.0, URDF_PI), (0.0, 0.0, -1.0), 0.0, 6.3, _V, _EFFORT),
-    Joint("C", 0x03, (-0.0408, 0.0, 0.063), (0.0, 0.0, 0.0), (0.0, 1.0, 0.0), 0.0, 3.5, _V, _EFFORT),
-    Joint("B", 0x02, (-0.0408, 0.0, -0.08863), (0.0, URDF_PI, 0.0), (0.0, 0.0, -1.0), 0.0, 6.3, _V, _EFFORT),
+    Joint("G", (0.0665, 0.0, 0.078), (0.0, 0.0, 0.0), (0.0, 0.0, -1.0), 0.0, 6.3, _V, _EFFORT, device_id=0x07),
+    Joint("F", (-0.046, 0.0, 0.0674), (0.0, 0.0, 0.0), (0.0, 1.0, 0.0), 0.0, 3.5, _V, _EFFORT, device_id=0x06),
+    Joint("E", (-0.0052, 0.0, -0.29055), (0.0, 0.0, 0.0), (0.0, 1.0, 0.0), 0.0, 3.5, _V, _EFFORT, device_id=0x05),
+    Joint("D", (0.0408, 0.0, 0.09695), (0.0, 0.0, URDF_PI), (0.0, 0.0, -1.0), 0.0, 6.3, _V, _EFFORT, device_id=0x04),
+    Joint("C", (-0.0408, 0.0, 0.063), (0.0, 0.0, 0.0), (0.0, 1.0, 0.0), 0.0, 3.5, _V, _EFFORT, device_id=0x03),
+    Joint("B", (-0.0408, 0.0, -0.08863), (0.0, URDF_PI, 0.0), (0.0, 0.0, -1.0), 0.0, 6.3, _V, _EFFORT, device_id=0x02),
 )
 
 # Fixed joint from link B to the jaws base frame: the project's tool frame.
@@ -95,11 +75,10 @@ TOOL_XYZ: tuple[float, float, float] = (0.0, 0.0, 0.124)
 TOOL_RPY: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
 # The jaws A: a prismatic joint hanging from the tool frame, 0 … 35 mm of travel.
-JAWS = Joint("A", 0x01, (0.0, 0.0, 0.009), (0.0, 0.0, 0.0), (0.0, 0.0, 1.0), 0.0, 0.035, 0.1, 10.0, PRISMATIC)
+JAWS = Joint("A", (0.0, 0.0, 0.009), (0.0, 0.0, 0.0), (0.0, 0.0, 1.0), 0.0, 0.035, 0.1, 10.0, kind=PRISMATIC, device_id=0x01)
 
 # Every actuator in hardware order G, F, E, D, C, B, A.
 JOINTS: tuple[Joint, ...] = ARM_JOINTS + (JAWS,)
-
 
 
 # -- the manufacturer's kinematic and dynamic data ---------------------------------------------

@@ -16,6 +16,8 @@ import struct
 
 import numpy as np
 
+from uvms_jax.urdf import REVOLUTE
+
 __all__ = [
     "JointSpec",
     "LimitError",
@@ -114,8 +116,6 @@ def joint_specs(robot) -> tuple[JointSpec, ...]:
       ValueError: an arm with a prismatic arm joint (the runner drives revolute joints and
         at most one gripper).
     """
-    from uvms_jax.kin import REVOLUTE  # the chain's kinds; imported here, as the robot is, to keep hw free of JAX
-
     linear = [n for n, k in zip(robot.joint_names, robot.chain.kinds) if k != REVOLUTE]
     if linear:
         raise ValueError(f"robot {robot.name!r}: the hardware runner drives revolute arm joints, {linear} are not")

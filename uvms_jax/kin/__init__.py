@@ -19,10 +19,7 @@ Robots: the papers' models (``docking_arm``, ``uvms12``, ``bravo7``) and any arm
 see docs/robots.md.
 """
 
-from uvms_jax.kin._chain import PRISMATIC
-from uvms_jax.kin._chain import REVOLUTE
 from uvms_jax.kin._chain import Chain
-from uvms_jax.kin._chain import UrdfJoint
 from uvms_jax.kin._chain import chain_from_urdf_joints
 from uvms_jax.kin._chain import check_joint_array
 from uvms_jax.kin._chain import make_chain
@@ -64,3 +61,6 @@ from uvms_jax.kin._models import uvms12
 from uvms_jax.kin._vehicle import VEHICLE_DOFS
 from uvms_jax.kin._vehicle import adjoint_twists
 from uvms_jax.kin._vehicle import uvms
+from uvms_jax.urdf import PRISMATIC
+from uvms_jax.urdf import REVOLUTE
+from uvms_jax.urdf import UrdfJoint

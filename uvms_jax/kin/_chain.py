@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Sequence
 
 import jax
@@ -12,9 +11,7 @@ from flax import struct
 from jax import Array
 
 from uvms_jax.kin._lie import rpy_matrix
-
-REVOLUTE = "revolute"
-PRISMATIC = "prismatic"
+from uvms_jax.urdf import PRISMATIC, REVOLUTE, UrdfJoint
 
 
 @struct.dataclass
@@ -161,21 +158,6 @@ def revolute_twist(axis, point) -> np.ndarray:
 def prismatic_twist(direction) -> np.ndarray:
     """``ξ = [k, 0]`` for a prismatic joint along unit direction k (base frame)."""
     return np.concatenate([np.asarray(direction, dtype=np.float64), np.zeros(3)])
-
-
-@dataclass(frozen=True)
-class UrdfJoint:
-    """One moving joint as a URDF writes it: origin in the parent link frame, axis in the joint frame."""
-
-    name: str
-    xyz: tuple[float, float, float]
-    rpy: tuple[float, float, float]
-    axis: tuple[float, float, float]
-    lower: float
-    upper: float
-    kind: str = REVOLUTE
-    velocity: float = 1.0
-    effort: float = 1.0
 
 
 def chain_from_urdf_joints(

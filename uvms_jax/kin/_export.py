@@ -8,9 +8,10 @@ import numpy as np
 
 from uvms_jax import bravo7 as _b7
 from uvms_jax import frames
-from uvms_jax.kin._chain import REVOLUTE, Chain, UrdfJoint
+from uvms_jax.kin._chain import Chain
 from uvms_jax.kin._models import BRAVO7_JAWS, BRAVO7_JOINTS, BRAVO7_TOOL_XYZ
 from uvms_jax.text import numbers
+from uvms_jax.urdf import REVOLUTE, UrdfJoint
 
 
 def _urdf_text(name: str, joints: Sequence[UrdfJoint], tool_xyz, tool_rpy, extra: str = "") -> str:

@@ -14,7 +14,6 @@ from uvms_jax import frames
 from uvms_jax.kin._chain import (
     REVOLUTE,
     Chain,
-    UrdfJoint,
     chain_from_urdf_joints,
     make_chain,
     revolute_twist,
@@ -96,14 +95,11 @@ def _uvms12_arm(l1: float, l2: float, l3: float) -> Chain:
     )
 
 
-# The Reach Bravo 7 in kin's URDF form, from its one home uvms_jax.bravo7 (docs/theory.md §1.3).
-def _urdf_joint(j: _b7.Joint) -> UrdfJoint:
-    return UrdfJoint(j.name, j.xyz, j.rpy, j.axis, j.lower, j.upper, kind=j.kind, velocity=j.velocity, effort=j.effort)
-
-
-BRAVO7_JOINTS = tuple(_urdf_joint(j) for j in _b7.ARM_JOINTS)  # G, F, E, D, C, B
+# The Reach Bravo 7 from its one home uvms_jax.bravo7 (docs/theory.md §1.3): its joints are
+# URDF joints (uvms_jax.urdf.UrdfJoint) with a device id.
+BRAVO7_JOINTS = _b7.ARM_JOINTS  # G, F, E, D, C, B
 BRAVO7_TOOL_XYZ = _b7.TOOL_XYZ  # jaws base frame in link B's frame
-BRAVO7_JAWS = _urdf_joint(_b7.JAWS)
+BRAVO7_JAWS = _b7.JAWS
 
 
 def bravo7() -> Chain:

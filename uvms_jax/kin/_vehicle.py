@@ -6,7 +6,8 @@ from typing import Sequence
 
 import numpy as np
 
-from uvms_jax.kin._chain import PRISMATIC, REVOLUTE, Chain, make_chain, prismatic_twist, revolute_twist
+from uvms_jax.kin._chain import Chain, make_chain, prismatic_twist, revolute_twist
+from uvms_jax.urdf import PRISMATIC, REVOLUTE
 
 # The dexterity paper's 6-DOF vehicle (docs/theory.md §1.2), in the one order the product of
 # exponentials is taken: translations, then XYZ Euler rotations through the vehicle origin.
