@@ -10,6 +10,7 @@ the executor sends when a fault stops it.
 from __future__ import annotations
 
 import dataclasses
+import threading
 
 import numpy as np
 import pytest
@@ -127,13 +128,21 @@ def test_the_executors_settings_lead_the_simulated_servo():
 
 
 def test_the_stage_runs_over_bpl_and_writes_its_plot_table_and_results(tmp_path):
-    from uvms_jax.hover import run_hover, write_hover
+    from uvms_jax.hover import HoverFilmed, run_hover, write_hover
 
-    stage = run_hover(ARM, _plan(), POSE, VehicleSettings(), current=(0.3, 0.0, 0.0))
+    filmed = []  # what the film hook was given, and how many runs were done when it was called
+
+    def film(run, label):
+        filmed.append((run, label, threading.current_thread() is not threading.main_thread()))
+        return HoverFilmed(None, None, label, "none made in this test")
+
+    stage = run_hover(ARM, _plan(), POSE, VehicleSettings(), current=(0.3, 0.0, 0.0), film=film)
     assert list(stage.runs) == ["still water", "current [0.3, 0.0, 0.0] m/s",
                                 "current [0.3, 0.0, 0.0] m/s, whole-body controller"]
     assert stage.main == "current [0.3, 0.0, 0.0] m/s, whole-body controller"
-    res, table, notes = write_hover(stage, tmp_path, video=False, docked={"status": "completed", "gates": PLAN_GATES})
+    # the main run was filmed once, in a thread of its own
+    assert [(r, label, other) for r, label, other in filmed] == [(stage.runs[stage.main], stage.main, True)]
+    res, table, notes = write_hover(stage, tmp_path, docked={"status": "completed", "gates": PLAN_GATES})
     assert (tmp_path / "hover.png").stat().st_size > 10_000 and not (tmp_path / "hover.mp4").exists()
     assert res["driver"] == "BPL executor, whole-body controller" and res["status"] == "completed"
     assert res["gates_tool_within_tolerance"] == res["gates"] == PLAN_GATES
@@ -141,6 +150,7 @@ def test_the_stage_runs_over_bpl_and_writes_its_plot_table_and_results(tmp_path)
     plain = res["runs"]["current [0.3, 0.0, 0.0] m/s"]
     removes = res["coordination_removes"]["max_gate_tool_error_m"]
     assert removes == pytest.approx(1.0 - res["max_gate_tool_error_m"] / plain["max_gate_tool_error_m"]) and removes > 0.5
-    assert len(table.splitlines()) == 2 + 4 and "docked (hw stage)" in table and len(notes) == 1
+    assert len(table.splitlines()) == 2 + 4 and "docked (hw stage)" in table and len(notes) == 2
+    assert notes[1] == "No video of the hovering run: none made in this test." and "video_frames" not in res
     still_only = run_hover(ARM, _plan(), POSE, VehicleSettings(), whole_body=None)
     assert list(still_only.runs) == ["still water"] and "coordination_removes" not in still_only.results()

@@ -14,7 +14,8 @@ that keeps the tool on its planned path with the vehicle's station keeping in it
 :class:`HoverLog`; :func:`write_hover_video` films a run in its planning scene. Over BPL,
 :func:`execute_plan_hovering` runs a plan with the hw executor on the simulated arm mounted on
 the vehicle, the whole-body controller between the plan and the arm
-(:class:`ExecutorWholeBody`); :func:`run_hover` and :func:`write_hover` are the hover stage.
+(:class:`ExecutorWholeBody`); :func:`run_hover` and :func:`write_hover` are the hover stage
+(:func:`film_hover` films its main run while the others go on).
 Settings: :class:`VehicleSettings` (trimmed to neutral and level for an arm
 and pose by :func:`trimmed`), :class:`ControllerSettings`, :class:`CurrentSettings`.
 
@@ -74,7 +75,9 @@ from uvms_jax.hover._plan import run_plan_hovering
 from uvms_jax.hover._plan import vehicle_arm_chain
 from uvms_jax.hover._plan import vehicle_displacement
 from uvms_jax.hover._settings import DEFAULT_THRUSTERS
+from uvms_jax.hover._stage import HoverFilmed
 from uvms_jax.hover._stage import HoverStage
+from uvms_jax.hover._stage import film_hover
 from uvms_jax.hover._stage import plot_hover
 from uvms_jax.hover._stage import run_hover
 from uvms_jax.hover._stage import write_hover
@@ -99,8 +102,8 @@ from uvms_jax.hover._wholebody import WholeBodyCommand
 __all__ = ["allocate_thrust", "apply_buoyancy", "arm_motion", "batch_candidates", "batch_controlled", "batch_plan",
            "batch_scenarios", "BatchResult", "buoyancy_bodies", "buoyancy_xfrc", "control_steps",
            "ControlledResult", "CONTROLS", "ControllerSettings", "CurrentRanking", "current_at", "currents_grid", "CurrentSettings", "DEFAULT_THRUSTERS",
-           "docked_tool", "execute_plan_hovering", "executor_settings", "ExecutorWholeBody", "fluid_bodies", "fluid_xfrc", "follow_tool_path",
-           "GRAVITY", "hold_pose", "hover_mjcf", "hover_mjx", "hover_model", "hover_spec", "HoverFilm", "hover_frame", "HoverLog", "HoverMJX",
+           "docked_tool", "execute_plan_hovering", "film_hover", "executor_settings", "ExecutorWholeBody", "fluid_bodies", "fluid_xfrc", "follow_tool_path",
+           "GRAVITY", "hold_pose", "hover_mjcf", "hover_mjx", "hover_model", "hover_spec", "HoverFilm", "HoverFilmed", "hover_frame", "HoverLog", "HoverMJX",
            "HoverRun", "HoverSim", "HoverStage", "HoverState", "HoverWorld", "HULL_GEOM", "level_attitude", "nav_schedule", "NavigationEstimate",
            "NavigationSettings", "PeriodRecord",
            "plan_targets", "plot_hover", "plot_robustness", "rank_by_current", "run_hover", "run_plan_hovering", "SERVO_KP", "SERVO_KV", "servo_name",

@@ -13,6 +13,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 from collections.abc import Callable, Sequence
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -21,16 +22,34 @@ from uvms_jax.hw import ExecutorSettings, SimSettings
 from uvms_jax.planfile import Plan
 from uvms_jax.robot import Robot
 from uvms_jax.text import md_table
+from uvms_jax.video import VideoInfo
 
 from ._executed import executor_settings
 from ._plan import HoverRun, execute_plan_hovering
 from ._settings import ControllerSettings, CurrentSettings, NavigationSettings, VehicleSettings, WholeBodySettings
 
-__all__ = ["HoverStage", "run_hover", "write_hover"]
+__all__ = ["HoverFilmed", "HoverStage", "film_hover", "run_hover", "write_hover"]
 
 log = logging.getLogger(__name__)
 
 STILL = "still water"
+
+
+@dataclasses.dataclass(frozen=True)
+class HoverFilmed:
+    """The main run filmed (:func:`film_hover`).
+
+    Attributes:
+      video: the MP4 written, or None where this machine has no offscreen GL context.
+      frame: ``(height, width, 3)`` uint8, the frame at the gate of the largest tool error (None
+        without a video).
+      label: the run's label; reason: why there is no video ("" with one).
+    """
+
+    video: VideoInfo | None
+    frame: np.ndarray | None
+    label: str
+    reason: str = ""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -44,6 +63,7 @@ class HoverStage:
         controller's in the current, else the current's, else still water's).
       vehicle: the vehicle the runs were on; tool_tolerance_m, tool_tolerance_deg: the gates'
         tool tolerances [m, °].
+      filmed: the main run's video (:func:`film_hover`), or None.
     """
 
     runs: dict[str, HoverRun]
@@ -51,6 +71,7 @@ class HoverStage:
     vehicle: VehicleSettings
     tool_tolerance_m: float
     tool_tolerance_deg: float
+    filmed: HoverFilmed | None = None
 
     def results(self) -> dict:
         """``results.json``'s ``hover`` entry: the main run's :meth:`HoverRun.summary`, ``runs``
@@ -72,7 +93,8 @@ def run_hover(robot: Robot, plan: Plan, pose, vehicle: VehicleSettings, *, curre
               whole_body: WholeBodySettings | None = WholeBodySettings(),
               navigation: NavigationSettings | None = None, tool_tolerance_m: float = 0.01,
               tool_tolerance_deg: float = 2.0, config: ExecutorSettings = ExecutorSettings(), sim: SimSettings = SimSettings(),
-              progress: Callable[[str], None] | None = None) -> HoverStage:
+              progress: Callable[[str], None] | None = None,
+              film: Callable[[HoverRun, str], HoverFilmed] | None = None) -> HoverStage:
     """``plan`` over BPL on the vehicle hovering at the docked ``pose`` ``(4,) = [x, y, z, ψ]``
     [m, rad]: in still water, and in ``current`` [m/s, world] (if not 0) with the station
     keeping alone and, unless ``whole_body`` is None, with the whole-body controller (its
@@ -83,6 +105,11 @@ def run_hover(robot: Robot, plan: Plan, pose, vehicle: VehicleSettings, *, curre
       vehicle: the vehicle, built once (its hull and the arm's mount the docking scene's).
       config, sim: the executor's and the simulated arm's settings (the ``hw`` stage's).
       progress: called with each run's label when it is done.
+      film: None, or called with the main run and its label (e.g. :func:`film_hover` with its
+        scene and path bound) as soon as that run is done, in a thread of its own while the
+        other runs go on: the main run goes first. Rendering waits mostly on OpenGL and ffmpeg,
+        which leave Python's lock free, so on two cores the video costs little beyond the runs.
+        What it returns is the stage's ``filmed``; what it raises, ``run_hover`` raises.
     """
     cases = {STILL: ((0.0, 0.0, 0.0), False)}
     flowing = f"current {[round(float(v), 3) + 0.0 for v in current]} m/s"
@@ -90,25 +117,30 @@ def run_hover(robot: Robot, plan: Plan, pose, vehicle: VehicleSettings, *, curre
         cases[flowing] = (tuple(current), False)
         if whole_body is not None:
             cases[f"{flowing}, whole-body controller"] = (tuple(current), True)
-    runs = {}
-    for label, (v, coordinate) in cases.items():
-        runs[label] = execute_plan_hovering(
-            robot, plan, pose, vehicle, controller, CurrentSettings(velocity=v), config=config, sim=sim,
-            tool_tolerance_m=tool_tolerance_m, tool_tolerance_deg=tool_tolerance_deg,
-            control="whole_body" if coordinate else "pid",
-            whole_body=executor_settings(whole_body, sim.servo_gain) if coordinate else None, navigation=navigation)
-        if progress is not None:
-            progress(label)
-    return HoverStage(runs, list(runs)[-1], vehicle, float(tool_tolerance_m), float(tool_tolerance_deg))
+    main = list(cases)[-1]
+    runs, filming = {}, None
+    with ThreadPoolExecutor(max_workers=1, thread_name_prefix="hover-film") as pool:
+        for label in [main, *list(cases)[:-1]]:
+            v, coordinate = cases[label]
+            runs[label] = execute_plan_hovering(
+                robot, plan, pose, vehicle, controller, CurrentSettings(velocity=v), config=config, sim=sim,
+                tool_tolerance_m=tool_tolerance_m, tool_tolerance_deg=tool_tolerance_deg,
+                control="whole_body" if coordinate else "pid",
+                whole_body=executor_settings(whole_body, sim.servo_gain) if coordinate else None, navigation=navigation)
+            if label == main and film is not None:
+                filming = pool.submit(film, runs[main], main)
+            if progress is not None:
+                progress(label)
+        filmed = None if filming is None else filming.result()
+    return HoverStage({label: runs[label] for label in cases}, main, vehicle, float(tool_tolerance_m),
+                      float(tool_tolerance_deg), filmed)
 
 
-def write_hover(stage: HoverStage, out: Path | str, *, scene=None, video: bool = True, fps: float = 8.0,
-                size: tuple[int, int] = (480, 360), frame_png: Path | str | None = None,
+def write_hover(stage: HoverStage, out: Path | str, *, frame_png: Path | str | None = None,
                 docked: dict | None = None) -> tuple[dict, str, list[str]]:
-    """Write ``out/hover.png`` (drift and tool error over time) and, with ``video`` and a
-    ``scene`` (the planning scene the plan was made in), ``out/hover.mp4`` of the main run
-    and ``out/hover_frame.png`` (also at ``frame_png``): its frame at the gate of the largest
-    tool error.
+    """Write ``out/hover.png`` (drift and tool error over time) and, for a filmed stage
+    (:func:`film_hover`), ``out/hover_frame.png`` (also at ``frame_png``): the video's frame
+    at the gate of the largest tool error.
 
     Args:
       docked: the ``hw`` stage's results (``status``, ``gates``) for the table's first row, or None.
@@ -123,9 +155,26 @@ def write_hover(stage: HoverStage, out: Path | str, *, scene=None, video: bool =
     res = stage.results()
     plot_hover(stage.runs, out / "hover.png")
     notes = [_note(stage)]
-    if video:
-        notes.append(_film(stage, scene, out, res, fps, size, frame_png))
+    if stage.filmed is not None:
+        notes.append(_film_note(stage.filmed, out, res, frame_png))
     return res, _table(stage, res["runs"], docked), notes
+
+
+def film_hover(run: HoverRun, label: str, *, scene, path: Path | str, fps: float = 8.0,
+               size: tuple[int, int] = (480, 360)) -> HoverFilmed:
+    """``run`` as an MP4 at ``path`` in ``scene`` (the planning scene its plan was made in:
+    :func:`~uvms_jax.hover.write_hover_video`) and its frame at the gate of the largest tool
+    error; where this machine has no offscreen GL context, no video and the reason."""
+    from ._video import hover_frame, write_hover_video
+
+    try:
+        video = write_hover_video(run, scene, path, fps=fps, size=size)
+        worst = run.gate_times[np.argmax(run.gate_tool_error)] if len(run.gate_times) else run.log.time[-1]
+        frame = hover_frame(run, scene, float(min(worst, run.log.time[-1])), size=size)
+    except RuntimeError as e:  # no offscreen GL context on this machine
+        log.warning("no video of the hovering run: %s", e)
+        return HoverFilmed(None, None, label, str(e))
+    return HoverFilmed(video, frame, label)
 
 
 def _table(stage: HoverStage, summaries: dict, docked: dict | None) -> str:
@@ -159,31 +208,22 @@ def _note(stage: HoverStage) -> str:
             "`hover/hover.png`: drift and tool error over time.")
 
 
-def _film(stage: HoverStage, scene, out: Path, res: dict, fps: float, size: tuple[int, int],
-          frame_png: Path | str | None) -> str:
-    """``out/hover.mp4`` and ``out/hover_frame.png`` of the main run; the summary's note."""
-    from ._video import hover_frame, write_hover_video
-
-    if scene is None:
-        return "No video of the hovering run: no scene (run the plan stage or give a scenario)."
-    run, label = stage.runs[stage.main], stage.main
-    try:
-        video = write_hover_video(run, scene, out / "hover.mp4", fps=fps, size=size)
-        worst = run.gate_times[np.argmax(run.gate_tool_error)] if len(run.gate_times) else run.log.time[-1]
-        still = hover_frame(run, scene, float(min(worst, run.log.time[-1])), size=size)
-    except RuntimeError as e:  # no offscreen GL context on this machine
-        log.warning("no video of the hovering run: %s", e)
-        return f"No video of the hovering run: {e}."
+def _film_note(filmed: HoverFilmed, out: Path, res: dict, frame_png: Path | str | None) -> str:
+    """Save the video's frame at the worst gate; ``res`` gets the video's size and time; the
+    summary's note."""
+    if filmed.video is None:
+        return f"No video of the hovering run: {filmed.reason}."
     from PIL import Image
 
     for path in [out / "hover_frame.png"] + ([Path(frame_png)] if frame_png else []):
         path.parent.mkdir(parents=True, exist_ok=True)
-        Image.fromarray(still).save(path, optimize=True)
+        Image.fromarray(filmed.frame).save(path, optimize=True)
+    video = filmed.video
     res["video_frames"], res["video_render_s"] = video.frames, video.seconds
     link = f"{out.name}/{video.path.name}"
-    return (f"Video of the {label} run: [{link}]({link}) — the vehicle and the arm as simulated in the hw video's "
-            "scene, camera and frames (compare side by side), with the docked hull's outline (white), the tool's "
-            "target path (green) and its path so far (red), the current (blue arrow) and the time and the tool "
+    return (f"Video of the {filmed.label} run: [{link}]({link}) — the vehicle and the arm as simulated in the hw "
+            "video's scene, camera and frames (compare side by side), with the docked hull's outline (white), the "
+            "tool's target path (green) and its path so far (red), the current (blue arrow) and the time and the tool "
             f"error at the last gate; {video.fps:g} fps, {video.frames} frames, rendered in {video.seconds:.1f} s. "
             f"`{out.name}/hover_frame.png`: the frame at the gate of the largest tool error.")
 
