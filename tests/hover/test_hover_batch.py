@@ -78,9 +78,15 @@ def test_mjx_refuses_its_own_fluid_with_implicitfast():
 
 
 @pytest.fixture(scope="module")
-def batch():
+def sim():
+    """The MJX model of the file's batches (one per process: its batch is traced once)."""
+    return hover_mjx(ARM, VehicleSettings(), ControllerSettings())
+
+
+@pytest.fixture(scope="module")
+def batch(sim):
     return batch_scenarios(ARM, VehicleSettings(), ControllerSettings(), POSES, CURRENTS, _targets(), DURATION,
-                           gate_times=[GATE])
+                           gate_times=[GATE], sim=sim)
 
 
 @pytest.fixture(scope="module")
@@ -122,9 +128,8 @@ def test_a_stronger_current_drifts_further(batch):
     assert np.all(batch.max_tool_error[:, 1] > batch.max_tool_error[:, 0])
 
 
-def test_step_is_jittable_for_one_scenario():
+def test_step_is_jittable_for_one_scenario(sim):
     """The one-scenario control step runs under jit on its own (state in, state out)."""
-    sim = hover_mjx(ARM, VehicleSettings(), ControllerSettings())
     state = jax.jit(sim.init)(POSES[0], Q_A)  # one program, not MJX's kinematics op by op
     state2, rec = jax.jit(sim.control_step)(state, Q_A, np.array([0.2, 0.0, 0.0]), POSES[0])
     assert np.all(np.isfinite(np.asarray(rec.position)))
@@ -174,7 +179,7 @@ def test_robustness_plot_is_written(batch, tmp_path):
     assert (tmp_path / "robustness.png").stat().st_size > 10_000
 
 
-def test_candidates_follow_the_docked_tool_path_and_the_unreachable_is_left_out():
+def test_candidates_follow_the_docked_tool_path_and_the_unreachable_is_left_out(sim):
     """Three docking candidates for one plan: its own pose, one nearby, one 3 m away. The
     nearby one moves the tool along the same world path (the docked pose's forward kinematics,
     to the IK tolerance), the far one cannot reach it and is left out of the batch."""
@@ -184,9 +189,9 @@ def test_candidates_follow_the_docked_tool_path_and_the_unreachable_is_left_out(
     plan = Plan(ARM.joint_names, (Segment("there", (0.0, 0.4, 0.8), tuple(map(tuple, (Q_A, (Q_A + Q_B) / 2, Q_B)))),))
     poses = np.stack([POSES[0], POSES[0] + [0.05, -0.03, 0.02, 0.2], POSES[0] + [3.0, 0.0, 0.0, 0.0]])
     # The batch fixture's shapes (2 poses kept, both currents, DURATION with the plan's final
-    # period): the same compiled program, read from the compilation cache.
+    # period) on its sim: the same traced and compiled program.
     dwell = DURATION - PERIOD - 0.8
-    res, reached = batch_candidates(ARM, plan, poses, CURRENTS, dwell_s=dwell, gripper_s=0.0)
+    res, reached = batch_candidates(ARM, plan, poses, CURRENTS, dwell_s=dwell, gripper_s=0.0, sim=sim)
     assert reached[:2].tolist() == [1.0, 1.0] and reached[2] < 1.0 and res.poses.shape == (2, 4)
     assert res.time.size == round(DURATION / PERIOD) + 1
     np.testing.assert_allclose(res.docked_tool[1], res.docked_tool[0], atol=2e-4)  # float32 IK tolerance 1e-4

@@ -50,7 +50,7 @@ SURFACE_STEP = 0.004
 _GAP = 0.75 * SURFACE_STEP
 _CANDIDATES = 4000  # grid candidate centres per shape (about)
 _FIT_VERSION = 3  # part of the cache key: changes when the fit does
-_CHUNK = 512  # candidate rows per distance block (memory: _CHUNK × points floats)
+_BLOCK = 16  # candidate centres per distance block (two blocks of _BLOCK × points floats)
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -197,14 +197,28 @@ def _solid(shape: Shape):
     return _polytope(v @ T[:3, :3].T + T[:3, 3])
 
 
+def _within(centres: np.ndarray, points: np.ndarray, radius: np.ndarray) -> np.ndarray:
+    """``(C, P)`` bool: ``points (P, 3)`` within ``radius (C,)`` of ``centres (C, 3)``, the
+    distance summed coordinate by coordinate in :func:`numpy.linalg.norm`'s order (the same
+    numbers), in blocks of :data:`_BLOCK` centres that stay in the processor's cache."""
+    out = np.empty((len(centres), len(points)), bool)
+    coords = np.ascontiguousarray(points.T)
+    d, term = np.empty((2, min(_BLOCK, len(centres)), len(points)))
+    for i in range(0, len(centres), _BLOCK):
+        c = centres[i:i + _BLOCK]
+        dk, tk = d[:len(c)], term[:len(c)]
+        np.square(np.subtract(c[:, :1], coords[0], out=dk), out=dk)
+        for k in (1, 2):
+            dk += np.square(np.subtract(c[:, k:k + 1], coords[k], out=tk), out=tk)
+        np.less_equal(np.sqrt(dk, out=dk), radius[i:i + _BLOCK, None], out=out[i:i + _BLOCK])
+    return out
+
+
 def _cover(points: np.ndarray, depth, candidates: np.ndarray, max_excess: float):
     """Greedy set cover of ``points (P, 3)`` by spheres at ``candidates (C, 3)`` of radius
     ``depth + max_excess``, less the spheres the others make redundant, each shrunk to the
     farthest point it is left with: ``(centres (s, 3), radii (s,), excess)``."""
-    radius = depth(candidates) + max_excess - _GAP
-    covers = np.concatenate([
-        np.linalg.norm(candidates[i:i + _CHUNK, None] - points[None], axis=2) <= radius[i:i + _CHUNK, None]
-        for i in range(0, len(candidates), _CHUNK)])
+    covers = _within(candidates, points, depth(candidates) + max_excess - _GAP)
     gain = np.count_nonzero(covers, axis=1)
     left = np.ones(len(points), bool)
     centres, reach = [], []
