@@ -5,14 +5,12 @@ with the reason; the baseline takes the run's arm and start."""
 
 from __future__ import annotations
 
-import subprocess
-import sys
-
 import pytest
 import yaml
 from hydra import compose, initialize_config_dir
 
 from _pipeline_helpers import CONFIG_DIR, ROOT
+from _script_runs import run_script_cases
 from uvms_jax.pipeline import check_stages
 
 USAGE_EXIT = 2  # experiments/_cli.py: a configuration error, nothing ran
@@ -34,7 +32,7 @@ def _bravo_without_gripper(tmp_path) -> str:
     return str(path)
 
 
-@pytest.mark.parametrize(("overrides", "expected"), [
+REFUSED = [
     (["scenario.start_q=[0.1,0.2,0.3]"],  # the scenario schema's check, the first to see it
      ["scenario.start_q: expected 6 joint angles ['G', 'F', 'E', 'D', 'C', 'B'] [rad], got [0.1, 0.2, 0.3]"]),
     (["plan.plan_json.jaws_open_mm=50", "plan.plan_json.jaws_closed_mm=-1"],
@@ -45,16 +43,28 @@ def _bravo_without_gripper(tmp_path) -> str:
     (["scenario.arm.card=GRIPPERLESS", "stages=[hw]"],
      [f"hw.plan: {EXAMPLE_PLAN} has gripper steps and arm 'bravo7' has no gripper: add "
       "`gripper: {joint: jaws, lower: 0.0, upper: 0.1, velocity: 0.1}` (its jaws) to the arm's card"]),
-])
-def test_what_a_stage_cannot_do_for_the_arm_is_refused_before_the_first_stage(tmp_path, overrides, expected):
-    overrides = [o.replace("GRIPPERLESS", _bravo_without_gripper(tmp_path)) for o in overrides]
-    run = tmp_path / "run"
-    done = subprocess.run([sys.executable, "experiments/pipeline.py", "experiment=tiny", f"hydra.run.dir={run}",
-                           *overrides], cwd=ROOT, capture_output=True, text=True, timeout=300)
-    lines = [line for line in done.stderr.splitlines() if line.strip()]  # stdout: the log (the arm loaded)
-    assert done.returncode == USAGE_EXIT and len(lines) == 1, done.stdout + done.stderr
+]
+
+
+@pytest.fixture(scope="module")
+def refused(tmp_path_factory):
+    """Each case of :data:`REFUSED`, its own run of the pipeline's command line, the runs in one
+    child process (the imports once): ``[(result, run folder)]``."""
+    tmp = tmp_path_factory.mktemp("arm_checks")
+    runs = [tmp / f"run{i}" for i in range(len(REFUSED))]
+    cases = [["experiment=tiny", f"hydra.run.dir={run}", *(o.replace("GRIPPERLESS", _bravo_without_gripper(tmp))
+                                                           for o in overrides)]
+             for run, (overrides, _) in zip(runs, REFUSED)]
+    return list(zip(run_script_cases("pipeline.py", cases, timeout=300 * len(cases))["cases"], runs))
+
+
+@pytest.mark.parametrize("case", range(len(REFUSED)), ids=["start_q", "jaws", "another_arms_plan", "no_gripper"])
+def test_what_a_stage_cannot_do_for_the_arm_is_refused_before_the_first_stage(refused, case):
+    done, run = refused[case]
+    lines = [line for line in done["stderr"].splitlines() if line.strip()]  # stdout: the log (the arm loaded)
+    assert done["code"] == USAGE_EXIT and len(lines) == 1, done["output"]
     assert lines[0].startswith("error: ")
-    for part in expected:
+    for part in REFUSED[case][1]:
         assert part in lines[0], lines[0]
     assert not any((run / name).exists() for name in ("surrogate", "docking", "hw", "RUNNING", "results.json"))
 

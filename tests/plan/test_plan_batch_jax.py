@@ -18,7 +18,7 @@ from uvms_jax import robot as R
 from uvms_jax.plan import Obstacle, densify
 from uvms_jax.plan._batch_jax import BatchSettings, plan_batch
 from uvms_jax.plan._vector import robot_spheres_model
-from uvms_jax.plan._vector_kernels import FREE, make_scratch, motion_free, states_status
+from uvms_jax.plan._vector_kernels import FREE, states_status
 from uvms_jax.plan._vector_jax import sphere_arm, sphere_worlds
 from uvms_jax.plan._worlds import World
 
@@ -46,17 +46,23 @@ def _pillar_world() -> World:
 
 class _SpheresOnly:
     """The Numba checker's covering spheres alone: what the batch planner sees (a state the
-    spheres cannot tell counts as a collision)."""
+    spheres cannot tell counts as a collision). A motion is free when every sample of the CPU
+    path's final check (densify) is: the one kernel of the test's verdicts."""
 
     def __init__(self, side, world: World):
         self.model = side.model(world)
-        self._scratch = make_scratch(self.model)
 
     def states_free(self, Q) -> np.ndarray:
         return states_status(np.ascontiguousarray(Q, dtype=np.float64), *self.model[:9], self.model[11]) == FREE
 
+    def motions_free(self, starts, ends, resolution: float) -> np.ndarray:
+        """``(m,)`` bool: each motion ``starts[i] → ends[i]`` free, all in one kernel call."""
+        dense = [densify(np.stack([a, b]), resolution) for a, b in zip(starts, ends)]
+        free = self.states_free(np.concatenate(dense))
+        return np.array([f.all() for f in np.split(free, np.cumsum([len(d) for d in dense])[:-1])])
+
     def motion_free(self, q0, q1, resolution: float) -> bool:
-        return motion_free(np.asarray(q0, float), np.asarray(q1, float), resolution, self.model, self._scratch)
+        return bool(self.motions_free([q0], [q1], resolution)[0])
 
 
 def _problems(panda, checker: _SpheresOnly, rng):
@@ -72,7 +78,8 @@ def _problems(panda, checker: _SpheresOnly, rng):
     for a, b in zip(Q[free][1::2], Q[free][2::2]):
         if checker.motion_free(a, b, RESOLUTION):
             continue
-        detours = sum(checker.motion_free(a, w, RESOLUTION) and checker.motion_free(w, b, RESOLUTION) for w in W)
+        detours = np.sum(checker.motions_free([a] * len(W), W, RESOLUTION)
+                         & checker.motions_free(W, [b] * len(W), RESOLUTION))
         if detours >= 40:  # a fifth of the free states: the random vertices meet one
             hard = (a, b)
             break

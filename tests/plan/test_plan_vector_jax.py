@@ -142,15 +142,20 @@ def test_every_primitive_and_batch_shape(panda, side, tmp_path, shape):
 
 def test_motion_samples_are_the_cpu_paths():
     """A padded path's samples are densify's (the CPU path's final check) without the start,
-    then the last waypoint repeated; a path with more samples than room says it does not fit."""
+    then the last waypoint repeated; a path with one sample more than room says it does not
+    fit. Both paths through one compiled call (the same shapes and room)."""
     rng = np.random.default_rng(3)
-    path = rng.uniform(-1, 1, (4, 7))
-    padded = np.concatenate([path, np.repeat(path[-1:], 3, axis=0)])
+    longer = rng.uniform(-1, 1, (4, 7))
+    path = 0.9 * longer  # fewer samples than the longer path
+    pad = lambda p: jnp.asarray(np.concatenate([p, np.repeat(p[-1:], 3, axis=0)]))  # noqa: E731
     dense = densify(path, 0.01)[1:]
-    Q, seg, used, fits = motion_samples(jnp.asarray(padded), 4, 0.01, len(dense) + 5)
+    room = len(densify(longer, 0.01)) - 2  # one sample short of the longer path's
+    assert room > len(dense)
+    samples = jax.jit(motion_samples, static_argnums=(2, 3))
+    Q, seg, used, fits = samples(pad(path), 4, 0.01, room)
     assert bool(fits) and int(used.sum()) == len(dense)
     np.testing.assert_allclose(np.asarray(Q)[:len(dense)], dense, rtol=0, atol=1e-12)
-    np.testing.assert_allclose(np.asarray(Q)[len(dense):], np.repeat(path[-1:], 5, axis=0))
+    np.testing.assert_allclose(np.asarray(Q)[len(dense):], np.repeat(path[-1:], room - len(dense), axis=0))
     starts = np.cumsum([0] + [len(densify(path[k:k + 2], 0.01)) - 1 for k in range(3)])
     assert np.all(np.asarray(seg)[:len(dense)] == np.searchsorted(starts, np.arange(len(dense)), side="right") - 1)
-    assert not bool(motion_samples(jnp.asarray(padded), 4, 0.01, len(dense) - 1)[3])
+    assert not bool(samples(pad(longer), 4, 0.01, room)[3])
