@@ -53,7 +53,7 @@ class _SpheresOnly:
         self._scratch = make_scratch(self.model)
 
     def states_free(self, Q) -> np.ndarray:
-        return states_status(np.ascontiguousarray(Q, dtype=np.float64), *self.model[:9], self.model[11]) == FREE
+        return states_status(np.ascontiguousarray(Q, dtype=np.float64), *self.model[:9], *self.model[11:]) == FREE
 
     def motion_free(self, q0, q1, resolution: float) -> bool:
         return motion_free(np.asarray(q0, float), np.asarray(q1, float), resolution, self.model, self._scratch)
