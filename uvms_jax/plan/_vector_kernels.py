@@ -210,20 +210,6 @@ def _place_spheres(c, b, clusters, spheres, R, t, sw, splaced) -> None:
     splaced[c] = True
 
 
-@numba.njit(cache=True, inline="always")
-def _spheres_meet(rows, lo1, hi1, b1, lo2, hi2, b2, margin, R, t) -> bool:
-    """Whether a sphere of ``rows[lo1:hi1]`` (on body ``b1``) and one of ``rows[lo2:hi2]`` (on
-    ``b2``) are nearer than ``margin`` [m]; ``rows (S, 4)``: centre in the body frame, radius."""
-    for s1 in range(lo1, hi1):
-        x1, y1, z1 = _to_world(R, t, b1, rows[s1, 0], rows[s1, 1], rows[s1, 2])
-        for s2 in range(lo2, hi2):
-            x2, y2, z2 = _to_world(R, t, b2, rows[s2, 0], rows[s2, 1], rows[s2, 2])
-            r = rows[s1, 3] + rows[s2, 3] + margin
-            if (x1 - x2) ** 2 + (y1 - y2) ** 2 + (z1 - z2) ** 2 < r * r:
-                return True
-    return False
-
-
 @numba.njit(cache=True)
 def _groups_touch(g1, g2, groups, spheres, margin, clusters, R, t, cc, sw, splaced) -> bool:
     """Whether a sphere of group ``g1`` is nearer than ``margin`` to one of group ``g2``:
@@ -270,9 +256,21 @@ def _inner_hits_obstacle(g, m, groups, obstacles, planes, margin, inner, R, t) -
 
 
 @numba.njit(cache=True)
-def _inner_groups_touch(g1, g2, groups, margin, inner, R, t) -> bool:
-    return _spheres_meet(inner, int(groups[g1, 9]), int(groups[g1, 10]), int(groups[g1, 2]), int(groups[g2, 9]),
-                         int(groups[g2, 10]), int(groups[g2, 2]), margin, R, t)
+def _inner_groups_touch(g1, g2, groups, margin, inner, R, t, iw) -> bool:
+    """Whether an inscribed sphere of group ``g1`` is nearer than ``margin`` to one of ``g2``
+    (their world centres placed once into ``iw (I, 3)``)."""
+    lo1, hi1, lo2, hi2 = int(groups[g1, 9]), int(groups[g1, 10]), int(groups[g2, 9]), int(groups[g2, 10])
+    for g, lo, hi in ((g1, lo1, hi1), (g2, lo2, hi2)):
+        b = int(groups[g, 2])
+        for s in range(lo, hi):
+            iw[s, 0], iw[s, 1], iw[s, 2] = _to_world(R, t, b, inner[s, 0], inner[s, 1], inner[s, 2])
+    for s1 in range(lo1, hi1):
+        r1 = inner[s1, 3] + margin
+        for s2 in range(lo2, hi2):
+            r = r1 + inner[s2, 3]
+            if (iw[s1, 0] - iw[s2, 0]) ** 2 + (iw[s1, 1] - iw[s2, 1]) ** 2 + (iw[s1, 2] - iw[s2, 2]) ** 2 < r * r:
+                return True
+    return False
 
 
 @numba.njit(cache=True)
@@ -345,7 +343,7 @@ def _table_verdict(q, k, meta, values, margin) -> int:
 
 @numba.njit(cache=True)
 def _status(q, kin, groups, spheres, obstacles, planes, pairs, margin, clusters, inner, exact, resolve, tab_index,
-            tab_meta, tab_values, near_start, near, R, t, gc, cc, placed, sw, splaced) -> int:
+            tab_meta, tab_values, near_start, near, R, t, gc, cc, placed, sw, splaced, iw) -> int:
     """:func:`state_status` with the model's and the scratch's arrays as arguments of their own
     (an array taken from a tuple costs a reference count, ~7 ns, per state)."""
     pose_bodies(q, kin, R, t)
@@ -386,7 +384,7 @@ def _status(q, kin, groups, spheres, obstacles, planes, pairs, margin, clusters,
         _place_clusters(g2, groups, clusters, R, t, cc, placed, splaced)
         if not _groups_touch(g1, g2, groups, spheres, margin, clusters, R, t, cc, sw, splaced):
             continue
-        if _inner_groups_touch(g1, g2, groups, margin, inner, R, t):
+        if _inner_groups_touch(g1, g2, groups, margin, inner, R, t, iw):
             return HIT
         verdict, posed = _undecided(q, g1, exact[5][exact[4][g2, 0]:exact[4][g2, 1]], exact, resolve, margin, posed)
         if verdict == HIT:
@@ -410,7 +408,7 @@ def state_status(q, model, scratch) -> int:
     tables, near = model[11], model[12]
     return _status(q, model[0], model[1], model[2], model[3], model[4], model[5], model[6], model[7], model[8],
                    model[9], model[10], tables[0], tables[1], tables[2], near[0], near[1], scratch[0], scratch[1],
-                   scratch[2], scratch[4], scratch[5], scratch[6], scratch[7])
+                   scratch[2], scratch[4], scratch[5], scratch[6], scratch[7], scratch[8])
 
 
 @numba.njit(cache=True)
@@ -444,11 +442,11 @@ def states_status(Q, kin, groups, spheres, obstacles, planes, pairs, margin, clu
     near_start, near_rows = near
     for c in numba.prange((k + chunk - 1) // chunk):
         exact = without_exact(groups.shape[0], obstacles.shape[0])
-        R, t, gc, _, cc, placed, sw, splaced = _scratch(kin.shape[0], groups.shape[0], spheres.shape[0],
-                                                        clusters.shape[0])
+        R, t, gc, _, cc, placed, sw, splaced, iw = _scratch(kin.shape[0], groups.shape[0], spheres.shape[0],
+                                                            clusters.shape[0], inner.shape[0])
         for i in range(c * chunk, min(k, (c + 1) * chunk)):
             out[i] = _status(Q[i], kin, groups, spheres, obstacles, planes, pairs, margin, clusters, inner, exact, 0,
-                             tab_index, tab_meta, tab_values, near_start, near_rows, R, t, gc, cc, placed, sw, splaced)
+                             tab_index, tab_meta, tab_values, near_start, near_rows, R, t, gc, cc, placed, sw, splaced, iw)
     return out
 
 
@@ -457,14 +455,15 @@ def make_scratch(model):
     """Work arrays of one thread's checks: body rotations ``(n, 3, 3)`` and positions ``(n, 3)``,
     group centres ``(G, 3)``, one configuration ``(n,)``, cluster centres ``(C, 3)``, whether
     each group's cluster centres are placed for the current state ``(G,)``, sphere centres
-    ``(S, 3)``, whether each cluster's spheres are placed ``(C,)``."""
-    return _scratch(model[0].shape[0], model[1].shape[0], model[2].shape[0], model[7].shape[0])
+    ``(S, 3)``, whether each cluster's spheres are placed ``(C,)``, inscribed sphere centres
+    ``(I, 3)``."""
+    return _scratch(model[0].shape[0], model[1].shape[0], model[2].shape[0], model[7].shape[0], model[8].shape[0])
 
 
 @numba.njit(cache=True)
-def _scratch(n, G, S, C):
+def _scratch(n, G, S, C, I):
     return (np.empty((n, 3, 3)), np.empty((n, 3)), np.empty((G, 3)), np.empty(n), np.empty((C, 3)), np.zeros(G, np.bool_),
-            np.empty((S, 3)), np.zeros(C, np.bool_))
+            np.empty((S, 3)), np.zeros(C, np.bool_), np.empty((I, 3)))
 
 
 @numba.njit(cache=True)
@@ -510,7 +509,7 @@ def pairs_touching(Q, model, candidates) -> np.ndarray:
     """``(k, P)`` bool: whether the two groups of each candidate pair ``(P, 2)`` have spheres
     nearer than the margin at each row of ``Q (k, n)`` (for the pairs that touch in every pose)."""
     out = np.zeros((Q.shape[0], candidates.shape[0]), dtype=np.bool_)
-    R, t, _, _, cc, placed, sw, splaced = make_scratch(model)
+    R, t, _, _, cc, placed, sw, splaced, _ = make_scratch(model)
     groups, clusters = model[1], model[7]
     for i in range(Q.shape[0]):
         pose_bodies(Q[i], model[0], R, t)
