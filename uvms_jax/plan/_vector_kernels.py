@@ -71,9 +71,12 @@ _mj_kinematics = numba.types.ExternalFunction("mj_kinematics", numba.types.void(
 _mj_geom_distance = numba.types.ExternalFunction(
     "mj_geomDistance", numba.types.float64(_ptr, _ptr, numba.types.intc, numba.types.intc, numba.types.float64, _ptr))
 _DISTMAX = 1e-3  # [m] past the margin: MuJoCo stops measuring a pair there
+# The per-state helpers allocate nothing: compiled without Numba's reference counting, a call
+# does not count a reference in and out for each array argument (two atomic operations each).
+_NO_NRT = {"cache": True, "_nrt": False}
 
 
-@numba.njit(cache=True, fastmath=False)
+@numba.njit(**_NO_NRT)
 def pose_bodies(q, kin, R_out, t_out) -> None:
     """World poses of the chain's bodies at ``q (n,)``: ``R_out (n, 3, 3)``, ``t_out (n, 3)``
     (body ``i`` is moved by joint ``i``; body ``i - 1`` is its parent, the base for ``i = 0``)."""
@@ -143,7 +146,7 @@ def sphere_obstacle_distance(x, y, z, o, planes) -> float:
     return _obstacle_distance(x, y, z, o.reshape((1, o.shape[0])), 0, planes)
 
 
-@numba.njit(cache=True)
+@numba.njit(**_NO_NRT)
 def _obstacle_distance(x, y, z, rows, m, planes) -> float:
     """:func:`sphere_obstacle_distance` of row ``m`` of ``rows (M, 20)``, read in place (a row
     taken as an array of its own costs a reference count per test)."""
@@ -182,7 +185,7 @@ def _obstacle_distance(x, y, z, rows, m, planes) -> float:
     return best
 
 
-@numba.njit(cache=True)
+@numba.njit(**_NO_NRT)
 def _hits_obstacle(g, m, groups, spheres, obstacles, planes, margin, clusters, R, t, cc, sw, splaced) -> bool:
     """Whether a sphere of group ``g`` is nearer than ``margin`` to obstacle row ``m``: its
     clusters' bounds (world centres ``cc (C, 3)``) first, then their spheres (world centres
@@ -210,7 +213,7 @@ def _place_spheres(c, b, clusters, spheres, R, t, sw, splaced) -> None:
     splaced[c] = True
 
 
-@numba.njit(cache=True)
+@numba.njit(**_NO_NRT)
 def _groups_touch(g1, g2, groups, spheres, margin, clusters, R, t, cc, sw, splaced) -> bool:
     """Whether a sphere of group ``g1`` is nearer than ``margin`` to one of group ``g2``:
     cluster bounds (world centres ``cc (C, 3)``) against cluster bounds, then their spheres
@@ -242,7 +245,7 @@ def _groups_touch(g1, g2, groups, spheres, margin, clusters, R, t, cc, sw, splac
     return False
 
 
-@numba.njit(cache=True)
+@numba.njit(**_NO_NRT)
 def _inner_hits_obstacle(g, m, groups, obstacles, planes, margin, inner, R, t) -> bool:
     """Whether an inscribed sphere of group ``g`` is certainly nearer than ``margin`` to row
     ``m`` (a polytope only when the centre is inside it, where its face bound is exact)."""
@@ -255,7 +258,7 @@ def _inner_hits_obstacle(g, m, groups, obstacles, planes, margin, inner, R, t) -
     return False
 
 
-@numba.njit(cache=True)
+@numba.njit(**_NO_NRT)
 def _inner_groups_touch(g1, g2, groups, margin, inner, R, t, iw) -> bool:
     """Whether an inscribed sphere of group ``g1`` is nearer than ``margin`` to one of ``g2``
     (their world centres placed once into ``iw (I, 3)``)."""
@@ -341,11 +344,12 @@ def _table_verdict(q, k, meta, values, margin) -> int:
     return MAYBE
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _status(q, kin, groups, spheres, obstacles, planes, pairs, margin, clusters, inner, exact, resolve, tab_index,
             tab_meta, tab_values, near_start, near, R, t, gc, cc, placed, sw, splaced, iw) -> int:
-    """:func:`state_status` with the model's and the scratch's arrays as arguments of their own
-    (an array taken from a tuple costs a reference count, ~7 ns, per state)."""
+    """:func:`state_status` with the model's and the scratch's arrays as arguments of their own,
+    inlined where it is called: taken from a tuple, or passed in a call, each array costs a
+    reference count in and out per state."""
     pose_bodies(q, kin, R, t)
     G = groups.shape[0]
     for g in range(G):
