@@ -15,9 +15,11 @@ The verdicts are the Numba kernel's covering spheres alone (its FREE,
 :func:`~uvms_jax.plan._vector_kernels.state_status`; what the spheres cannot tell counts as a
 collision here, as a GPU holds no MuJoCo model): a sphere collides with an obstacle when its
 signed distance is below its radius plus the margin, and two spheres of a checked pair when their centres are nearer than their radii plus
-the margin. The Numba kernel skips far groups by bounding spheres; that test is exact (the
-distances are 1-Lipschitz), so here every sphere is tested against every row with no broad
-phase — the same verdicts up to float round-off, with no branches to diverge on a GPU.
+the margin. The Numba kernel skips far groups by bounding spheres and boxes, and the obstacles
+out of a group's reach (:func:`~uvms_jax.plan._worlds.near_obstacles`); these tests only skip
+what is farther than the margin (the distances are 1-Lipschitz), so here every sphere is tested
+against every row with no broad phase — the same verdicts up to float round-off, with no
+branches to diverge on a GPU.
 """
 
 from __future__ import annotations
