@@ -123,7 +123,8 @@ def test_near_lists_change_no_verdict(panda, problems):
         moving = np.flatnonzero(groups[:, 2] >= 0)
         start = np.zeros(len(groups) + 1, np.int64)
         start[1:] = np.cumsum(np.where(groups[:, 2] >= 0, len(rows), 0))
-        every = np.array([[m, 0, 0, 0, np.inf, np.inf, np.inf] for _ in moving for m in range(len(rows))]).reshape(-1, 7)
+        unbounded = [0, 0, 0, np.inf, np.inf, np.inf]
+        every = np.array([[m, *unbounded] for _ in moving for m in range(len(rows))]).reshape(-1, 7)
         got = K.states_status(Q, *model[:9], *model[11:])
         np.testing.assert_array_equal(got, K.states_status(Q, *model[:9], model[11], (start, every)), family)
         assert {K.FREE, K.HIT} <= set(got.tolist()), family

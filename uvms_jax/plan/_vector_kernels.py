@@ -450,7 +450,8 @@ def states_status(Q, kin, groups, spheres, obstacles, planes, pairs, margin, clu
                                                             clusters.shape[0], inner.shape[0])
         for i in range(c * chunk, min(k, (c + 1) * chunk)):
             out[i] = _status(Q[i], kin, groups, spheres, obstacles, planes, pairs, margin, clusters, inner, exact, 0,
-                             tab_index, tab_meta, tab_values, near_start, near_rows, R, t, gc, cc, placed, sw, splaced, iw)
+                             tab_index, tab_meta, tab_values, near_start, near_rows, R, t, gc, cc, placed, sw, splaced,
+                             iw)
     return out
 
 
@@ -466,8 +467,8 @@ def make_scratch(model):
 
 @numba.njit(cache=True)
 def _scratch(n, G, S, C, I):
-    return (np.empty((n, 3, 3)), np.empty((n, 3)), np.empty((G, 3)), np.empty(n), np.empty((C, 3)), np.zeros(G, np.bool_),
-            np.empty((S, 3)), np.zeros(C, np.bool_), np.empty((I, 3)))
+    return (np.empty((n, 3, 3)), np.empty((n, 3)), np.empty((G, 3)), np.empty(n), np.empty((C, 3)),
+            np.zeros(G, np.bool_), np.empty((S, 3)), np.zeros(C, np.bool_), np.empty((I, 3)))
 
 
 @numba.njit(cache=True)
