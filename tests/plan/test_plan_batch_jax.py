@@ -53,7 +53,7 @@ class _SpheresOnly:
         self.model = side.model(world)
 
     def states_free(self, Q) -> np.ndarray:
-        return states_status(np.ascontiguousarray(Q, dtype=np.float64), *self.model[:9], self.model[11]) == FREE
+        return states_status(np.ascontiguousarray(Q, dtype=np.float64), *self.model[:9], *self.model[11:]) == FREE
 
     def motions_free(self, starts, ends, resolution: float) -> np.ndarray:
         """``(m,)`` bool: each motion ``starts[i] → ends[i]`` free, all in one kernel call."""

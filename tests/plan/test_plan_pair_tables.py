@@ -69,9 +69,9 @@ def test_tables_change_no_verdict(checker):
     """4096 random states: the verdicts (spheres, tables, MuJoCo where undecided) equal those of
     the spheres and MuJoCo alone, and the tables leave fewer states undecided."""
     model = checker.model
-    plain = model[:11] + (without_tables(len(model[5])),)
+    plain = model[:11] + (without_tables(len(model[5])),) + model[12:]
     Q = np.random.default_rng(4).uniform(checker.lower, checker.upper, (4096, checker.robot.n_joints))
-    with_tables, without = (states_status(Q, *m[:9], m[11]) for m in (model, plain))
+    with_tables, without = (states_status(Q, *m[:9], *m[11:]) for m in (model, plain))
     assert np.all((with_tables == without) | (with_tables == 2) | (without == 2))
     assert np.mean(with_tables == 2) < 0.5 * np.mean(without == 2)
     np.testing.assert_array_equal(settle(Q, with_tables, model), settle(Q, without, plain))

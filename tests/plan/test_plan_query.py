@@ -84,6 +84,54 @@ def test_primitive_distances_match_mujoco(shape, dims):
             assert mine == pytest.approx(theirs, abs=DIST_ATOL)
 
 
+@pytest.mark.parametrize("shape,dims", [("box", (0.3, 0.1, 0.05)), ("capsule", (0.05, 0.3)), ("cylinder", (0.08, 0.2)),
+                                        ("sphere", (0.1,))])
+def test_obstacle_boxes_are_the_shapes_extents(shape, dims):
+    """The axis-aligned box around a rotated primitive: the extents of points on its surface
+    (a box's corners, a cylinder's rims, a capsule's or sphere's ball at the ends), all inside
+    and the box no larger by more than the sampling's step."""
+    rng = np.random.default_rng(5)
+    for _ in range(10):
+        R = frames.rpy_matrix(rng.uniform(-np.pi, np.pi, 3))
+        obstacle = P.Obstacle("o", shape, (0.1, -0.2, 0.3), dims=dims, quat=tuple(frames.matrix_quat(R)))
+        box = P._worlds._obstacle_boxes(P._worlds.obstacle_rows([obstacle])[0])[0]
+        u = np.linspace(0, 2 * np.pi, 3601)[:, None]
+        if shape == "box":
+            local = (np.array([[i, j, k] for i in (-1, 1) for j in (-1, 1) for k in (-1, 1)]) * dims) / 2
+        elif shape == "cylinder":
+            rim = dims[0] * np.hstack([np.cos(u), np.sin(u), 0 * u])
+            local = np.vstack([rim + [0, 0, h] for h in (-dims[1] / 2, dims[1] / 2)])
+        else:  # a ball at each end (the sphere's one, at the centre)
+            d = rng.normal(size=(20000, 3))
+            ball = dims[0] * d / np.linalg.norm(d, axis=1, keepdims=True)
+            local = np.vstack([ball + [0, 0, h] for h in ((-dims[1] / 2, dims[1] / 2) if shape == "capsule" else (0,))])
+        points = local @ R.T + obstacle.T_world[:3, 3]
+        extent = np.max(np.abs(points - box[:3]), axis=0)
+        assert np.all(extent <= box[3:] + 1e-12)
+        assert np.all(box[3:] - extent < 2e-3 * max(dims)), (shape, box[3:] - extent)
+
+
+def test_near_lists_change_no_verdict(panda, problems):
+    """Each group tests only the obstacles within its reach, behind their grown boxes: 4096
+    random states give the verdicts of the model that tests every group against every
+    obstacle (the ones the spheres call FREE are free for MuJoCo: see the test below)."""
+    Q = np.random.default_rng(6).uniform(panda.lower, panda.upper, (4096, panda.n_joints))
+    cut = {}
+    for family, (world, _) in problems.items():
+        model = P.VectorChecker(panda, world, OPENING).model
+        groups, rows = model[1], model[3]
+        moving = np.flatnonzero(groups[:, 2] >= 0)
+        start = np.zeros(len(groups) + 1, np.int64)
+        start[1:] = np.cumsum(np.where(groups[:, 2] >= 0, len(rows), 0))
+        unbounded = [0, 0, 0, np.inf, np.inf, np.inf]
+        every = np.array([[m, *unbounded] for _ in moving for m in range(len(rows))]).reshape(-1, 7)
+        got = K.states_status(Q, *model[:9], *model[11:])
+        np.testing.assert_array_equal(got, K.states_status(Q, *model[:9], model[11], (start, every)), family)
+        assert {K.FREE, K.HIT} <= set(got.tolist()), family
+        cut[family] = 1 - len(model[12][1]) / len(every)
+    assert cut["bookshelf_thin"] > 0.2, cut  # the links near the base reach none of the shelves
+
+
 def test_motion_is_free_exactly_when_every_sample_is(panda, problems):
     world, _ = problems["bookshelf_thin"]
     checker = P.VectorChecker(panda, world, OPENING)

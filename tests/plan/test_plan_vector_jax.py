@@ -17,12 +17,12 @@ from uvms_jax.plan._vector import robot_spheres_model
 from uvms_jax.plan._vector_jax import (motion_samples, numba_model, sphere_arm, sphere_worlds,
                                        states_free)
 from uvms_jax.plan._vector_kernels import FREE, sphere_obstacle_distance, states_status
-from uvms_jax.plan._worlds import World, obstacle_rows
+from uvms_jax.plan._worlds import World, near_obstacles, obstacle_rows
 
 
 def numba_states_free(Q, model):
     """The Numba kernel's covering-sphere verdicts (what the JAX checker computes)."""
-    return states_status(np.ascontiguousarray(Q), *model[:9], model[11]) == FREE
+    return states_status(np.ascontiguousarray(Q), *model[:9], *model[11:]) == FREE
 
 
 ROBOTS = Path(str(importlib.metadata.distribution("example-robot-data").locate_file(
@@ -94,7 +94,9 @@ def _states(panda, rng, k):
 
 def _bracket(side, worlds, index, Q, got, tol):
     model = numba_model(side, worlds, index)
-    lo, hi = (model[:6] + (model[6] + m,) + model[7:] for m in (-tol, tol))
+    # The near lists are built for a margin: rebuilt for each.
+    lo, hi = (model[:6] + (model[6] + m,) + model[7:12] + (near_obstacles(*model[:2], *model[3:5], model[6] + m),)
+              for m in (-tol, tol))
     free_lo, free_hi = numba_states_free(Q, lo), numba_states_free(Q, hi)
     assert not np.any(free_hi & ~got), "free by Numba with a larger margin, colliding here"
     assert not np.any(got & ~free_lo), "colliding by Numba with a smaller margin, free here"

@@ -32,7 +32,7 @@ from uvms_jax.plan._pair_tables import pair_tables
 from uvms_jax.plan._vector_kernels import (make_scratch, motion_free, pairs_touching, settle, state_free,
                                            states_status, without_exact, without_tables)
 from uvms_jax.plan._spec import Obstacle
-from uvms_jax.plan._worlds import World, add_obstacles, obstacle_rows
+from uvms_jax.plan._worlds import World, add_obstacles, near_obstacles, obstacle_rows
 from uvms_jax.robot import (BASE, Robot, RobotSpheres, Shape, base_body, card_jaws, collision_spheres, inscribed_spheres,
                             robot_spec)
 
@@ -134,8 +134,10 @@ class RobotSpheresModel:
             arrays, tables = without_exact(len(self.groups), int(np.sum(near))), without_tables(len(pairs))
         else:
             arrays, tables = exact.arrays(near), pair_tables(exact, self, pairs)
-        return (self.kin, self.groups, self.spheres, rows[near], planes, pairs, float(margin), self.clusters,
-                self.inner, arrays, int(exact is not None), tables)
+        rows = rows[near]
+        return (self.kin, self.groups, self.spheres, rows, planes, pairs, float(margin), self.clusters,
+                self.inner, arrays, int(exact is not None), tables,
+                near_obstacles(self.kin, self.groups, rows, planes, float(margin)))
 
 
 def _bound(c: np.ndarray, r: np.ndarray) -> list[float]:
@@ -237,8 +239,9 @@ def robot_spheres_model(robot: Robot, opening: float | None = None, spheres: Rob
     candidates = np.array([p for p in itertools.combinations(range(len(groups)), 2) if p not in skipped],
                           dtype=np.int64).reshape(-1, 2)
     Q = np.random.default_rng(0).uniform(robot.lower, robot.upper, (_ALWAYS_SAMPLES, n))
-    model = (kin, groups, sphere_rows, np.zeros((0, 20)), np.zeros((0, 4)), np.zeros((0, 2), np.int64), 0.0, clusters,
-             inner_rows, without_exact(len(groups), 0), 0, without_tables(0))
+    no_rows, no_planes = np.zeros((0, 20)), np.zeros((0, 4))
+    model = (kin, groups, sphere_rows, no_rows, no_planes, np.zeros((0, 2), np.int64), 0.0, clusters, inner_rows,
+             without_exact(len(groups), 0), 0, without_tables(0), near_obstacles(kin, groups, no_rows, no_planes, 0.0))
     touching = pairs_touching(Q, model, candidates)
     for (a, b), always in zip(candidates, np.all(touching, axis=0)):
         if always:
@@ -387,13 +390,13 @@ class VectorChecker:
         """``(k,)`` uint8 FREE / HIT / MAYBE of the rows of ``Q (k, n)`` [rad] by the spheres
         alone (see :func:`~uvms_jax.plan._vector_kernels.state_status`), in one compiled call
         over the CPU's threads."""
-        return states_status(self._rows(Q), *self.model[:9], self.model[11])
+        return states_status(self._rows(Q), *self.model[:9], *self.model[11:])
 
     def states_free(self, Q) -> np.ndarray:
         """``(k,)`` bool: rows of ``Q (k, n)`` [rad] where the robot touches nothing (limits not
         checked): the spheres' verdict, MuJoCo's where the spheres cannot tell."""
         Q = self._rows(Q)
-        return settle(Q, states_status(Q, *self.model[:9], self.model[11]), self.model)
+        return settle(Q, states_status(Q, *self.model[:9], *self.model[11:]), self.model)
 
     def state_free(self, q) -> bool:
         """Whether the robot at ``q (n,)`` [rad] touches nothing (limits not checked), in one

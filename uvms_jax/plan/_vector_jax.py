@@ -15,9 +15,11 @@ The verdicts are the Numba kernel's covering spheres alone (its FREE,
 :func:`~uvms_jax.plan._vector_kernels.state_status`; what the spheres cannot tell counts as a
 collision here, as a GPU holds no MuJoCo model): a sphere collides with an obstacle when its
 signed distance is below its radius plus the margin, and two spheres of a checked pair when their centres are nearer than their radii plus
-the margin. The Numba kernel skips far groups by bounding spheres; that test is exact (the
-distances are 1-Lipschitz), so here every sphere is tested against every row with no broad
-phase — the same verdicts up to float round-off, with no branches to diverge on a GPU.
+the margin. The Numba kernel skips far groups by bounding spheres and boxes, and the obstacles
+out of a group's reach (:func:`~uvms_jax.plan._worlds.near_obstacles`); these tests only skip
+what is farther than the margin (the distances are 1-Lipschitz), so here every sphere is tested
+against every row with no broad phase — the same verdicts up to float round-off, with no
+branches to diverge on a GPU.
 """
 
 from __future__ import annotations
@@ -34,7 +36,7 @@ import numpy as np
 
 from uvms_jax.plan._vector import RobotSpheresModel
 from uvms_jax.plan._vector_kernels import BOX, CAPSULE, CYLINDER, POLYTOPE, SPHERE, without_exact, without_tables
-from uvms_jax.plan._worlds import ROW, World, obstacle_rows
+from uvms_jax.plan._worlds import ROW, World, near_obstacles, obstacle_rows
 
 __all__ = ["PAD_PLANE", "PAD_ROW", "SphereArm", "SphereWorlds", "motion_samples", "numba_model", "sphere_arm",
            "sphere_worlds", "state_free", "states_free"]
@@ -150,10 +152,11 @@ def numba_model(side: RobotSpheresModel, world: SphereWorlds, index: int | None 
     unbatched one: the same rows, faces and checked pairs, in float64."""
     pick = (lambda a: np.asarray(a)) if index is None else (lambda a: np.asarray(a)[index])
     cands = np.array(candidate_pairs(side), np.int64).reshape(-1, 2)
-    rows = pick(world.obstacles).astype(np.float64)
-    return (side.kin, side.groups, side.spheres, rows, pick(world.planes).astype(np.float64),
-            cands[pick(world.pair_on)], float(pick(world.margin)), side.clusters, side.inner,
-            without_exact(len(side.groups), len(rows)), 0, without_tables(int(np.sum(pick(world.pair_on)))))
+    rows, planes, margin = pick(world.obstacles).astype(np.float64), pick(world.planes).astype(np.float64), \
+        float(pick(world.margin))
+    return (side.kin, side.groups, side.spheres, rows, planes, cands[pick(world.pair_on)], margin, side.clusters,
+            side.inner, without_exact(len(side.groups), len(rows)), 0, without_tables(int(np.sum(pick(world.pair_on)))),
+            near_obstacles(side.kin, side.groups, rows, planes, margin))
 
 
 _EYE = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)

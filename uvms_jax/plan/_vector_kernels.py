@@ -21,14 +21,15 @@ Everything is a flat array so that Numba compiles one loop per kernel:
 * ``pairs``: ``(P, 2)`` group pairs checked against each other (self-collision).
 
 The model tuple is ``(kin, groups, spheres, obstacles, planes, pairs, margin, clusters, inner,
-exact, resolve, tables)``. ``exact`` is MuJoCo's model of the same robot and world, called through its C
+exact, resolve, tables, near)``. ``exact`` is MuJoCo's model of the same robot and world, called through its C
 API: ``(mjModel address, mjData address, qpos (view of the mjData's), the arm joints' qpos
 addresses (n,), per group its geoms' range (G, 2) into geom ids (K,), each obstacle row's geom
 id (M,))``; ``resolve`` 1: the states the spheres cannot tell are measured by it (never in
 parallel threads: the mjData is shared). ``tables``: MuJoCo's distance between the two groups of
 a pair two joints apart, over a grid of those joints (:mod:`uvms_jax.plan._pair_tables`):
 ``(index (P,) per pair its table or -1, meta (T, 8) [joint a, joint b, first node a, first
-node b, spacing, bound, nodes a, nodes b], values (T, Na, Nb) float32 [m])``.
+node b, spacing, bound, nodes a, nodes b], values (T, Na, Nb) float32 [m])``. ``near``: per group the
+obstacles within its reach and their boxes (:func:`~uvms_jax.plan._worlds.near_obstacles`).
 
 A sphere collides with an obstacle when its signed distance is below its radius plus the
 margin; a polytope's distance is bounded below by its largest face distance, so polytopes are
@@ -70,9 +71,12 @@ _mj_kinematics = numba.types.ExternalFunction("mj_kinematics", numba.types.void(
 _mj_geom_distance = numba.types.ExternalFunction(
     "mj_geomDistance", numba.types.float64(_ptr, _ptr, numba.types.intc, numba.types.intc, numba.types.float64, _ptr))
 _DISTMAX = 1e-3  # [m] past the margin: MuJoCo stops measuring a pair there
+# The per-state helpers allocate nothing: compiled without Numba's reference counting, a call
+# does not count a reference in and out for each array argument (two atomic operations each).
+_NO_NRT = {"cache": True, "_nrt": False}
 
 
-@numba.njit(cache=True, fastmath=False)
+@numba.njit(**_NO_NRT)
 def pose_bodies(q, kin, R_out, t_out) -> None:
     """World poses of the chain's bodies at ``q (n,)``: ``R_out (n, 3, 3)``, ``t_out (n, 3)``
     (body ``i`` is moved by joint ``i``; body ``i - 1`` is its parent, the base for ``i = 0``)."""
@@ -139,76 +143,81 @@ def _to_world(R, t, b, x, y, z):
 def sphere_obstacle_distance(x, y, z, o, planes) -> float:
     """Signed distance [m] of the point ``(x, y, z)`` to the obstacle row ``o (20,)`` (a lower
     bound for a polytope)."""
-    kind = o[0]
-    if kind == BOX:  # o[1:4] centre, o[4:13] rotation row-major (columns: box axes), o[13:16] half edges
-        px, py, pz = x - o[1], y - o[2], z - o[3]
+    return _obstacle_distance(x, y, z, o.reshape((1, o.shape[0])), 0, planes)
+
+
+@numba.njit(**_NO_NRT)
+def _obstacle_distance(x, y, z, rows, m, planes) -> float:
+    """:func:`sphere_obstacle_distance` of row ``m`` of ``rows (M, 20)``, read in place (a row
+    taken as an array of its own costs a reference count per test)."""
+    kind = rows[m, 0]
+    if kind == BOX:  # [1:4] centre, [4:13] rotation row-major (columns: box axes), [13:16] half edges
+        px, py, pz = x - rows[m, 1], y - rows[m, 2], z - rows[m, 3]
         out2, inside = 0.0, -np.inf
         for a in range(3):
-            u = px * o[4 + a] + py * o[7 + a] + pz * o[10 + a]
-            e = abs(u) - o[13 + a]
+            u = px * rows[m, 4 + a] + py * rows[m, 7 + a] + pz * rows[m, 10 + a]
+            e = abs(u) - rows[m, 13 + a]
             if e > inside:
                 inside = e
             if e > 0.0:
                 out2 += e * e
         return np.sqrt(out2) if out2 > 0.0 else inside
-    if kind == SPHERE:  # o[1:4] centre, o[4] radius
-        return np.sqrt((x - o[1]) ** 2 + (y - o[2]) ** 2 + (z - o[3]) ** 2) - o[4]
-    if kind == CAPSULE or kind == CYLINDER:  # o[1:4] centre, o[4:7] unit axis, o[7] half length, o[8] radius
-        px, py, pz = x - o[1], y - o[2], z - o[3]
-        along = px * o[4] + py * o[5] + pz * o[6]
-        rx, ry, rz = px - along * o[4], py - along * o[5], pz - along * o[6]
+    if kind == SPHERE:  # [1:4] centre, [4] radius
+        return np.sqrt((x - rows[m, 1]) ** 2 + (y - rows[m, 2]) ** 2 + (z - rows[m, 3]) ** 2) - rows[m, 4]
+    if kind == CAPSULE or kind == CYLINDER:  # [1:4] centre, [4:7] unit axis, [7] half length, [8] radius
+        px, py, pz = x - rows[m, 1], y - rows[m, 2], z - rows[m, 3]
+        along = px * rows[m, 4] + py * rows[m, 5] + pz * rows[m, 6]
+        rx, ry, rz = px - along * rows[m, 4], py - along * rows[m, 5], pz - along * rows[m, 6]
         radial = np.sqrt(rx * rx + ry * ry + rz * rz)
         if kind == CAPSULE:
-            a = min(max(along, -o[7]), o[7])
-            return np.sqrt(radial * radial + (along - a) ** 2) - o[8]
-        dr, dz = radial - o[8], abs(along) - o[7]
+            a = min(max(along, -rows[m, 7]), rows[m, 7])
+            return np.sqrt(radial * radial + (along - a) ** 2) - rows[m, 8]
+        dr, dz = radial - rows[m, 8], abs(along) - rows[m, 7]
         if dr > 0.0 and dz > 0.0:
             return np.sqrt(dr * dr + dz * dz)
         return max(dr, dz)
-    # POLYTOPE: o[1], o[2] first and end face row
+    # POLYTOPE: [1], [2] first and end face row
     best = -np.inf
-    for f in range(int(o[1]), int(o[2])):
+    for f in range(int(rows[m, 1]), int(rows[m, 2])):
         d = planes[f, 0] * x + planes[f, 1] * y + planes[f, 2] * z + planes[f, 3]
         if d > best:
             best = d
     return best
 
 
-@numba.njit(cache=True)
-def _hits_obstacle(g, o, model, R, t, cc) -> bool:
-    """Whether a sphere of group ``g`` is nearer than the margin to obstacle row ``o``: its
-    clusters' bounds (world centres ``cc (C, 3)``) first, then their spheres."""
-    groups, spheres, planes, margin, clusters = model[1], model[2], model[4], model[6], model[7]
+@numba.njit(**_NO_NRT)
+def _hits_obstacle(g, m, groups, spheres, obstacles, planes, margin, clusters, R, t, cc, sw, splaced) -> bool:
+    """Whether a sphere of group ``g`` is nearer than ``margin`` to obstacle row ``m``: its
+    clusters' bounds (world centres ``cc (C, 3)``) first, then their spheres (world centres
+    ``sw (S, 3)``, placed by :func:`_place_spheres`)."""
     b = int(groups[g, 2])
     for c in range(int(groups[g, 7]), int(groups[g, 8])):
-        if sphere_obstacle_distance(cc[c, 0], cc[c, 1], cc[c, 2], o, planes) >= clusters[c, 5] + margin:
+        if _obstacle_distance(cc[c, 0], cc[c, 1], cc[c, 2], obstacles, m, planes) >= clusters[c, 5] + margin:
             continue
+        _place_spheres(c, b, clusters, spheres, R, t, sw, splaced)
         for s in range(int(clusters[c, 0]), int(clusters[c, 1])):
-            x, y, z = _to_world(R, t, b, spheres[s, 0], spheres[s, 1], spheres[s, 2])
-            if sphere_obstacle_distance(x, y, z, o, planes) < spheres[s, 3] + margin:
+            if _obstacle_distance(sw[s, 0], sw[s, 1], sw[s, 2], obstacles, m, planes) < spheres[s, 3] + margin:
                 return True
     return False
 
 
 @numba.njit(cache=True, inline="always")
-def _spheres_meet(rows, lo1, hi1, b1, lo2, hi2, b2, margin, R, t) -> bool:
-    """Whether a sphere of ``rows[lo1:hi1]`` (on body ``b1``) and one of ``rows[lo2:hi2]`` (on
-    ``b2``) are nearer than ``margin`` [m]; ``rows (S, 4)``: centre in the body frame, radius."""
-    for s1 in range(lo1, hi1):
-        x1, y1, z1 = _to_world(R, t, b1, rows[s1, 0], rows[s1, 1], rows[s1, 2])
-        for s2 in range(lo2, hi2):
-            x2, y2, z2 = _to_world(R, t, b2, rows[s2, 0], rows[s2, 1], rows[s2, 2])
-            r = rows[s1, 3] + rows[s2, 3] + margin
-            if (x1 - x2) ** 2 + (y1 - y2) ** 2 + (z1 - z2) ** 2 < r * r:
-                return True
-    return False
+def _place_spheres(c, b, clusters, spheres, R, t, sw, splaced) -> None:
+    """World centres ``sw`` of cluster ``c``'s spheres (on body ``b``), once per state
+    (``splaced (C,)``, cleared with its group's cluster centres): a sphere met by several
+    obstacles or clusters is placed once."""
+    if splaced[c]:
+        return
+    for s in range(int(clusters[c, 0]), int(clusters[c, 1])):
+        sw[s, 0], sw[s, 1], sw[s, 2] = _to_world(R, t, b, spheres[s, 0], spheres[s, 1], spheres[s, 2])
+    splaced[c] = True
 
 
-@numba.njit(cache=True)
-def _groups_touch(g1, g2, model, R, t, cc) -> bool:
-    """Whether a sphere of group ``g1`` is nearer than the margin to one of group ``g2``:
-    cluster bounds (world centres ``cc (C, 3)``) against cluster bounds, then their spheres."""
-    groups, spheres, margin, clusters = model[1], model[2], model[6], model[7]
+@numba.njit(**_NO_NRT)
+def _groups_touch(g1, g2, groups, spheres, margin, clusters, R, t, cc, sw, splaced) -> bool:
+    """Whether a sphere of group ``g1`` is nearer than ``margin`` to one of group ``g2``:
+    cluster bounds (world centres ``cc (C, 3)``) against cluster bounds, then their spheres
+    (world centres ``sw (S, 3)``)."""
     b1, b2 = int(groups[g1, 2]), int(groups[g2, 2])
     # g2's bound in the world: the clusters of g1 outside it meet none of g2's.
     x2, y2, z2 = _to_world(R, t, b2, groups[g2, 3], groups[g2, 4], groups[g2, 5])
@@ -220,31 +229,51 @@ def _groups_touch(g1, g2, model, R, t, cc) -> bool:
             r = clusters[c1, 5] + clusters[c2, 5] + margin
             if (cc[c1, 0] - cc[c2, 0]) ** 2 + (cc[c1, 1] - cc[c2, 1]) ** 2 + (cc[c1, 2] - cc[c2, 2]) ** 2 >= r * r:
                 continue
-            if _spheres_meet(spheres, int(clusters[c1, 0]), int(clusters[c1, 1]), b1, int(clusters[c2, 0]),
-                             int(clusters[c2, 1]), b2, margin, R, t):
-                return True
+            # Each sphere of c1 against c2's bound, then against its spheres.
+            _place_spheres(c1, b1, clusters, spheres, R, t, sw, splaced)
+            for s1 in range(int(clusters[c1, 0]), int(clusters[c1, 1])):
+                r1 = spheres[s1, 3] + margin
+                r = r1 + clusters[c2, 5]
+                if (sw[s1, 0] - cc[c2, 0]) ** 2 + (sw[s1, 1] - cc[c2, 1]) ** 2 + (sw[s1, 2] - cc[c2, 2]) ** 2 >= r * r:
+                    continue
+                _place_spheres(c2, b2, clusters, spheres, R, t, sw, splaced)
+                for s2 in range(int(clusters[c2, 0]), int(clusters[c2, 1])):
+                    r = r1 + spheres[s2, 3]
+                    d2 = (sw[s1, 0] - sw[s2, 0]) ** 2 + (sw[s1, 1] - sw[s2, 1]) ** 2 + (sw[s1, 2] - sw[s2, 2]) ** 2
+                    if d2 < r * r:
+                        return True
     return False
 
 
-@numba.njit(cache=True)
-def _inner_hits_obstacle(g, o, model, R, t) -> bool:
-    """Whether an inscribed sphere of group ``g`` is certainly nearer than the margin to ``o``
-    (a polytope only when the centre is inside it, where its face bound is exact)."""
-    groups, planes, margin, inner = model[1], model[4], model[6], model[8]
+@numba.njit(**_NO_NRT)
+def _inner_hits_obstacle(g, m, groups, obstacles, planes, margin, inner, R, t) -> bool:
+    """Whether an inscribed sphere of group ``g`` is certainly nearer than ``margin`` to row
+    ``m`` (a polytope only when the centre is inside it, where its face bound is exact)."""
     b = int(groups[g, 2])
     for s in range(int(groups[g, 9]), int(groups[g, 10])):
         x, y, z = _to_world(R, t, b, inner[s, 0], inner[s, 1], inner[s, 2])
-        d = sphere_obstacle_distance(x, y, z, o, planes)
-        if d < inner[s, 3] + margin and (o[0] != POLYTOPE or d <= 0.0):
+        d = _obstacle_distance(x, y, z, obstacles, m, planes)
+        if d < inner[s, 3] + margin and (obstacles[m, 0] != POLYTOPE or d <= 0.0):
             return True
     return False
 
 
-@numba.njit(cache=True)
-def _inner_groups_touch(g1, g2, model, R, t) -> bool:
-    groups, margin, inner = model[1], model[6], model[8]
-    return _spheres_meet(inner, int(groups[g1, 9]), int(groups[g1, 10]), int(groups[g1, 2]), int(groups[g2, 9]),
-                         int(groups[g2, 10]), int(groups[g2, 2]), margin, R, t)
+@numba.njit(**_NO_NRT)
+def _inner_groups_touch(g1, g2, groups, margin, inner, R, t, iw) -> bool:
+    """Whether an inscribed sphere of group ``g1`` is nearer than ``margin`` to one of ``g2``
+    (their world centres placed once into ``iw (I, 3)``)."""
+    lo1, hi1, lo2, hi2 = int(groups[g1, 9]), int(groups[g1, 10]), int(groups[g2, 9]), int(groups[g2, 10])
+    for g, lo, hi in ((g1, lo1, hi1), (g2, lo2, hi2)):
+        b = int(groups[g, 2])
+        for s in range(lo, hi):
+            iw[s, 0], iw[s, 1], iw[s, 2] = _to_world(R, t, b, inner[s, 0], inner[s, 1], inner[s, 2])
+    for s1 in range(lo1, hi1):
+        r1 = inner[s1, 3] + margin
+        for s2 in range(lo2, hi2):
+            r = r1 + inner[s2, 3]
+            if (iw[s1, 0] - iw[s2, 0]) ** 2 + (iw[s1, 1] - iw[s2, 1]) ** 2 + (iw[s1, 2] - iw[s2, 2]) ** 2 < r * r:
+                return True
+    return False
 
 
 @numba.njit(cache=True)
@@ -284,51 +313,43 @@ def _undecided(q, g, others, exact, resolve, margin, posed):
 
 
 @numba.njit(cache=True, inline="always")
-def _place_clusters(g, groups, clusters, R, t, cc, placed) -> None:
+def _place_clusters(g, groups, clusters, R, t, cc, placed, splaced) -> None:
     """World centres ``cc`` of group ``g``'s clusters, once per state (``placed (G,)``): only the
-    groups whose bound meets something need them."""
+    groups whose bound meets something need them; their spheres are not placed yet
+    (``splaced``)."""
     if placed[g]:
         return
     b = int(groups[g, 2])
     for c in range(int(groups[g, 7]), int(groups[g, 8])):
         cc[c, 0], cc[c, 1], cc[c, 2] = _to_world(R, t, b, clusters[c, 2], clusters[c, 3], clusters[c, 4])
+        splaced[c] = False
     placed[g] = True
 
 
 @numba.njit(cache=True, inline="always")
-def _table_verdict(q, k, tables, margin) -> int:
+def _table_verdict(q, k, meta, values, margin) -> int:
     """A tabled pair's verdict at ``q``: the distance at the nearest grid node, give or take
     the table's bound (how far the pair's distance can change within half a spacing of each of
     its joints): FREE or HIT where that settles it against ``margin`` [m], else MAYBE (the
     spheres decide, as for an untabled pair; also off the grid)."""
-    meta, values = tables[1][k], tables[2][k]
-    i = int(np.floor((q[int(meta[0])] - meta[2]) / meta[4] + 0.5))
-    j = int(np.floor((q[int(meta[1])] - meta[3]) / meta[4] + 0.5))
-    if i < 0 or j < 0 or i >= meta[6] or j >= meta[7]:
+    i = int(np.floor((q[int(meta[k, 0])] - meta[k, 2]) / meta[k, 4] + 0.5))
+    j = int(np.floor((q[int(meta[k, 1])] - meta[k, 3]) / meta[k, 4] + 0.5))
+    if i < 0 or j < 0 or i >= meta[k, 6] or j >= meta[k, 7]:
         return MAYBE
-    d = values[i, j]
-    if d - meta[5] > margin:
+    d = values[k, i, j]
+    if d - meta[k, 5] > margin:
         return FREE
-    if d + meta[5] < margin:
+    if d + meta[k, 5] < margin:
         return HIT
     return MAYBE
 
 
-@numba.njit(cache=True)
-def state_status(q, model, scratch) -> int:
-    """The robot at ``q (n,)`` against the world and itself: :data:`FREE` (nothing nearer than
-    the margin [m]) or :data:`HIT`; without the exact model (``model``'s last entry off),
-    :data:`MAYBE` where the spheres cannot tell.
-
-    ``model``: see the module docstring; ``scratch``: :func:`make_scratch`. Each test goes from
-    a group's bound to its clusters' bounds to their covering spheres; where these touch, an
-    inscribed sphere that does settles HIT, else MuJoCo measures the pair's geoms (once posed
-    for this state) or, without it, the state is MAYBE and the scan goes on (a later HIT
-    settles it)."""
-    kin, groups, obstacles, planes, pairs, margin, clusters = model[0], model[1], model[3], model[4], model[5], \
-        model[6], model[7]
-    exact, resolve, tables = model[9], model[10], model[11]
-    R, t, gc, _, cc, placed = scratch
+@numba.njit(cache=True, inline="always")
+def _status(q, kin, groups, spheres, obstacles, planes, pairs, margin, clusters, inner, exact, resolve, tab_index,
+            tab_meta, tab_values, near_start, near, R, t, gc, cc, placed, sw, splaced, iw) -> int:
+    """:func:`state_status` with the model's and the scratch's arrays as arguments of their own,
+    inlined where it is called: taken from a tuple, or passed in a call, each array costs a
+    reference count in and out per state."""
     pose_bodies(q, kin, R, t)
     G = groups.shape[0]
     for g in range(G):
@@ -336,20 +357,17 @@ def state_status(q, model, scratch) -> int:
         placed[g] = False
     status, posed = FREE, False
     for g in range(G):
-        if groups[g, 2] < 0:  # the base's groups: fixed, as the world is
-            continue
-        gr = groups[g, 6]
-        for m in range(obstacles.shape[0]):
-            o = obstacles[m]
-            reach = gr + o[19] + margin
-            if (gc[g, 0] - o[16]) ** 2 + (gc[g, 1] - o[17]) ** 2 + (gc[g, 2] - o[18]) ** 2 > reach * reach:
+        x, y, z, gr = gc[g, 0], gc[g, 1], gc[g, 2], groups[g, 6]
+        for j in range(near_start[g], near_start[g + 1]):  # the obstacles within the group's reach
+            if abs(x - near[j, 1]) > near[j, 4] or abs(y - near[j, 2]) > near[j, 5] or abs(z - near[j, 3]) > near[j, 6]:
+                continue  # the group's bound is outside the obstacle's box
+            m = int(near[j, 0])
+            if _obstacle_distance(x, y, z, obstacles, m, planes) >= gr + margin:
                 continue
-            if sphere_obstacle_distance(gc[g, 0], gc[g, 1], gc[g, 2], o, planes) >= gr + margin:
+            _place_clusters(g, groups, clusters, R, t, cc, placed, splaced)
+            if not _hits_obstacle(g, m, groups, spheres, obstacles, planes, margin, clusters, R, t, cc, sw, splaced):
                 continue
-            _place_clusters(g, groups, clusters, R, t, cc, placed)
-            if not _hits_obstacle(g, o, model, R, t, cc):
-                continue
-            if _inner_hits_obstacle(g, o, model, R, t):
+            if _inner_hits_obstacle(g, m, groups, obstacles, planes, margin, inner, R, t):
                 return HIT
             verdict, posed = _undecided(q, g, exact[6][m:m + 1], exact, resolve, margin, posed)
             if verdict == HIT:
@@ -357,8 +375,8 @@ def state_status(q, model, scratch) -> int:
             status = max(status, verdict)
     for p in range(pairs.shape[0]):
         g1, g2 = pairs[p, 0], pairs[p, 1]
-        if tables[0][p] >= 0:
-            verdict = _table_verdict(q, tables[0][p], tables, margin)
+        if tab_index[p] >= 0:
+            verdict = _table_verdict(q, tab_index[p], tab_meta, tab_values, margin)
             if verdict == FREE:
                 continue
             if verdict == HIT:
@@ -366,17 +384,35 @@ def state_status(q, model, scratch) -> int:
         reach = groups[g1, 6] + groups[g2, 6] + margin
         if (gc[g1, 0] - gc[g2, 0]) ** 2 + (gc[g1, 1] - gc[g2, 1]) ** 2 + (gc[g1, 2] - gc[g2, 2]) ** 2 > reach * reach:
             continue
-        _place_clusters(g1, groups, clusters, R, t, cc, placed)
-        _place_clusters(g2, groups, clusters, R, t, cc, placed)
-        if not _groups_touch(g1, g2, model, R, t, cc):
+        _place_clusters(g1, groups, clusters, R, t, cc, placed, splaced)
+        _place_clusters(g2, groups, clusters, R, t, cc, placed, splaced)
+        if not _groups_touch(g1, g2, groups, spheres, margin, clusters, R, t, cc, sw, splaced):
             continue
-        if _inner_groups_touch(g1, g2, model, R, t):
+        if _inner_groups_touch(g1, g2, groups, margin, inner, R, t, iw):
             return HIT
         verdict, posed = _undecided(q, g1, exact[5][exact[4][g2, 0]:exact[4][g2, 1]], exact, resolve, margin, posed)
         if verdict == HIT:
             return HIT
         status = max(status, verdict)
     return status
+
+
+@numba.njit(cache=True)
+def state_status(q, model, scratch) -> int:
+    """The robot at ``q (n,)`` against the world and itself: :data:`FREE` (nothing nearer than
+    the margin [m]) or :data:`HIT`; without the exact model (``model``'s ``resolve`` off),
+    :data:`MAYBE` where the spheres cannot tell.
+
+    ``model``: see the module docstring; ``scratch``: :func:`make_scratch`. Each group meets
+    only the obstacles of its ``near`` list, and only where its bound is inside the obstacle's
+    box there; each test goes from the group's bound to its clusters' bounds to their covering
+    spheres; where these touch, an inscribed sphere that does settles HIT, else MuJoCo measures
+    the pair's geoms (once posed for this state) or, without it, the state is MAYBE and the
+    scan goes on (a later HIT settles it)."""
+    tables, near = model[11], model[12]
+    return _status(q, model[0], model[1], model[2], model[3], model[4], model[5], model[6], model[7], model[8],
+                   model[9], model[10], tables[0], tables[1], tables[2], near[0], near[1], scratch[0], scratch[1],
+                   scratch[2], scratch[4], scratch[5], scratch[6], scratch[7], scratch[8])
 
 
 @numba.njit(cache=True)
@@ -398,19 +434,24 @@ def without_tables(n_pairs: int) -> tuple:
 
 
 @numba.njit(cache=True, parallel=True)
-def states_status(Q, kin, groups, spheres, obstacles, planes, pairs, margin, clusters, inner, tables) -> np.ndarray:
+def states_status(Q, kin, groups, spheres, obstacles, planes, pairs, margin, clusters, inner, tables,
+                  near) -> np.ndarray:
     """``(k,)`` uint8: :func:`state_status` of each row of ``Q (k, n)`` by the spheres and the
     pair tables alone (the model without ``exact``: threads share no mjData), in chunks over the
     CPU's threads."""
     k = Q.shape[0]
     out = np.empty(k, dtype=np.uint8)
     chunk = 256
+    tab_index, tab_meta, tab_values = tables
+    near_start, near_rows = near
     for c in numba.prange((k + chunk - 1) // chunk):
-        model = (kin, groups, spheres, obstacles, planes, pairs, margin, clusters, inner,
-                 without_exact(groups.shape[0], obstacles.shape[0]), 0, tables)
-        scratch = make_scratch(model)
+        exact = without_exact(groups.shape[0], obstacles.shape[0])
+        R, t, gc, _, cc, placed, sw, splaced, iw = _scratch(kin.shape[0], groups.shape[0], spheres.shape[0],
+                                                            clusters.shape[0], inner.shape[0])
         for i in range(c * chunk, min(k, (c + 1) * chunk)):
-            out[i] = state_status(Q[i], model, scratch)
+            out[i] = _status(Q[i], kin, groups, spheres, obstacles, planes, pairs, margin, clusters, inner, exact, 0,
+                             tab_index, tab_meta, tab_values, near_start, near_rows, R, t, gc, cc, placed, sw, splaced,
+                             iw)
     return out
 
 
@@ -418,9 +459,16 @@ def states_status(Q, kin, groups, spheres, obstacles, planes, pairs, margin, clu
 def make_scratch(model):
     """Work arrays of one thread's checks: body rotations ``(n, 3, 3)`` and positions ``(n, 3)``,
     group centres ``(G, 3)``, one configuration ``(n,)``, cluster centres ``(C, 3)``, whether
-    each group's cluster centres are placed for the current state ``(G,)``."""
-    n, G, C = model[0].shape[0], model[1].shape[0], model[7].shape[0]
-    return np.empty((n, 3, 3)), np.empty((n, 3)), np.empty((G, 3)), np.empty(n), np.empty((C, 3)), np.zeros(G, np.bool_)
+    each group's cluster centres are placed for the current state ``(G,)``, sphere centres
+    ``(S, 3)``, whether each cluster's spheres are placed ``(C,)``, inscribed sphere centres
+    ``(I, 3)``."""
+    return _scratch(model[0].shape[0], model[1].shape[0], model[2].shape[0], model[7].shape[0], model[8].shape[0])
+
+
+@numba.njit(cache=True)
+def _scratch(n, G, S, C, I):
+    return (np.empty((n, 3, 3)), np.empty((n, 3)), np.empty((G, 3)), np.empty(n), np.empty((C, 3)),
+            np.zeros(G, np.bool_), np.empty((S, 3)), np.zeros(C, np.bool_), np.empty((I, 3)))
 
 
 @numba.njit(cache=True)
@@ -466,16 +514,16 @@ def pairs_touching(Q, model, candidates) -> np.ndarray:
     """``(k, P)`` bool: whether the two groups of each candidate pair ``(P, 2)`` have spheres
     nearer than the margin at each row of ``Q (k, n)`` (for the pairs that touch in every pose)."""
     out = np.zeros((Q.shape[0], candidates.shape[0]), dtype=np.bool_)
-    R, t, _, _, cc, _ = make_scratch(model)
+    R, t, _, _, cc, placed, sw, splaced, _ = make_scratch(model)
     groups, clusters = model[1], model[7]
     for i in range(Q.shape[0]):
         pose_bodies(Q[i], model[0], R, t)
+        placed[:] = False
         for g in range(groups.shape[0]):
-            for c in range(int(groups[g, 7]), int(groups[g, 8])):
-                cc[c, 0], cc[c, 1], cc[c, 2] = _to_world(R, t, int(groups[g, 2]), clusters[c, 2], clusters[c, 3],
-                                                         clusters[c, 4])
+            _place_clusters(g, groups, clusters, R, t, cc, placed, splaced)
         for p in range(candidates.shape[0]):
-            out[i, p] = _groups_touch(candidates[p, 0], candidates[p, 1], model, R, t, cc)
+            out[i, p] = _groups_touch(candidates[p, 0], candidates[p, 1], groups, model[2], model[6], clusters, R, t,
+                                      cc, sw, splaced)
     return out
 
 

@@ -18,11 +18,12 @@ from scipy.spatial import ConvexHull
 
 from uvms_jax import frames
 from uvms_jax.plan._spec import Obstacle
-from uvms_jax.plan._vector_kernels import BOX, CAPSULE, CYLINDER, POLYTOPE, SPHERE
+from uvms_jax.plan._vector_kernels import BOX, CAPSULE, CYLINDER, POLYTOPE, SPHERE, _obstacle_distance
 
-__all__ = ["World", "add_obstacles", "obstacle_rows"]
+__all__ = ["World", "add_obstacles", "near_obstacles", "obstacle_rows"]
 
 ROW = 20  # floats per obstacle row of the compiled checker
+_NEAR_TOL = 1e-9  # [m] added to the reach and the boxes of near_obstacles: far above their float64 round-off
 
 
 @dataclasses.dataclass(frozen=True)
@@ -117,3 +118,50 @@ def add_obstacles(spec: mujoco.MjSpec, obstacles: Iterable[Obstacle], prefix: st
             spec.worldbody.add_geom(type=kind, size=[radius, length / 2, 0], **kw)
         names.append(name)
     return names
+
+
+def _obstacle_boxes(obstacles) -> np.ndarray:
+    """``(M, 6)`` axis-aligned boxes around the obstacle rows ``(M, 20)``: centre, half extents
+    [m] (a polytope: its bounding ball's)."""
+    out = np.empty((len(obstacles), 6))
+    for m, o in enumerate(obstacles):
+        c, a = o[1:4], o[4:7]
+        if o[0] == BOX:
+            half = np.abs(o[4:13].reshape(3, 3)) @ o[13:16]
+        elif o[0] == SPHERE:
+            half = np.full(3, o[4])
+        elif o[0] == CAPSULE:
+            half = np.abs(a) * o[7] + o[8]
+        elif o[0] == CYLINDER:  # the end discs reach r·sqrt(1 − a_i²) along axis i
+            half = np.abs(a) * o[7] + o[8] * np.sqrt(np.clip(1.0 - a * a, 0.0, 1.0))
+        else:
+            c, half = o[16:19], np.full(3, o[19])
+        out[m, :3], out[m, 3:] = c, half
+    return out
+
+
+def near_obstacles(kin, groups, obstacles, planes, margin: float) -> tuple[np.ndarray, np.ndarray]:
+    """Per group, the obstacles it can meet in some pose, with their boxes grown by its bound:
+    ``(start (G + 1,) int64, rows (K, 7))``, group ``g``'s rows ``start[g]:start[g + 1]``, each
+    ``[obstacle row, box centre (3), half extents + bound radius + margin + tolerance (3)]``
+    [m] (its bound meets the obstacle only with its centre inside that box).
+
+    Joint 0 turns about its body's origin, so that point never moves; a group on body ``b``
+    stays within ``|centre| + radius + Σ_{0<i≤b} |offset_i|`` of it (its bound's centre in the
+    body's frame, the joints' fixed offsets up the chain; unbounded past a prismatic joint), and
+    an obstacle farther than that plus the margin (a polytope's largest face distance, a lower
+    bound) never meets it. The base's groups get none: both are fixed."""
+    boxes = _obstacle_boxes(obstacles)
+    origin = kin[0, 9:12] if len(kin) and kin[0, 15] == 0.0 else None
+    start, rows = [0], []
+    for g in range(len(groups)):
+        b = int(groups[g, 2])
+        reach = np.linalg.norm(groups[g, 3:6]) + groups[g, 6] + np.sum(np.linalg.norm(kin[1:b + 1, 9:12], axis=1))
+        if origin is None or np.any(kin[:b + 1, 15] != 0.0):
+            reach = np.inf
+        for m in range(len(obstacles) if b >= 0 else 0):
+            if reach < np.inf and _obstacle_distance(*origin, obstacles, m, planes) > reach + margin + _NEAR_TOL:
+                continue
+            rows.append([m, *boxes[m, :3], *(boxes[m, 3:] + groups[g, 6] + margin + _NEAR_TOL)])
+        start.append(len(rows))
+    return np.array(start, np.int64), np.array(rows, np.float64).reshape(-1, 7)
