@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 import logging
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 from uvms_jax import hw, planfile, progress
@@ -13,6 +14,7 @@ from uvms_jax.pipeline._report import StageReport
 from uvms_jax.pipeline._settings import PipelineSettings
 from uvms_jax.pipeline.stages._flow import VIDEO_FPS, VIDEO_SIZE, Flow, film_scene
 from uvms_jax.text import md_table
+from uvms_jax.video import VideoInfo
 
 __all__ = ["run"]
 
@@ -39,9 +41,14 @@ def run(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
             raise
         if hw_run.ok:
             bar.update(bar.total - bar.n)
-    res = hw.write_run(hw_run, out, plot=hs.plot, plan_path=source)
-    # The plan as a ROS-shaped JointTrajectory: what another arm's own controller executes.
-    planfile.save_plan(the_plan, out / "joint_trajectory.yaml", joint_trajectory=True, gripper=flow.robot)
+    # The video renders in a thread of its own while the run's files are written: it waits mostly
+    # on OpenGL and ffmpeg, which leave Python's lock to the plots.
+    with ThreadPoolExecutor(max_workers=1, thread_name_prefix="hw-film") as pool:
+        filming = pool.submit(_run_video, s, flow, hw_run.log, out) if hs.plot and hw_run.log.rows else None
+        res = hw.write_run(hw_run, out, plot=hs.plot, plan_path=source)
+        # The plan as a ROS-shaped JointTrajectory: what another arm's own controller executes.
+        planfile.save_plan(the_plan, out / "joint_trajectory.yaml", joint_trajectory=True, gripper=flow.robot)
+        filmed = None if filming is None else filming.result()
     if not hw_run.ok:
         log.warning("simulated run aborted (arm told to hold): %s", hw_run.result.reason)
     clock = "virtual clock" if hs.link == "loopback" else "real time"
@@ -57,30 +64,31 @@ def run(s: PipelineSettings, out: Path, flow: Flow) -> StageReport:
              "real-arm runs with motion capture (~2 mm); `run.csv` logs commanded vs measured states for the same "
              "comparison. Same plan on a real arm: `uvms-hw run PLAN --dry-run`, then `--udp 192.168.2.3:6789`; "
              "`joint_trajectory.yaml`: the plan as a ROS-shaped JointTrajectory for any arm's own controller."]
-    if hs.plot and hw_run.log.rows:
-        notes.append(_run_video(s, flow, hw_run.log, out, res))
+    if filmed is not None:
+        note, video = filmed
+        notes.append(note)
+        if video is not None:
+            res["video_frames"], res["video_render_s"] = video.frames, video.seconds
     return StageReport("hw", f"Execution on the simulated {flow.robot.name} (docs/theory.md §6, thesis 4.6)", [table],
                        res, notes)
 
 
-def _run_video(s: PipelineSettings, flow: Flow, run_log: hw.RunLog, out: Path, res: dict) -> str:
+def _run_video(s: PipelineSettings, flow: Flow, run_log: hw.RunLog, out: Path) -> tuple[str, VideoInfo | None]:
     """``out/run.mp4``: the measured run in the planning stage's scene, else the scenario's
     (the example plan was planned in the thesis cage of ``configs/scenario/thesis_cage.yaml``);
-    returns the summary note."""
+    returns the summary note and the video (None: none made)."""
     scene = film_scene(s, flow)
     if scene is None:
-        return "No video of the run: no scene (run the plan stage or give a scenario)."
+        return "No video of the run: no scene (run the plan stage or give a scenario).", None
     t, q = run_log.measured(scene.robot.joint_names)
     if len(t) == 0:
-        return "No video of the run: no complete measured state was logged."
+        return "No video of the run: no complete measured state was logged.", None
     try:
         video = planning.render_run_video(scene, t, q, out / "run.mp4", fps=VIDEO_FPS, size=VIDEO_SIZE)
     except RuntimeError as e:  # no offscreen GL context on this machine
         log.warning("no video of the run: %s", e)
-        return f"No video of the run: {e}."
-    res["video_frames"] = video.frames
-    res["video_render_s"] = video.seconds
+        return f"No video of the run: {e}.", None
     link = f"{out.name}/{video.path.name}"
     return (f"Video of the run: [{link}]({link}) — measured joint angles in the MuJoCo scene, {video.fps:g} fps, "
             f"{VIDEO_SIZE[0]}×{VIDEO_SIZE[1]}, {video.frames} frames, rendered offscreen in {video.seconds:.1f} s "
-            "(arm only: the jaws' opening and the carried objects are not drawn).")
+            "(arm only: the jaws' opening and the carried objects are not drawn).", video)
