@@ -199,6 +199,18 @@ def _slack(limit):
     return LIMIT_SLACK + 4 * jnp.finfo(limit.dtype).eps * jnp.abs(limit)
 
 
+def _batched_like(tree, anchor):
+    """``tree`` with every leaf's value unchanged but computed from ``anchor``, a traced bool
+    scalar that is True (``lax.select``: ``jnp.where`` returns an empty leaf as it is).
+
+    Under ``vmap``, every leaf of a scan's starting carry is then batched along each axis
+    ``anchor`` is, and ``lax.scan``'s batching rule batches the scan's body once. From a carry
+    only partly batched it batches the body again for every round of carry fields it finds
+    batched after the last (twice or more per ``vmap``, the physics scan inside each time).
+    """
+    return jax.tree.map(lambda x: jax.lax.select(jax.lax.broadcast_in_dim(anchor, x.shape, ()), x, x), tree)
+
+
 # -- one scenario ---------------------------------------------------------------------------------
 class _Carry(NamedTuple):
     data: mjx.Data
@@ -241,6 +253,8 @@ class _Rollout:
         g = self.gate_rows.size
         carry = _Carry(d, state.integral, q_plan[0], nav, jnp.zeros(g, dtype), jnp.zeros(g, dtype), jnp.zeros(g, dtype),
                        jnp.zeros(4, dtype), jnp.zeros((), dtype), jnp.zeros(4, jnp.int32))
+        # Batched over the poses and the scenarios alike (True: both are checked to be finite).
+        carry = _batched_like(carry, jnp.isfinite(pose[0] + knots[0, 0]))
         period, steps, dt = sim.period, sim.physics_steps, sim.model.opt.timestep
         lower, upper, limits = c(sim.robot.lower, dtype), c(sim.robot.upper, dtype), c(sim.limits, dtype)
 
