@@ -146,13 +146,16 @@ class HoverMJX:
     def init(self, pose, q0) -> HoverState:
         """The vehicle at rest at ``pose = [x, y, z, ψ]`` [m, rad] (level), the arm at ``q0``
         ``(n,)`` [rad] with its servos holding it; kinematics computed."""
+        return HoverState(mjx.kinematics(self.mx, self.placed(pose, q0)), jnp.zeros(4, dtype=self.dtype))
+
+    def placed(self, pose, q0) -> mjx.Data:
+        """:meth:`init`'s data with nothing computed: ``qpos`` and the servos' ``ctrl`` set."""
         pose, q0 = self._c(pose), self._c(q0)
         d = mjx.make_data(self.mx)
         quat = jnp.stack([jnp.cos(pose[3] / 2), jnp.zeros_like(pose[3]), jnp.zeros_like(pose[3]),
                           jnp.sin(pose[3] / 2)])
         qpos = d.qpos.at[:3].set(pose[:3]).at[3:7].set(quat).at[self.qadr].set(q0)
-        d = d.replace(qpos=qpos, ctrl=d.ctrl.at[self.servo].set(q0))
-        return HoverState(mjx.kinematics(self.mx, d), jnp.zeros(4, dtype=self.dtype))
+        return d.replace(qpos=qpos, ctrl=d.ctrl.at[self.servo].set(q0))
 
     def record(self, d: mjx.Data) -> PeriodRecord:
         """The :class:`PeriodRecord` of ``d`` (whose kinematics must be current)."""
@@ -175,8 +178,13 @@ class HoverMJX:
         """One MuJoCo step (``implicitfast``) with buoyancy and drag set for the pose and
         velocity being integrated: :func:`mujoco.mjx.step` with the wrenches inserted between
         the velocity and the acceleration stages."""
+        return self.integrate(mjx.fwd_position(self.mx, d), wind, volume, cob)
+
+    def integrate(self, d: mjx.Data, wind, volume, cob) -> mjx.Data:
+        """:meth:`physics_step` after its position stage (``mjx.fwd_position``), which ``d`` must
+        hold for its ``qpos``: a loop that ends each step with the next one's position stage
+        has the kinematics of every step's end without computing them twice."""
         m = self.mx
-        d = mjx.fwd_position(m, d)
         d = mjx.fwd_velocity(m, d)
         d = d.replace(xfrc_applied=self.wrenches(d, wind, volume, cob))
         d = mjx.fwd_actuation(m, d)

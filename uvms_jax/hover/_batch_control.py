@@ -17,7 +17,8 @@ with no host round trip. Each period of a scenario:
   feed-forward — the same methods and :mod:`~uvms_jax.hover._wbc` formulas the CPU runs, with
   ``xp=jax.numpy``; the docked pose, the ballast and the plan's tables enter them as traced
   arrays, so poses and plans vary across the batch;
-- the physics steps (:meth:`HoverMJX.physics_step <uvms_jax.hover.HoverMJX.physics_step>`);
+- the physics steps (:meth:`HoverMJX.physics_step <uvms_jax.hover.HoverMJX.physics_step>`, each
+  ending with the next one's position stage, so the kinematics at the period's end come free);
 - the tool's world pose against its planned path, kept at the gates; the largest errors and the
   limit counts over the run.
 
@@ -199,6 +200,18 @@ def _slack(limit):
     return LIMIT_SLACK + 4 * jnp.finfo(limit.dtype).eps * jnp.abs(limit)
 
 
+def _batched_like(tree, anchor):
+    """``tree`` with every leaf's value unchanged but computed from ``anchor``, a traced bool
+    scalar that is True (``lax.select``: ``jnp.where`` returns an empty leaf as it is).
+
+    Under ``vmap``, every leaf of a scan's starting carry is then batched along each axis
+    ``anchor`` is, and ``lax.scan``'s batching rule batches the scan's body once. From a carry
+    only partly batched it batches the body again for every round of carry fields it finds
+    batched after the last (twice or more per ``vmap``, the physics scan inside each time).
+    """
+    return jax.tree.map(lambda x: jax.lax.select(jax.lax.broadcast_in_dim(anchor, x.shape, ()), x, x), tree)
+
+
 # -- one scenario ---------------------------------------------------------------------------------
 class _Carry(NamedTuple):
     data: mjx.Data
@@ -235,12 +248,15 @@ class _Rollout:
         wb = next(iter(controllers.values()))
         R_goal = wb.T_dock[:3, :3] @ wb.T_tool[:, :3, :3]  # (P + 1, 3, 3) the tool's planned world pose
         p_goal = wb.T_tool[:, :3, 3] @ wb.T_dock[:3, :3].T + wb.T_dock[:3, 3]
-        state = sim.init(pose, q_plan[0])
-        d = state.data
+        # The carry's data holds the position stage (kinematics included) of its qpos: each
+        # physics step ends with the next one's (HoverMJX.integrate), so a period ends with them.
+        d = mjx.fwd_position(sim.mx, sim.placed(pose, q_plan[0]))
         nav = None if self.navigation is None else _nav_start(d.qpos[:3], d.xmat[sim.vehicle_id], self.history)
         g = self.gate_rows.size
-        carry = _Carry(d, state.integral, q_plan[0], nav, jnp.zeros(g, dtype), jnp.zeros(g, dtype), jnp.zeros(g, dtype),
+        carry = _Carry(d, jnp.zeros(4, dtype), q_plan[0], nav, jnp.zeros(g, dtype), jnp.zeros(g, dtype), jnp.zeros(g, dtype),
                        jnp.zeros(4, dtype), jnp.zeros((), dtype), jnp.zeros(4, jnp.int32))
+        # Batched over the poses and the scenarios alike (True: both are checked to be finite).
+        carry = _batched_like(carry, jnp.isfinite(pose[0] + knots[0, 0]))
         period, steps, dt = sim.period, sim.physics_steps, sim.model.opt.timestep
         lower, upper, limits = c(sim.robot.lower, dtype), c(sim.robot.upper, dtype), c(sim.limits, dtype)
 
@@ -260,10 +276,9 @@ class _Rollout:
 
             def physics(d, j):
                 wind = current_at(times, knots, (k * steps + j) * dt, xp=jnp)
-                return sim.physics_step(d, wind, volume, cob), None
+                return mjx.fwd_position(sim.mx, sim.integrate(d, wind, volume, cob)), None
 
             d, _ = jax.lax.scan(physics, d, jnp.arange(steps))
-            d = mjx.kinematics(sim.mx, d)
             row = k + 1
             tool_R = d.site_xmat[sim.tool_site].reshape(3, 3)
             error = jnp.linalg.norm(d.site_xpos[sim.tool_site] - p_goal[row])
