@@ -386,9 +386,12 @@ def state_free(q, model, scratch) -> bool:
 
 @numba.njit(cache=True)
 def without_exact(n_groups: int, n_obstacles: int) -> tuple:
-    """The ``exact`` entry of a model with no MuJoCo model (MAYBE states stay open)."""
-    return (0, 0, np.zeros(1), np.zeros(0, np.int64), np.zeros((n_groups, 2), np.int64), np.zeros(0, np.int32),
-            np.zeros(n_obstacles, np.int32))
+    """The ``exact`` entry of a model with no MuJoCo model (MAYBE states stay open). Its two
+    pointers are int64 zeros, not literal ones: a literal 0 would type the model apart from the
+    one Python passes (int64), and compile every kernel that takes it twice."""
+    null = np.int64(0)
+    return (null, null, np.zeros(1), np.zeros(0, np.int64), np.zeros((n_groups, 2), np.int64),
+            np.zeros(0, np.int32), np.zeros(n_obstacles, np.int32))
 
 
 @numba.njit(cache=True)
@@ -407,7 +410,7 @@ def states_status(Q, kin, groups, spheres, obstacles, planes, pairs, margin, clu
     chunk = 256
     for c in numba.prange((k + chunk - 1) // chunk):
         model = (kin, groups, spheres, obstacles, planes, pairs, margin, clusters, inner,
-                 without_exact(groups.shape[0], obstacles.shape[0]), 0, tables)
+                 without_exact(groups.shape[0], obstacles.shape[0]), np.int64(0), tables)  # typed as Python's
         scratch = make_scratch(model)
         for i in range(c * chunk, min(k, (c + 1) * chunk)):
             out[i] = state_status(Q[i], model, scratch)
