@@ -29,6 +29,7 @@ N_GRIPPER_STEPS = 12  # 4 objects: open and close at each, release at its base (
 BARE = {"z1": ("z1_description/urdf/z1.urdf", "gripperStator", 0.04, 6),
         "xarm7": ("xarm_description/urdf/xarm7.urdf", "link7", 0.04, 7)}
 STAGES = ["surrogate", "docking", "plan", "schedule", "hw", "hover", "baseline"]
+DOCK_TO_RUN = ["docking", "plan", "schedule", "hw"]  # the stages that place, plan and run the arm
 
 
 def bare_mjcf(urdf: str, out) -> str:
@@ -49,10 +50,12 @@ def doc_card() -> dict:
     return yaml.safe_load(block.group(1))
 
 
-def doc_command() -> list[str]:
-    """docs/robots.md's command that runs an arm card, as words."""
+def doc_command(stages: list[str] = STAGES) -> list[str]:
+    """docs/robots.md's command that runs an arm card, as words; ``stages`` other than the
+    default ones are added to it."""
     line = re.search(r"^python experiments/pipeline\.py scenario\.arm\.card=my_arm\.yaml.*$", DOC, flags=re.M)
-    return shlex.split(line.group(0))
+    extra = [] if stages == STAGES else [f"stages=[{','.join(stages)}]"]
+    return shlex.split(line.group(0)) + extra
 
 
 def plan_gates(plan: dict) -> int:

@@ -1,15 +1,15 @@
 """The pipeline (tiny preset) with real arms' own description files (examples/arms.yaml: their
 collision geometry, or capsules), each with the jaws the file lacks, through docs/robots.md's
-command: each docks, plans every task-graph edge, schedules and runs the winner on its
-simulated arm with every gate reached; the Panda also hovers and runs the baseline (default
-stages). All slow; a file of its own so that pytest's workers share these runs with
-test_pipeline_arms.py's."""
+command and the docking to execution stages: each docks, plans every task-graph edge, schedules
+and runs the winner on its simulated arm with every gate reached. The Panda's run with every
+stage is test_pipeline_arms_panda.py's. All slow; files of their own so that pytest's workers
+(one file each) share these runs with test_pipeline_arms.py's."""
 
 from __future__ import annotations
 
 import pytest
 
-from _arm_runs import check_run, doc_command, own_card, run_pipeline
+from _arm_runs import DOCK_TO_RUN, check_run, doc_command, own_card, run_pipeline
 
 pytestmark = pytest.mark.slow
 
@@ -21,13 +21,6 @@ ARMS = {"z1": 6, "ur5": 6}
 def test_pipeline_with_another_arm(tmp_path, arm):
     card = own_card(arm)
     run = tmp_path / "run"
-    stages = ["docking", "plan", "schedule", "hw"]
-    res = run_pipeline([*doc_command(), f"stages=[{','.join(stages)}]"], run, card, tmp_path)
+    res = run_pipeline(doc_command(DOCK_TO_RUN), run, card, tmp_path)
     assert res["arm"]["source"] == card["description"]
-    check_run(res, run, ARMS[arm], gripper=True, stages=stages)
-
-
-def test_pipeline_with_the_panda(tmp_path):
-    """The Franka Panda's own description (its collision meshes), default stages."""
-    run = tmp_path / "run"
-    check_run(run_pipeline(doc_command(), run, own_card("panda"), tmp_path, optimised=True), run, 7, gripper=True)
+    check_run(res, run, ARMS[arm], gripper=True, stages=DOCK_TO_RUN)

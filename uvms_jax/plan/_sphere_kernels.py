@@ -19,12 +19,14 @@ _FACE_ATOL = 1e-9  # coplanar triangles of a hull give one face equation up to r
 
 def _hull_faces(vertices: np.ndarray) -> np.ndarray:
     """Face equations ``(f, 4)`` of the convex hull of ``vertices (v, 3)``: ``n·x + d ≤ 0``
-    inside, ``|n| = 1``."""
-    keep: list[np.ndarray] = []
-    for e in ConvexHull(vertices).equations:
-        if not any(np.all(np.abs(e - k) < _FACE_ATOL * 1e3) for k in keep):
-            keep.append(e)
-    return np.array(keep)
+    inside, ``|n| = 1``: the hull's triangles' equations in Qhull's order, each kept unless a
+    kept one equals it within the tolerance (each compared with all kept ones in one call)."""
+    equations = ConvexHull(vertices).equations
+    keep, n = np.empty_like(equations), 0
+    for e in equations:
+        if not np.any(np.all(np.abs(keep[:n] - e) < _FACE_ATOL * 1e3, axis=1)):
+            keep[n], n = e, n + 1
+    return keep[:n].copy()
 
 
 def _box_of(faces: np.ndarray) -> np.ndarray | None:

@@ -422,9 +422,12 @@ def state_free(q, model, scratch) -> bool:
 
 @numba.njit(cache=True)
 def without_exact(n_groups: int, n_obstacles: int) -> tuple:
-    """The ``exact`` entry of a model with no MuJoCo model (MAYBE states stay open)."""
-    return (0, 0, np.zeros(1), np.zeros(0, np.int64), np.zeros((n_groups, 2), np.int64), np.zeros(0, np.int32),
-            np.zeros(n_obstacles, np.int32))
+    """The ``exact`` entry of a model with no MuJoCo model (MAYBE states stay open). Its two
+    pointers are int64 zeros, not literal ones: a literal 0 would type the model apart from the
+    one Python passes (int64), and compile every kernel that takes it twice."""
+    null = np.int64(0)
+    return (null, null, np.zeros(1), np.zeros(0, np.int64), np.zeros((n_groups, 2), np.int64),
+            np.zeros(0, np.int32), np.zeros(n_obstacles, np.int32))
 
 
 @numba.njit(cache=True)
@@ -449,7 +452,8 @@ def states_status(Q, kin, groups, spheres, obstacles, planes, pairs, margin, clu
         R, t, gc, _, cc, placed, sw, splaced, iw = _scratch(kin.shape[0], groups.shape[0], spheres.shape[0],
                                                             clusters.shape[0], inner.shape[0])
         for i in range(c * chunk, min(k, (c + 1) * chunk)):
-            out[i] = _status(Q[i], kin, groups, spheres, obstacles, planes, pairs, margin, clusters, inner, exact, 0,
+            out[i] = _status(Q[i], kin, groups, spheres, obstacles, planes, pairs, margin, clusters, inner, exact,
+                             np.int64(0),
                              tab_index, tab_meta, tab_values, near_start, near_rows, R, t, gc, cc, placed, sw, splaced,
                              iw)
     return out
