@@ -79,9 +79,9 @@ def mbm_benchmark() -> str:
             f"Invalid in the model (MuJoCo on the description's geometry; limits in float64): {invalid}. "
             f"Numba compile or cache load {d['compile_s']:.1f} s before any timing.\n\n" + _mbm_vamp(d) +
             f"Per state, one call over 4096 uniform random configurations (range over the seven families' first "
-            f"worlds): the spheres and pair tables alone {spheres[0]:.1f}–{spheres[-1]:.1f} µs "
+            f"worlds): the spheres and pair tables alone {spheres[0]:.2f}–{spheres[-1]:.2f} µs "
             f"({maybe[-1]:.0%} or fewer "
-            f"undecided), the verdicts with MuJoCo settling those {verdict[0]:.1f}–{verdict[-1]:.1f} µs, MuJoCo "
+            f"undecided), the verdicts with MuJoCo settling those {verdict[0]:.2f}–{verdict[-1]:.2f} µs, MuJoCo "
             f"alone {mujoco[0]:.1f}–{mujoco[-1]:.1f} µs.\n")
 
 
